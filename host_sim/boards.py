@@ -1,0 +1,97 @@
+"""Simulated boards: a clock, a bus, the chips at their addresses and the world they sense.
+
+    from host_sim.boards import make_board
+    b = make_board('gy87', seed=3)
+    b.bus.scan()            # -> [104, 119]: MPU6050 and BMP180; the HMC5883L is behind the bypass
+    b.bus.writeto_mem(0x68, 0x37, b'\\x02')   # I2C_BYPASS_EN
+    b.bus.scan()            # -> [30, 104, 119]
+
+Boards and their chips' mountings (body frame AN4248: x forward, y right, z down; a mounting
+is the body -> sensor signed permutation of host_sim.world):
+  'qmc5883l', 'gy271'   QMC5883L at 0x0D, chip x forward, y left, z up  -> (1, -2, -3)
+  'hmc5883l'            HMC5883L at 0x1E (GY-273 / older GY-271), same axes -> (1, -2, -3)
+  'qmc5883p'            QMC5883P at 0x2C (newer GY-271), same axes        -> (1, -2, -3)
+  'gy87'                MPU6050 at 0x68 + HMC5883L at 0x1E on the MPU's auxiliary bus (hidden
+                        until the bypass is opened) + BMP180 at 0x77; MPU6050 and HMC5883L both
+                        x forward, y left, z up -> (1, -2, -3)
+  'gy87-qmc'            the GY-87 clone with a QMC5883L at 0x0D behind the bypass instead
+`accel=True` adds a separate MPU6050 module (GY-521, 0x68, x forward, y left, z up) to a board
+without one. For these mountings the firmware's sensor -> body maps are: magnetometer
+(x, -y, -z); accelerometer, AN4248 gravity sign, (-x, y, z).
+"""
+from host_sim.bus import RegisterFile, SimI2C
+from host_sim.clock import SimClock
+from host_sim.prng import mix32
+from host_sim.world import World, check_mount
+
+CHIPS = ("qmc5883l", "gy271", "hmc5883l", "qmc5883p", "gy87", "gy87-qmc")
+MOUNT_X_FWD_Y_LEFT_Z_UP = (1, -2, -3)
+_BMP180_ADDR = 0x77
+_BMP180_ID_REG = 0xD0
+_BMP180_ID = 0x55
+
+
+class Board:
+    """What make_board returns: .clock, .bus, .world, .mag, .accel (or None), .chip,
+    .mag_address, .accel_address (or None), .mount, .accel_mount, .sleep_us (bus delay)."""
+
+    def __init__(self, chip, clock, bus, world):
+        self.chip = chip
+        self.clock = clock
+        self.bus = bus
+        self.world = world
+        self.mag = None
+        self.mag_address = None
+        self.accel = None
+        self.accel_address = None
+        self.mount = None
+        self.accel_mount = None
+        self.sleep_us = bus.sleep_us
+
+    def now_us(self):
+        return self.clock.now_us
+
+
+def _mag(kind, world, mount, seed, noise):
+    if kind == "qmc5883l":
+        from host_sim.qmc5883l import QMC5883LSim
+        return QMC5883LSim(world, mount=mount, seed=seed, noise=noise), 0x0D
+    if kind == "hmc5883l":
+        from host_sim.hmc5883l import HMC5883LSim
+        return HMC5883LSim(world, mount=mount, seed=seed, noise=noise), 0x1E
+    from host_sim.qmc5883p import QMC5883PSim
+    return QMC5883PSim(world, mount=mount, seed=seed, noise=noise), 0x2C
+
+
+def make_board(chip="qmc5883l", world=None, seed=1, noise=True, freq=400000, mount=None,
+               accel_mount=None, accel=None, clock=None):
+    """Build a simulated board (see the module docstring). `world` defaults to a still
+    World(seed=seed); `mount`/`accel_mount` override the chips' mountings; `noise=False`
+    leaves only quantisation; `accel` None = the board's own (gy87: yes, others: no)."""
+    if chip not in CHIPS:
+        raise ValueError("make_board: unknown chip %r; expected one of %s"
+                         % (chip, ", ".join(CHIPS)))
+    if clock is None:
+        clock = SimClock()
+    if world is None:
+        world = World(seed=seed)
+    bus = SimI2C(clock, freq)
+    b = Board(chip, clock, bus, world)
+    mag_seed = mix32(seed * 2 + 1)
+    acc_seed = mix32(seed * 2 + 2)
+    b.mount = check_mount(mount if mount is not None else MOUNT_X_FWD_Y_LEFT_Z_UP)
+    b.accel_mount = check_mount(accel_mount if accel_mount is not None else MOUNT_X_FWD_Y_LEFT_Z_UP)
+    kind = {"gy271": "qmc5883l", "gy87": "hmc5883l", "gy87-qmc": "qmc5883l"}.get(chip, chip)
+    b.mag, b.mag_address = _mag(kind, world, b.mount, mag_seed, noise)
+    has_accel = chip in ("gy87", "gy87-qmc") if accel is None else bool(accel)
+    if has_accel:
+        from host_sim.mpu6050 import MPU6050Sim
+        b.accel = MPU6050Sim(world, mount=b.accel_mount, seed=acc_seed, noise=noise)
+        b.accel_address = 0x68
+        bus.attach(0x68, b.accel)
+    if chip in ("gy87", "gy87-qmc"):
+        bus.attach(b.mag_address, b.mag, gate=b.accel.bypass_open)
+        bus.attach(_BMP180_ADDR, RegisterFile({_BMP180_ID_REG: _BMP180_ID}))
+    else:
+        bus.attach(b.mag_address, b.mag)
+    return b
