@@ -1,0 +1,172 @@
+"""HMC5883L 3-axis magnetometer (Honeywell), I2C address 0x1E (also on GY-87 boards).
+
+    from machine import I2C, Pin
+    from firmware.hmc5883l import HMC5883L
+    x, y, z = HMC5883L(I2C(0, scl=Pin(5), sda=Pin(4), freq=400000), gain=1).read()
+
+HMC5883L(i2c, address=0x1E, *, gain=1, rate=15, averaging=8, delay_us=None, timeout_us=None)
+  gain       GN code 0..7: 1370, 1090 (default, +-1.3 G), 820, 660, 440, 390, 330, 230 counts/G
+  rate       output rate in Hz: 3, 15, 30, 75 (0.75, 1.5 and 7.5 Hz are not integers: not offered)
+  averaging  samples averaged per output: 1, 2, 4, 8
+read() -> (x, y, z) raw counts in the chip's axes (the chip sends X, Z, Y; this reorders);
+read_into(buf) fills buf[0..2] without allocating. set_gain(gain) changes the range.
+self_test() -> (passed, (x, y, z)): the datasheet's positive-bias test at gain 5.
+.KIND 'hmc5883l', .range_code (GN), .counts_per_gauss.
+
+The first measurement after a gain change still uses the old gain (datasheet, CRB), and after a
+write to CRA, CRB or MODE the first set arrives 2/rate later (datasheet, mode register). So after
+any configuration the driver waits two output periods and throws one sample away: no sample it
+returns was measured with the old gain.
+
+Errors: SensorNotFound (ID is not 'H43'), BusError, DataReadyTimeout, SensorOverflow (an axis
+reads -4096, the ADC overflow marker, or anything outside the output range -2048..2047).
+"""
+try:
+    from micropython import const
+except ImportError:  # CPython
+    def const(x):
+        return x
+
+from firmware.errors import BusError, SensorNotFound, SensorOverflow
+from firmware.sensors import Device
+
+# Registers (datasheet register list)
+_CRA = const(0x00)
+_CRB = const(0x01)
+_MODE = const(0x02)
+_DATA = const(0x03)        # X, Z, Y int16 MSB first in 0x03..0x08
+_STATUS = const(0x09)
+_ID_A = const(0x0A)        # 'H', '4', '3' in 0x0A..0x0C
+
+# Bit fields
+_MS_NORMAL = const(0x00)   # CRA[1:0] measurement mode (01 would be positive bias)
+_MODE_CONTINUOUS = const(0x00)  # MODE[1:0]; bit7 (high-speed I2C) stays 0
+_RDY = const(0x01)         # STATUS bit0
+_OVERFLOW = const(-4096)   # data register value on ADC overflow (datasheet, data output registers)
+
+_GAINS = (0, 1, 2, 3, 4, 5, 6, 7)                                # GN[7:5] codes
+_COUNTS_PER_GAUSS = (1370, 1090, 820, 660, 440, 390, 330, 230)  # per GN (datasheet CRB table)
+_RATES_HZ = (3, 15, 30, 75)
+_RATE_DO = (2, 4, 5, 6)                                          # CRA DO[4:2] codes
+_PERIODS_US = (333334, 66667, 33334, 13334)
+_AVERAGING = (1, 2, 4, 8)                                        # CRA MA[6:5] code = index
+
+# Self test (datasheet "Self Test Operation" and spec table): positive bias at gain 5 reads
+# about +452 (X, Y) / +421 (Z) counts; acceptance limits 243..575 counts on every axis.
+_ST_GAIN = const(5)
+_ST_CRA = const(0x71)      # MA 8 averages, DO 15 Hz, MS 01 positive bias (datasheet example)
+_ST_PERIOD_US = const(66667)
+_ST_LOW = const(243)
+_ST_HIGH = const(575)
+_SETTLE_MARGIN_US = const(2000)
+
+
+def _code(value, table, name):
+    if value not in table:
+        raise ValueError("HMC5883L %s=%s: expected one of %s"
+                         % (name, value, ", ".join(str(v) for v in table)))
+    return table.index(value)
+
+
+class HMC5883L(Device):
+    KIND = "hmc5883l"
+    OPTIONS = ("gain", "rate", "averaging", "delay_us", "timeout_us")
+
+    def __init__(self, i2c, address=0x1E, *, gain=1, rate=15, averaging=8, delay_us=None,
+                 timeout_us=None):
+        gn = _code(gain, _GAINS, "gain")
+        ri = _code(rate, _RATES_HZ, "rate")
+        ma = _code(averaging, _AVERAGING, "averaging")
+        super().__init__(i2c, address, _PERIODS_US[ri], delay_us, timeout_us)
+        self._probe_id()
+        self._cra = ma << 5 | _RATE_DO[ri] << 2 | _MS_NORMAL
+        self._write_u8(_CRA, self._cra)
+        self._set_gain_code(gn)
+        self._write_u8(_MODE, _MODE_CONTINUOUS)
+        self._settle(self._period_us)
+
+    def _probe_id(self):
+        b = self._buf
+        try:
+            self._read_into(_ID_A, memoryview(b)[0:3])
+        except BusError as e:
+            raise SensorNotFound("no HMC5883L at 0x%02X: reading ID registers 0x0A-0x0C failed "
+                                 "(errno %s)" % (self.address, e.errno), address=self.address)
+        if b[0] != 0x48 or b[1] != 0x34 or b[2] != 0x33:  # 'H', '4', '3'
+            raise SensorNotFound("no HMC5883L at 0x%02X: ID registers 0x0A-0x0C read "
+                                 "0x%02X 0x%02X 0x%02X, expected 'H43' (0x48 0x34 0x33)"
+                                 % (self.address, b[0], b[1], b[2]), address=self.address)
+
+    def _set_gain_code(self, gn):
+        self._write_u8(_CRB, gn << 5)
+        self.range_code = gn
+        self.counts_per_gauss = _COUNTS_PER_GAUSS[gn]
+
+    def _settle(self, period_us):
+        # The first measurement after a configuration change keeps the old gain: let two
+        # measurements complete, then read (all six bytes: clears LOCK) and drop one sample.
+        self._delay(2 * period_us + _SETTLE_MARGIN_US)
+        self.wait_ready(_STATUS, _RDY)
+        self._read_into(_DATA, self._buf)
+
+    def set_gain(self, gain):
+        """Change the GN code (0..7); returns once samples carry the new gain."""
+        self._set_gain_code(_code(gain, _GAINS, "gain"))
+        self._settle(self._period_us)
+
+    def read_into(self, buf):
+        """Wait for RDY, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
+        self.wait_ready(_STATUS, _RDY)
+        d = self._buf
+        self._read_into(_DATA, d)  # all six bytes in one transaction (a partial read sets LOCK)
+        x = d[0] << 8 | d[1]       # int16 MSB first, in the order X, Z, Y
+        z = d[2] << 8 | d[3]
+        y = d[4] << 8 | d[5]
+        # Valid outputs -2048..2047 are 0x0000..0x07FF and 0xF800..0xFFFF, so (v + 0x800) & 0xF000
+        # is 0 exactly for them; the overflow marker -4096 (0xF000) and anything else fail.
+        if (x + 0x800) & 0xF000 or (y + 0x800) & 0xF000 or (z + 0x800) & 0xF000:
+            self._overflow()
+        buf[0] = x - 0x10000 if x & 0x8000 else x  # sign-extended by hand (no struct tuple)
+        buf[1] = y - 0x10000 if y & 0x8000 else y
+        buf[2] = z - 0x10000 if z & 0x8000 else z
+
+    def _overflow(self):
+        d = self._buf
+        x, z, y = ((d[i] << 8 | d[i + 1]) - ((d[i] & 0x80) << 9) for i in (0, 2, 4))
+        raw = (x, y, z)
+        if _OVERFLOW in raw:
+            msg = ("ADC overflow (-4096) in raw %s; lower the gain (set_gain(%d) or higher)"
+                   % (raw, min(self.range_code + 1, 7)))
+        else:
+            msg = "raw %s outside the output range -2048..2047" % (raw,)
+        raise SensorOverflow("HMC5883L at 0x%02X: %s" % (self.address, msg),
+                             address=self.address, raw=raw)
+
+    def read(self):
+        """(x, y, z) raw counts, the chip's axes."""
+        v = [0, 0, 0]
+        self.read_into(v)
+        return (v[0], v[1], v[2])
+
+    def self_test(self):
+        """Positive-bias self test; returns (passed, (x, y, z) counts at gain 5)."""
+        gn = self.range_code
+        self._write_u8(_CRA, _ST_CRA)
+        self._write_u8(_CRB, _ST_GAIN << 5)
+        self._write_u8(_MODE, _MODE_CONTINUOUS)
+        self._settle(_ST_PERIOD_US)
+        v = [0, 0, 0]
+        try:
+            self.read_into(v)
+            passed = True
+            for c in v:
+                if c < _ST_LOW or c > _ST_HIGH:
+                    passed = False
+        except SensorOverflow as e:
+            v = list(e.raw)
+            passed = False
+        finally:
+            self._write_u8(_CRA, self._cra)
+            self._set_gain_code(gn)
+            self._settle(self._period_us)
+        return passed, (v[0], v[1], v[2])

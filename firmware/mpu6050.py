@@ -1,0 +1,76 @@
+"""MPU6050 accelerometer (InvenSense), I2C address 0x68 (0x69 with AD0 high): tilt for the compass.
+
+    from machine import I2C, Pin
+    from firmware.mpu6050 import MPU6050
+    ax, ay, az = MPU6050(I2C(0, scl=Pin(22), sda=Pin(21), freq=400000)).read_accel()
+
+MPU6050(i2c, address=0x68, *, accel_range=2)  accel_range in g: 2, 4, 8, 16
+read_accel() -> (x, y, z) raw counts in the chip's axes (specific force: +1 g on an axis that
+points up); read_accel_into(buf) fills buf[0..2] without allocating. .counts_per_g.
+enable_bypass() connects the auxiliary I2C bus to the main one (GY-87/GY-86: the magnetometer
+sits there). The constructor wakes the chip and sets the range; it leaves the bypass alone.
+Errors: SensorNotFound (WHO_AM_I is not 0x68), BusError.
+"""
+try:
+    from micropython import const
+except ImportError:  # CPython
+    def const(x):
+        return x
+
+from firmware.errors import SensorNotFound
+from firmware.sensors import Device
+
+# Registers (register map rev 4.2)
+_ACCEL_CONFIG = const(0x1C)
+_INT_PIN_CFG = const(0x37)
+_ACCEL_XOUT_H = const(0x3B)   # X, Y, Z int16 MSB first in 0x3B..0x40
+_USER_CTRL = const(0x6A)
+_PWR_MGMT_1 = const(0x6B)
+_WHO_AM_I = const(0x75)
+
+# Bit fields
+_I2C_BYPASS_EN = const(0x02)  # INT_PIN_CFG bit1
+_I2C_MST_EN = const(0x20)     # USER_CTRL bit5
+_WAKE_PLL_X = const(0x01)     # PWR_MGMT_1: SLEEP=0, clock from the X gyro PLL
+_ID_VALUE = const(0x68)       # WHO_AM_I reads 0x68 whatever AD0 is
+
+_RANGES_G = (2, 4, 8, 16)     # ACCEL_CONFIG AFS_SEL[4:3] code = index; 16384 >> code counts/g
+
+
+class MPU6050(Device):
+    OPTIONS = ("accel_range",)
+
+    def __init__(self, i2c, address=0x68, *, accel_range=2):
+        if accel_range not in _RANGES_G:
+            raise ValueError("MPU6050 accel_range=%s: expected one of 2, 4, 8, 16" % accel_range)
+        afs = _RANGES_G.index(accel_range)
+        super().__init__(i2c, address, 1000)  # no data-ready wait: outputs update continuously
+        who = self._probe_u8(_WHO_AM_I, "MPU6050")
+        if who != _ID_VALUE:
+            raise SensorNotFound("no MPU6050 at 0x%02X: WHO_AM_I (0x75) reads 0x%02X, expected "
+                                 "0x68" % (address, who), address=address)
+        self._write_u8(_PWR_MGMT_1, _WAKE_PLL_X)
+        self._write_u8(_ACCEL_CONFIG, afs << 3)
+        self.counts_per_g = 16384 >> afs
+
+    def enable_bypass(self):
+        """Clear I2C_MST_EN, set I2C_BYPASS_EN: the aux-bus chips appear on the main bus."""
+        self._write_u8(_USER_CTRL, self._read_u8(_USER_CTRL) & ~_I2C_MST_EN)
+        self._write_u8(_INT_PIN_CFG, self._read_u8(_INT_PIN_CFG) | _I2C_BYPASS_EN)
+
+    def read_accel_into(self, buf):
+        """Read the accelerometer (counts) into buf[0..2]. Allocates nothing."""
+        d = self._buf
+        self._read_into(_ACCEL_XOUT_H, d)
+        v = d[0] << 8 | d[1]     # int16 MSB first, sign-extended by hand (no struct tuple)
+        buf[0] = v - 0x10000 if v & 0x8000 else v
+        v = d[2] << 8 | d[3]
+        buf[1] = v - 0x10000 if v & 0x8000 else v
+        v = d[4] << 8 | d[5]
+        buf[2] = v - 0x10000 if v & 0x8000 else v
+
+    def read_accel(self):
+        """(x, y, z) raw counts, the chip's axes."""
+        v = [0, 0, 0]
+        self.read_accel_into(v)
+        return (v[0], v[1], v[2])

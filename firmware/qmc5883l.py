@@ -1,0 +1,131 @@
+"""QMC5883L 3-axis magnetometer (QST), I2C address 0x0D (the chip on most GY-271 boards).
+
+    from machine import I2C, Pin
+    from firmware.qmc5883l import QMC5883L
+    x, y, z = QMC5883L(I2C(0, scl=Pin(22), sda=Pin(21), freq=400000), range=8).read()
+
+QMC5883L(i2c, address=0x0D, *, range=2, odr=50, osr=512, delay_us=None, timeout_us=None)
+  range  full scale in gauss: 2 (12000 counts/G) or 8 (3000 counts/G)
+  odr    output data rate in Hz: 10, 50, 100, 200;  osr  oversampling 512, 256, 128, 64
+  delay_us, timeout_us: the bounded data-ready wait (see firmware.sensors)
+read() -> (x, y, z) raw counts in the chip's axes; read_into(buf) fills buf[0..2] without
+allocating (a list or array('h'/'i')). .KIND 'qmc5883l', .range_code (RNG field, 0/1),
+.counts_per_gauss, .skipped (reads that found DOR set: at least one sample set was lost each).
+
+Identification: the ID register 0x0D reads 0xFF, which is also what a bus with nothing driving
+SDA returns, so 0xFF alone proves little. The probe also soft-resets the chip and requires CTRL1
+to read back standby (MODE = 00; an undriven bus reads 0xFF, MODE = 11), then requires the
+configuration written to CTRL1 to read back unchanged.
+
+Errors: SensorNotFound (probe), BusError (any transfer), DataReadyTimeout (DRDY never set),
+SensorOverflow (OVL: the six data bytes are still read first, to release the data lock).
+"""
+try:
+    from micropython import const
+except ImportError:  # CPython
+    def const(x):
+        return x
+
+from firmware.errors import SensorNotFound, SensorOverflow
+from firmware.sensors import Device
+
+# Registers (datasheet register map)
+_XOUT_L = const(0x00)      # X, Y, Z int16 LSB first in 0x00..0x05
+_STATUS = const(0x06)
+_CTRL1 = const(0x09)
+_CTRL2 = const(0x0A)
+_SET_RESET = const(0x0B)
+_CHIP_ID = const(0x0D)
+
+# Bit fields
+_DRDY = const(0x01)        # STATUS bit0: all three axes ready; cleared by reading data
+_OVL = const(0x02)         # STATUS bit1: an axis is out of range
+_DOR = const(0x04)         # STATUS bit2: a sample set was skipped (data not read in time)
+_MODE_MASK = const(0x03)   # CTRL1[1:0]: 00 standby, 01 continuous
+_MODE_CONTINUOUS = const(0x01)
+_SOFT_RST = const(0x80)    # CTRL2 bit7
+# CTRL2 in use: INT_ENB = 0 enables the DRDY pin (active-low enable) for anyone wiring it;
+# ROL_PNT = 0, since every read here sets the pointer itself, so the rollover never matters.
+_CTRL2_RUN = const(0x00)
+_SET_RESET_PERIOD = const(0x01)  # datasheet recommended value
+_ID_VALUE = const(0xFF)
+_POR_US = const(1000)      # after SOFT_RST; hardware.md gives no figure, 1 ms is generous
+
+_RANGES_G = (2, 8)                         # RNG[5:4] code = index
+_COUNTS_PER_GAUSS = (12000, 3000)
+_ODRS_HZ = (10, 50, 100, 200)              # ODR[3:2] code = index
+_PERIODS_US = (100000, 20000, 10000, 5000)
+_OSRS = (512, 256, 128, 64)                # OSR[7:6] code = index
+
+
+def _code(value, table, name):
+    if value not in table:
+        raise ValueError("QMC5883L %s=%s: expected one of %s"
+                         % (name, value, ", ".join(str(v) for v in table)))
+    return table.index(value)
+
+
+class QMC5883L(Device):
+    KIND = "qmc5883l"
+    OPTIONS = ("range", "odr", "osr", "delay_us", "timeout_us")
+
+    def __init__(self, i2c, address=0x0D, *, range=2, odr=50, osr=512, delay_us=None,
+                 timeout_us=None):
+        rng = _code(range, _RANGES_G, "range")
+        rate = _code(odr, _ODRS_HZ, "odr")
+        over = _code(osr, _OSRS, "osr")
+        super().__init__(i2c, address, _PERIODS_US[rate], delay_us, timeout_us)
+        self.range_code = rng
+        self.counts_per_gauss = _COUNTS_PER_GAUSS[rng]
+        self.skipped = 0
+
+        chip_id = self._probe_u8(_CHIP_ID, "QMC5883L")
+        if chip_id != _ID_VALUE:
+            raise SensorNotFound("no QMC5883L at 0x%02X: chip ID register 0x0D reads 0x%02X, "
+                                 "expected 0xFF" % (address, chip_id), address=address)
+        self._write_u8(_CTRL2, _SOFT_RST)
+        self._delay(_POR_US)
+        ctrl1 = self._read_u8(_CTRL1)
+        if ctrl1 & _MODE_MASK:
+            raise SensorNotFound("no QMC5883L at 0x%02X: ID reads 0xFF but CTRL1 reads 0x%02X "
+                                 "after a soft reset, not standby (an undriven bus reads 0xFF)"
+                                 % (address, ctrl1), address=address)
+        self._write_u8(_SET_RESET, _SET_RESET_PERIOD)
+        self._write_u8(_CTRL2, _CTRL2_RUN)
+        cfg = over << 6 | rng << 4 | rate << 2 | _MODE_CONTINUOUS
+        self._write_u8(_CTRL1, cfg)
+        back = self._read_u8(_CTRL1)
+        if back != cfg:
+            raise SensorNotFound("no QMC5883L at 0x%02X: CTRL1 written 0x%02X reads back 0x%02X"
+                                 % (address, cfg, back), address=address)
+
+    def read_into(self, buf):
+        """Wait for DRDY, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
+        status = self.wait_ready(_STATUS, _DRDY)
+        d = self._buf
+        self._read_into(_XOUT_L, d)  # all six bytes in one transaction: releases the data lock
+        if status & _DOR:
+            self.skipped += 1
+        if status & _OVL:
+            self._overflow()
+        # int16 LSB first, sign-extended by hand (struct.unpack would allocate a tuple)
+        v = d[1] << 8 | d[0]
+        buf[0] = v - 0x10000 if v & 0x8000 else v
+        v = d[3] << 8 | d[2]
+        buf[1] = v - 0x10000 if v & 0x8000 else v
+        v = d[5] << 8 | d[4]
+        buf[2] = v - 0x10000 if v & 0x8000 else v
+
+    def _overflow(self):
+        d = self._buf
+        raw = tuple((d[i + 1] << 8 | d[i]) - ((d[i + 1] & 0x80) << 9) for i in (0, 2, 4))
+        raise SensorOverflow("QMC5883L at 0x%02X: OVL set (an axis is beyond +-%d G), raw %s; "
+                             "use range=8 or move the magnet away"
+                             % (self.address, _RANGES_G[self.range_code], raw),
+                             address=self.address, raw=raw)
+
+    def read(self):
+        """(x, y, z) raw counts, the chip's axes."""
+        v = [0, 0, 0]
+        self.read_into(v)
+        return (v[0], v[1], v[2])

@@ -1,0 +1,72 @@
+# detect() + reads on every simulated board, and each error path once; run on CPython and
+# MicroPython by tests/test_sensors.py, which requires identical output. Prints JSON ints only.
+import json
+
+from firmware import sensors
+from firmware.errors import BusError, DataReadyTimeout, SensorNotFound, SensorOverflow
+from host_sim import motion
+from host_sim.boards import make_board
+from host_sim.bus import SimI2C
+from host_sim.clock import SimClock
+from host_sim.world import World
+
+N = 25
+
+
+# MicroPython's json.dumps does not keep dict order: print [key, value] pairs.
+def emit(*pairs):
+    print(json.dumps([[k, list(v) if isinstance(v, tuple) else v] for k, v in pairs]))
+
+
+FIELDS = {SensorOverflow: ("address", "raw"), BusError: ("address", "register", "errno"),
+          DataReadyTimeout: ("address", "waited_us"), SensorNotFound: ("address", "tried", "found")}
+
+
+def err(e):
+    emit(("error", type(e).__name__), *[(k, getattr(e, k)) for k in FIELDS[type(e)]])
+
+
+STOP = {"qmc5883l": (0x09, b"\x00"), "hmc5883l": (0x02, b"\x02"), "qmc5883p": (0x0A, b"\x00")}
+
+for i, chip in enumerate(("qmc5883l", "hmc5883l", "gy87", "gy87-qmc", "qmc5883p")):
+    world = World(motion=motion.figure8(period_s=4), seed=11 + i)
+    b = make_board(chip, world=world, seed=11 + i)
+    mag = sensors.detect(b.bus, delay_us=b.sleep_us)
+    acc = sensors.detect_accel(b.bus)
+    emit(("kind", mag.KIND), ("address", mag.address), ("range_code", mag.range_code),
+         ("counts_per_gauss", mag.counts_per_gauss), ("t_us", b.clock.now_us))
+    buf = [0, 0, 0]
+    a = [0, 0, 0]
+    rows = []
+    for _ in range(N):
+        mag.read_into(buf)
+        row = [b.clock.now_us, buf[0], buf[1], buf[2]]
+        if acc is not None:
+            acc.read_accel_into(a)
+            row += [a[0], a[1], a[2]]
+        rows.append(row)
+    emit(("rows", rows))
+
+    b.mag.inject_raw(40000, -5, 5)  # out of range on either chip
+    try:
+        mag.read()
+    except SensorOverflow as e:
+        err(e)
+    b.bus.inject_eio(after=0)
+    try:
+        mag.read()
+    except BusError as e:
+        err(e)
+    reg, value = STOP[mag.KIND]  # standby / idle / suspend: no more samples
+    b.bus.writeto_mem(mag.address, reg, value)
+    try:
+        mag.read()
+    except DataReadyTimeout as e:
+        err(e)
+    emit(("t_us", b.clock.now_us), ("transactions", b.bus.transactions),
+         ("skipped", getattr(mag, "skipped", -1)))
+
+try:
+    sensors.detect(SimI2C(SimClock()))
+except SensorNotFound as e:
+    err(e)

@@ -1,0 +1,133 @@
+"""MPU6050 accelerometer driver against the independent register model (host_sim)."""
+import pytest
+from hypothesis import example, given, strategies as st
+
+from firmware.errors import BusError, SensorNotFound
+from firmware.mpu6050 import MPU6050
+from host_sim import motion
+from host_sim.boards import make_board
+from host_sim.bus import RegisterFile, SimI2C
+from host_sim.clock import SimClock
+from host_sim.mpu6050 import MPU6050Sim
+from host_sim.world import World
+from tests import intcheck
+
+ADDR = 0x68
+
+
+def accel_board(pose=(0, 0, 0), **kw):
+    yaw, pitch, roll = pose
+    return make_board("gy87", world=World(motion=motion.still(yaw=yaw, pitch=pitch, roll=roll)),
+                      noise=False, **kw)
+
+
+@pytest.mark.parametrize("rng,cpg", [(2, 16384), (4, 8192), (8, 4096), (16, 2048)])
+def test_constructor_wakes_the_chip_and_sets_the_range(rng, cpg):
+    b = accel_board()
+    assert b.accel.asleep()
+    m = MPU6050(b.bus, accel_range=rng)
+    assert not b.accel.asleep()
+    assert m.counts_per_g == cpg == b.accel.counts_per_g()
+
+
+# Chip x forward, y left, z up; the accelerometer reads specific force (+1 g on an axis that
+# points up). AN4248 eqs. 1-3: Gp = Rx(phi) Ry(theta) (0, 0, 1); the chip reads -Gp mapped
+# through (x, -y, -z): (sin theta, cos theta sin phi, cos theta cos phi) in g.
+@pytest.mark.parametrize("pose,expect_milli_g", [
+    ((0, 0, 0), (0, 0, 1000)),
+    ((0, 30, 0), (500, 0, 866)),       # nose up
+    ((0, -30, 0), (-500, 0, 866)),     # nose down: a negative x count
+    ((0, 0, 30), (0, 500, 866)),       # right side down: chip y (left) points up
+    ((0, 0, 180), (0, 0, -1000)),      # upside down
+    ((45, 0, -30), (0, -500, 866)),    # yaw does not change gravity
+])
+@pytest.mark.parametrize("rng", [2, 16])
+def test_physical_gravity_signs_and_scale(pose, expect_milli_g, rng):
+    b = accel_board(pose)
+    m = MPU6050(b.bus, accel_range=rng)
+    b.sleep_us(2000)  # awake: samples flow
+    got = m.read_accel()
+    for g, e in zip(got, expect_milli_g):
+        assert abs(g - e * m.counts_per_g // 1000) <= m.counts_per_g // 500 + 1
+
+
+def test_read_accel_into_fills_lists_and_arrays():
+    from array import array
+    b = accel_board()
+    m = MPU6050(b.bus)
+    b.sleep_us(2000)
+    for buf in ([0, 0, 0], array("h", [0, 0, 0]), array("i", [0, 0, 0])):
+        m.read_accel_into(buf)
+        assert list(buf) == list(m.read_accel())
+
+
+def test_enable_bypass_changes_only_its_two_bits():
+    b = make_board("gy87")
+    m = MPU6050(b.bus)
+    b.bus.writeto_mem(ADDR, 0x6A, bytes([0x24]))  # I2C_MST_EN + another bit
+    b.bus.writeto_mem(ADDR, 0x37, bytes([0x10]))  # INT_RD_CLEAR
+    assert 0x1E not in b.bus.scan()
+    m.enable_bypass()
+    assert b.bus.readfrom_mem(ADDR, 0x6A, 1)[0] == 0x04
+    assert b.bus.readfrom_mem(ADDR, 0x37, 1)[0] == 0x12
+    assert b.accel.bypass_open() and 0x1E in b.bus.scan()
+
+
+def test_address_0x69_works():
+    bus = SimI2C(SimClock())
+    bus.attach(0x69, MPU6050Sim(noise=False))
+    m = MPU6050(bus, address=0x69)
+    assert m.address == 0x69 and m.counts_per_g == 16384
+
+
+def test_wrong_who_am_i_is_rejected_naming_what_was_read():
+    bus = SimI2C(SimClock())
+    bus.attach(ADDR, RegisterFile({0x75: 0x70}))  # an MPU6500 answers 0x70
+    with pytest.raises(SensorNotFound) as e:
+        MPU6050(bus)
+    assert "0x70" in str(e.value) and "0x68" in str(e.value) and e.value.address == ADDR
+
+
+def test_absent_chip_is_sensor_not_found():
+    with pytest.raises(SensorNotFound) as e:
+        MPU6050(SimI2C(SimClock()))
+    assert "0x68" in str(e.value)
+
+
+@pytest.mark.parametrize("errno", [19, 5])
+def test_bus_fault_during_a_read_is_bus_error(errno):
+    b = accel_board()
+    m = MPU6050(b.bus)
+    if errno == 5:
+        b.bus.inject_eio()
+    else:
+        b.bus.inject_nack()
+    with pytest.raises(BusError) as e:
+        m.read_accel()
+    assert (e.value.address, e.value.register, e.value.errno) == (ADDR, 0x3B, errno)
+
+
+def test_bad_range_is_value_error():
+    with pytest.raises(ValueError):
+        MPU6050(make_board("gy87").bus, accel_range=3)
+
+
+# -- decode over every byte pattern (MSB first, hardware.md), small-int bound
+
+_CHECKED = {}
+
+
+@given(st.binary(min_size=6, max_size=6))
+@example(b"\x80\x00\x7f\xff\xff\xff")
+def test_decode_msb_first_never_leaves_small_int_range(raw):
+    if not _CHECKED:
+        mod, stats = intcheck.load("mpu6050")
+        bus = SimI2C(SimClock())
+        bus.attach(ADDR, RegisterFile({0x75: 0x68}))
+        _CHECKED.update(bus=bus, stats=stats, drv=mod.MPU6050(bus))
+    bus, d, stats = _CHECKED["bus"], _CHECKED["drv"], _CHECKED["stats"]
+    bus.writeto_mem(ADDR, 0x3B, raw)
+    out = [0, 0, 0]
+    d.read_accel_into(out)
+    assert out == [int.from_bytes(raw[i:i + 2], "big", signed=True) for i in (0, 2, 4)]
+    assert stats.max_abs < 1 << 30
