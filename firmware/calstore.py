@@ -1,0 +1,318 @@
+"""Power-safe storage of the calibration on the board's filesystem.
+
+    store = CalStore(sensor=mag.KIND, range_code=mag.range_code)
+    store.save(cal.to_bytes())                    # returns the record's sequence number
+    cal = Calibration.from_bytes(store.load())    # or StoreError with .reason
+
+The payload (model, V, InvW, B, fit error) is opaque here: Calibration.to_bytes() owns it.
+This module owns the record around it (little-endian):
+
+    offset size
+     0     4   magic b'eCAL'
+     4     1   format version (1)
+     5     1   header length (32 in version 1)
+     6     2   payload length
+     8    16   sensor kind, ASCII, NUL-padded ('qmc5883l', 'hmc5883l', ...)
+    24     1   range code of the sensor (the driver's .range_code)
+    25     3   reserved, 0
+    28     4   sequence number (newest wins)
+    32     n   payload
+    32+n   4   CRC-32 (IEEE, as binascii.crc32 / zlib.crc32) of every byte before it
+
+Bytes 0-7, the sequence number at 28-31 (when the header has 32 bytes or more) and the CRC
+trailer are the same in every version, so a record of a newer version is still recognised
+intact and refused as 'unknown_version', not as garbage, and save() numbers past it.
+
+Power safety: two slot files, <name>_a.cal and <name>_b.cal. save() writes the whole new
+record, with a higher sequence number, into the slot that does NOT hold the record load()
+would return now, then reads it back. Whatever a power cut leaves in that slot (nothing, a
+prefix, a torn tail of zeros or garbage, the old bytes), its CRC fails or its sequence number
+is older, so load() returns the previous calibration; once the record is complete, load()
+returns the new one. The scheme relies only on (1) a write to one file never altering
+another file's committed bytes, and (2) CRC-32 catching a torn record (it detects every error
+burst up to 32 bits, and any other corruption with probability 1 - 2**-32). It does not rely
+on rename being atomic (true on LittleFS, not on FAT), nor on a write being atomic (true of
+neither: LittleFS commits a file at close/sync, FAT writes in place).
+
+Refusals carry a reason (StoreError.reason), one of the REASON_* names below.
+"""
+import os
+import struct
+
+from firmware.errors import StoreError
+
+try:
+    from binascii import crc32 as _crc32_builtin
+except ImportError:  # a port built without binascii, or without its crc32
+    _crc32_builtin = None
+
+try:
+    from micropython import const
+except ImportError:  # CPython
+    def const(x):
+        return x
+
+REASON_MISSING = "missing"                  # no file in the slot
+REASON_TRUNCATED = "truncated"              # shorter than its header says (a cut write)
+REASON_BAD_LENGTH = "bad_length"            # longer than its header says
+REASON_BAD_MAGIC = "bad_magic"              # not a calibration record at all
+REASON_BAD_CRC = "bad_crc"                  # torn or corrupted record
+REASON_UNKNOWN_VERSION = "unknown_version"  # an intact record of a format this code cannot read
+REASON_OTHER_SENSOR = "other_sensor"        # intact, but made for another magnetometer
+REASON_OTHER_RANGE = "other_range"          # intact, but made at another range setting
+REASON_OLDER = "older"                      # load(): intact and usable, but the other is newer
+REASON_VERIFY_FAILED = "verify_failed"      # save(): the record read back differs
+
+MAGIC = b"eCAL"
+VERSION = const(1)
+HEADER_LEN = const(32)
+MAX_PAYLOAD = const(4096)      # bytes; a calibration is about a hundred
+_HEADER = "<4sBBH16sBBHI"      # magic, version, header len, payload len, sensor, range, 0, 0, seq
+_SENSOR_LEN = const(16)
+_ENOENT = const(2)
+
+# Why load() failed when no slot is usable: the most telling reason of the two slots.
+_REASON_RANK = (REASON_OTHER_SENSOR, REASON_OTHER_RANGE, REASON_UNKNOWN_VERSION,
+                REASON_BAD_CRC, REASON_BAD_LENGTH, REASON_TRUNCATED, REASON_BAD_MAGIC,
+                REASON_MISSING)
+
+
+def _make_crc_table():
+    # CRC-32/IEEE, reflected polynomial 0xEDB88320, one entry per nibble (16 ints).
+    t = []
+    for n in range(16):
+        c = n
+        for _ in range(4):
+            c = (c >> 1) ^ 0xEDB88320 if c & 1 else c >> 1
+        t.append(c)
+    return tuple(t)
+
+
+_CRC_NIBBLE = _make_crc_table()
+
+
+def crc32_int(data, crc=0):
+    """CRC-32 (IEEE) in integers only, the same value as binascii.crc32(data, crc)."""
+    crc ^= 0xFFFFFFFF
+    t = _CRC_NIBBLE
+    for b in data:
+        crc ^= b
+        crc = (crc >> 4) ^ t[crc & 15]
+        crc = (crc >> 4) ^ t[crc & 15]
+    return crc ^ 0xFFFFFFFF
+
+
+def crc32(data):
+    """CRC-32 of data: binascii's when the port has it, else crc32_int()."""
+    if _crc32_builtin is not None:
+        return _crc32_builtin(data) & 0xFFFFFFFF
+    return crc32_int(data)
+
+
+def _sensor_field(sensor):
+    b = sensor.encode() if isinstance(sensor, str) else bytes(sensor)
+    if not 0 < len(b) <= _SENSOR_LEN or b"\x00" in b:
+        raise ValueError("sensor kind %r must be 1..%d bytes without NUL" % (sensor, _SENSOR_LEN))
+    return b + bytes(_SENSOR_LEN - len(b))
+
+
+def encode_record(payload, sensor, range_code, seq):
+    """The record bytes for payload (bytes) made with sensor kind / range code, number seq."""
+    if len(payload) > MAX_PAYLOAD:
+        raise ValueError("payload of %d bytes exceeds %d" % (len(payload), MAX_PAYLOAD))
+    if not 0 <= range_code <= 255:
+        raise ValueError("range code %d not in 0..255" % range_code)
+    head = struct.pack(_HEADER, MAGIC, VERSION, HEADER_LEN, len(payload), _sensor_field(sensor),
+                       range_code, 0, 0, seq & 0xFFFFFFFF)
+    body = head + bytes(payload)
+    return body + struct.pack("<I", crc32(body))
+
+
+def decode_record(data, sensor, range_code):
+    """(seq, payload) of a record, or StoreError(reason) naming what is wrong with it.
+
+    Checks run from framing to meaning, so a torn write is reported as such (truncated,
+    bad_crc) and only an intact record can be refused as another version, sensor or range.
+    """
+    n = len(data)
+    if bytes(data[:4]) != MAGIC[:n if n < 4 else 4]:
+        raise StoreError(REASON_BAD_MAGIC, "starts %s, not %s" % (bytes(data[:4]), MAGIC))
+    if n < 8:
+        raise StoreError(REASON_TRUNCATED, "%d bytes, header needs 8" % n)
+    hlen = data[5]
+    plen = data[6] | (data[7] << 8)
+    total = hlen + plen + 4
+    if n < total:
+        raise StoreError(REASON_TRUNCATED, "%d bytes of %d" % (n, total))
+    if n > total:
+        raise StoreError(REASON_BAD_LENGTH, "%d bytes, header says %d" % (n, total))
+    want = struct.unpack("<I", bytes(data[total - 4:total]))[0]
+    got = crc32(bytes(data[:total - 4]))
+    if got != want:
+        raise StoreError(REASON_BAD_CRC, "crc 0x%08x, stored 0x%08x" % (got, want))
+    if data[4] != VERSION or hlen != HEADER_LEN:
+        raise StoreError(REASON_UNKNOWN_VERSION, "format %d (header %d bytes), this code reads %d"
+                         % (data[4], hlen, VERSION))
+    _, _, _, _, kind, rng, r1, r2, seq = struct.unpack(_HEADER, bytes(data[:HEADER_LEN]))
+    if r1 or r2:
+        raise StoreError(REASON_UNKNOWN_VERSION, "reserved bytes set: %d %d" % (r1, r2))
+    if kind != _sensor_field(sensor):
+        raise StoreError(REASON_OTHER_SENSOR, "made for %s, this sensor is %s"
+                         % (kind.rstrip(b"\x00"), sensor))
+    if rng != range_code:
+        raise StoreError(REASON_OTHER_RANGE, "made at range code %d, sensor at %d"
+                         % (rng, range_code))
+    return seq, bytes(data[HEADER_LEN:HEADER_LEN + plen])
+
+
+def _newer(a, b):
+    # Sequence numbers compare modulo 2**32 (RFC 1982 style), so wrap-around is harmless.
+    d = (a - b) & 0xFFFFFFFF
+    return 0 < d < 0x80000000
+
+
+class _OsFs:
+    """The default filesystem: builtin open and os.remove (MicroPython and CPython)."""
+
+    @staticmethod
+    def open(path, mode):
+        return open(path, mode)
+
+    @staticmethod
+    def remove(path):
+        os.remove(path)
+
+
+class CalStore:
+    """Two-slot, CRC-protected calibration record in `directory` (see the module doc).
+
+    fs: object with open(path, mode) -> file (read/write/close) and remove(path); default the
+    real filesystem. After load(): .seq and .path of the record returned, .last_skipped the
+    list of (path, reason) for the slot(s) not used.
+    """
+
+    def __init__(self, directory="/", name="ecompass", sensor="qmc5883l", range_code=0, fs=None):
+        _sensor_field(sensor)
+        if not 0 <= range_code <= 255:
+            raise ValueError("range code %d not in 0..255" % range_code)
+        self.sensor = sensor
+        self.range_code = range_code
+        self.fs = fs if fs is not None else _OsFs()
+        if directory in ("", "/"):
+            prefix = directory
+        else:
+            prefix = directory.rstrip("/") + "/"
+        self.paths = (prefix + name + "_a.cal", prefix + name + "_b.cal")
+        self.seq = None
+        self.path = None
+        self.last_skipped = []
+
+    def _read(self, path):
+        try:
+            f = self.fs.open(path, "rb")
+        except OSError as e:
+            if e.args and e.args[0] == _ENOENT:
+                return None
+            raise
+        try:
+            return f.read(HEADER_LEN + MAX_PAYLOAD + 5)  # one byte more than any record
+        finally:
+            f.close()
+
+    def _inspect(self, path):
+        # -> (seq or None, payload or None, reason or None, crc_ok_seq or None)
+        data = self._read(path)
+        if data is None:
+            return None, None, REASON_MISSING, None
+        try:
+            seq, payload = decode_record(data, self.sensor, self.range_code)
+        except StoreError as e:
+            intact = None
+            if (e.reason in (REASON_OTHER_SENSOR, REASON_OTHER_RANGE, REASON_UNKNOWN_VERSION)
+                    and data[5] >= HEADER_LEN):
+                intact = struct.unpack("<I", bytes(data[28:32]))[0]
+            return None, None, e.reason, intact
+        return seq, payload, None, seq
+
+    def _scan(self):
+        return [self._inspect(p) for p in self.paths]
+
+    @staticmethod
+    def _current(slots):
+        best = -1
+        for i in (0, 1):
+            seq = slots[i][0]
+            if seq is not None and (best < 0 or _newer(seq, slots[best][0])):
+                best = i
+        return best
+
+    def load(self):
+        """The newest usable payload (bytes); StoreError(reason) if neither slot has one."""
+        slots = self._scan()
+        best = self._current(slots)
+        self.last_skipped = []
+        for i in (0, 1):
+            if i != best:
+                reason = slots[i][2] if slots[i][2] is not None else REASON_OLDER
+                self.last_skipped.append((self.paths[i], reason))
+        if best < 0:
+            self.seq = None
+            self.path = None
+            reasons = [s[2] for s in slots]
+            for r in _REASON_RANK:
+                if r in reasons:
+                    break
+            raise StoreError(r, "; ".join("%s: %s" % (p, q) for p, q in self.last_skipped))
+        self.seq = slots[best][0]
+        self.path = self.paths[best]
+        return slots[best][1]
+
+    def save(self, payload):
+        """Store payload as the newest record, power-safely; returns its sequence number.
+
+        Raises ValueError for an oversized payload, OSError from the filesystem (full, read
+        only), StoreError('verify_failed') if the record read back is not the one written.
+        """
+        slots = self._scan()
+        best = self._current(slots)
+        a = slots[0][3]
+        b = slots[1][3]
+        if best >= 0:
+            target = 1 - best       # never touch the record load() returns now
+        elif a is None:
+            target = 0              # nothing usable: spare an intact record of another
+        elif b is None:             # sensor, range or version if there is one
+            target = 1
+        else:
+            target = 1 if _newer(a, b) else 0
+        top = None
+        for s in slots:
+            if s[3] is not None and (top is None or _newer(s[3], top)):
+                top = s[3]
+        seq = 1 if top is None else (top + 1) & 0xFFFFFFFF
+        record = encode_record(payload, self.sensor, self.range_code, seq)
+        path = self.paths[target]
+        f = self.fs.open(path, "wb")
+        try:
+            f.write(record)
+        finally:
+            f.close()
+        back = self._read(path)
+        if back is None or bytes(back) != record:
+            raise StoreError(REASON_VERIFY_FAILED, "%s read back %s bytes of %d"
+                             % (path, "no" if back is None else len(back), len(record)))
+        return seq
+
+    def erase(self):
+        """Remove both slots, older first, so a cut in between still leaves the newer one."""
+        slots = self._scan()
+        best = self._current(slots)
+        order = (1 - best, best) if best >= 0 else (0, 1)
+        for i in order:
+            try:
+                self.fs.remove(self.paths[i])
+            except OSError as e:
+                if not (e.args and e.args[0] == _ENOENT):
+                    raise
+        self.seq = None
+        self.path = None

@@ -1,0 +1,439 @@
+"""Sample selection for calibration: a bounded buffer of raw int16 samples, kept apart by distance.
+
+    buf = SampleBuffer(capacity=300, separation=separation_for(6000, 300))
+    if buf.offer(x, y, z) == REPLACED: ...  # buf.evicted holds the sample that left
+    pct = buf.coverage(vx, vy, vz)          # % of 100 equal-area sphere regions seen from V
+
+Why distance (Judd): a threshold on the distance between raw samples is origin-independent, so
+it spreads samples evenly whatever the hard iron; an angle threshold measured from a wrong
+centre bunches samples on one side and excludes the other. NXP's orientation bins need the
+calibrated field to pick a bin; a distance rule needs nothing but the raw counts.
+
+The rule, in raw counts with s = separation:
+- space is cut into cubic cells of side s, and a cell holds at most one sample;
+- a sample is kept only if its own cell is empty and no held sample is closer than s
+  (squared distances, no sqrt). Any sample closer than s lies in one of the 27 cells around
+  the new one, so at most 27 hash look-ups decide, whatever the fill (neighbour cells whose
+  nearest point is s or more away are skipped: 19.6 of the 26 remain on average): every
+  pair of held samples is at least s apart, and no scan of the buffer is ever needed.
+- when the buffer is full a kept sample overwrites the oldest one (FIFO), so a background
+  calibration follows a change of hard iron; the evicted sample is copied to `.evicted` so a
+  caller keeping exact sums can subtract its terms.
+
+Slot order: held samples always occupy slots 0 .. count-1 (`data[3*i:3*i+3]` is slot i), so
+sums over `data[:3*count]` need no ordering. Age order, oldest first, is
+`slot_by_age(0) .. slot_by_age(count - 1)`; `next_slot` is where the next kept sample goes
+(the oldest slot once the buffer is full).
+
+Cells map to slots through an open-addressing hash table (linear probing, load <= 1/3,
+backward-shift deletion, no tombstones) in preallocated arrays. offer() allocates nothing
+on MicroPython and every intermediate stays below 2**30 for int16 input and separation
+<= MAX_SEPARATION (tests/test_samples.py, tests/scenarios/samples_alloc.py).
+"""
+from array import array
+
+from firmware.fixedpoint import isqrt
+
+try:
+    from micropython import const
+except ImportError:  # CPython
+    def const(x):
+        return x
+
+REJECTED = const(0)  # offer(): too close to a held sample, or its cell is taken
+KEPT = const(1)      # offer(): stored in a free slot
+REPLACED = const(2)  # offer(): stored over the oldest sample, now in .evicted
+
+MAX_CAPACITY = const(16383)     # table entries are uint16 slot+1; the table is 3-6x capacity
+MAX_SEPARATION = const(16384)   # counts: keeps 3*s**2 < 2**30 (small int on 32-bit boards)
+N_REGIONS = const(100)          # equal-area sphere regions for coverage(), as MotionCal uses
+
+# Spatial hash: odd multipliers < 2**14 keep |c * m| < 2**29 for cell coordinates |c| <= 2**15,
+# and the xor of three such values stays below 2**29 too; a fold, a second multiply on 15 bits
+# and a fold spread neighbouring cells over the table (mean probes match ideal linear probing).
+_HX = const(0x2F1B)
+_HY = const(0x1D4F)
+_HZ = const(0x3A95)
+_HMIX = const(0x5BD1)
+
+_FAR = const(0)     # _probe(): cell empty and no sample within s met on the way
+_TAKEN = const(1)   # _probe(): the cell holds a sample, not within s
+_NEAR = const(2)    # _probe(): a held sample within s was met
+
+# MotionCal gap weights (peers.md): empty region 1.0, one sample 0.2, two 0.01, in hundredths
+_GAP_EMPTY = const(100)
+_GAP_ONE = const(20)
+_GAP_TWO = const(1)
+
+# Coverage regions. Area on a sphere is uniform in z (Archimedes), so each hemisphere is cut
+# into latitude bands whose height in z/|r| is 0.02 per region (z/|r| boundaries 49/50, 43/50,
+# 32/50, 17/50, 0), and each band into equal longitude sectors: 1 + 6 + 11 + 15 + 17 = 50
+# regions per hemisphere, all of area 4*pi/100 and about 20 degrees across.
+_Z_FIFTIETHS = (49, 43, 32, 17, 0)    # lower z/|r| limit of each band, in 1/50
+_BAND_SECTORS = (1, 6, 11, 15, 17)
+_BAND_FIRST = (0, 1, 7, 18, 33)       # region index of each band's sector 0 (upper hemisphere)
+# Sector boundaries: (cos, sin) of 2*pi*k/n in Q14 for k = 0 .. n-1, per band.
+_BOUNDS = (
+    (),
+    (16384, 0, 8192, 14189, -8192, 14189, -16384, 0, -8192, -14189, 8192, -14189),
+    (16384, 0, 13783, 8858, 6806, 14903, -2332, 16217, -10729, 12382, -15720, 4616,
+     -15720, -4616, -10729, -12382, -2332, -16217, 6806, -14903, 13783, -8858),
+    (16384, 0, 14968, 6664, 10963, 12176, 5063, 15582, -1713, 16294, -8192, 14189,
+     -13255, 9630, -16026, 3406, -16026, -3406, -13255, -9630, -8192, -14189,
+     -1713, -16294, 5063, -15582, 10963, -12176, 14968, -6664),
+    (16384, 0, 15278, 5919, 12108, 11038, 7303, 14666, 1512, 16314, -4484, 15759,
+     -9874, 13075, -13930, 8625, -16105, 3011, -16105, -3011, -13930, -8625,
+     -9874, -13075, -4484, -15759, 1512, -16314, 7303, -14666, 12108, -11038,
+     15278, -5919),
+)
+_NORM_HI = const(0x4000)  # region(): the largest component is scaled into [2**13, 2**14)
+_NORM_LO = const(0x2000)
+
+# separation_for(): a sphere of radius R saturates at about 8.2 * (R / s)**2 samples under this
+# rule (measured over 2e5 uniformly spread offers; tests/test_samples.py checks it within 25 %).
+_FILL_Q8 = const(2100)
+
+
+def _hash(cx, cy, cz):
+    h = (cx * _HX) ^ (cy * _HY) ^ (cz * _HZ)
+    h = (h ^ (h >> 13)) & 0x7FFF
+    h *= _HMIX  # < 2**15 * 2**15: still a small int
+    return h ^ (h >> 15)
+
+
+def separation_for(radius_counts, samples):
+    """Separation (counts) at which a whole sphere of `radius_counts` saturates at about
+    `samples` held samples.
+
+    radius_counts is the geomagnetic field in counts (50 uT = 6000 counts on a QMC5883L at
+    +-2 G, 545 on an HMC5883L at 1090 counts/G). Ask for fewer samples than the capacity
+    (about 3/4): if a whole sphere needs more than the capacity, the FIFO evicts the start of
+    a slow rotation before its end arrives and coverage never completes.
+    """
+    if radius_counts <= 0 or samples <= 0:
+        raise ValueError("separation_for(%d, %d): both must be > 0" % (radius_counts, samples))
+    s = isqrt(radius_counts * radius_counts * _FILL_Q8 // (256 * samples))
+    if s < 1:
+        return 1
+    return s if s < MAX_SEPARATION else MAX_SEPARATION
+
+
+def region(dx, dy, dz):
+    """Equal-area sphere region 0 .. N_REGIONS-1 of the direction (dx, dy, dz), or -1 for zero.
+
+    Regions 0 .. 49 have dz >= 0: 0 is the cap around +z, then bands of 6, 11, 15 and 17
+    longitude sectors down to the equator (sector 0 starts at +x and runs towards +y);
+    50 .. 99 mirror them for dz < 0.
+    """
+    ax = -dx if dx < 0 else dx
+    ay = -dy if dy < 0 else dy
+    az = -dz if dz < 0 else dz
+    m = ax if ax > ay else ay
+    if az > m:
+        m = az
+    if m == 0:
+        return -1
+    # Normalise so that r**2 < 3 * 2**28 stays a small int and the direction keeps 13 bits.
+    while m >= _NORM_HI:
+        dx >>= 1
+        dy >>= 1
+        az >>= 1
+        m >>= 1
+    while m < _NORM_LO:
+        dx <<= 1
+        dy <<= 1
+        az <<= 1
+        m <<= 1
+    r = isqrt(dx * dx + dy * dy + az * az)
+    band = 0
+    while 50 * az < _Z_FIFTIETHS[band] * r:
+        band += 1
+    first = _BAND_FIRST[band] if dz >= 0 else N_REGIONS // 2 + _BAND_FIRST[band]
+    n = _BAND_SECTORS[band]
+    if n == 1:
+        return first
+    # Largest k with angle(dx, dy) >= 2*pi*k/n, by bisection; each test is one cross product
+    # with the boundary's unit vector, valid because both angles lie in the same half-turn.
+    bounds = _BOUNDS[band]
+    upper = dy > 0 or (dy == 0 and dx >= 0)   # angle in [0, pi)
+    lo = 0
+    hi = n
+    while hi - lo > 1:
+        k = (lo + hi) >> 1
+        if 2 * k < n:  # boundary in [0, pi)
+            past = (not upper) or bounds[2 * k] * dy - bounds[2 * k + 1] * dx >= 0
+        else:          # boundary in [pi, 2*pi)
+            past = (not upper) and bounds[2 * k] * dy - bounds[2 * k + 1] * dx >= 0
+        if past:
+            lo = k
+        else:
+            hi = k
+    return first + lo
+
+
+class SampleBuffer:
+    """Bounded, distance-separated buffer of raw int16 magnetometer samples (see module doc).
+
+    Attributes: data (array 'h', 3*capacity; slots 0..count-1 hold samples), count, capacity,
+    separation (counts), evicted (array 'h', 3: the sample the last REPLACED pushed out),
+    next_slot, last_cells / last_probes (hash cells looked up / table entries read by the
+    last offer), region_counts (bytearray, per region, filled by coverage()), gaps_x100.
+    """
+
+    def __init__(self, capacity=300, separation=50):
+        if not 1 <= capacity <= MAX_CAPACITY:
+            raise ValueError("capacity %d not in 1..%d" % (capacity, MAX_CAPACITY))
+        self.capacity = capacity
+        self.data = array('h', bytearray(6 * capacity))
+        self.evicted = array('h', bytearray(6))
+        self._cells = array('h', bytearray(6 * capacity))  # cell coordinates of each slot
+        size = 4
+        while size < 3 * capacity:  # load <= 1/3: about 1.6 probes per unsuccessful look-up
+            size <<= 1
+        self._table = array('H', bytearray(2 * size))     # slot + 1, 0 = empty
+        self._mask = size - 1
+        self.regions = N_REGIONS
+        self.region_counts = bytearray(N_REGIONS)
+        self.gaps_x100 = N_REGIONS * _GAP_EMPTY
+        self.last_cells = 0
+        self.last_probes = 0
+        self._check_separation(separation)
+        self.separation = separation
+        self._s2 = separation * separation
+        self.clear()
+
+    @staticmethod
+    def _check_separation(d):
+        if not 1 <= d <= MAX_SEPARATION:
+            raise ValueError("separation %d counts not in 1..%d" % (d, MAX_SEPARATION))
+
+    def clear(self):
+        """Forget every sample (the caller's sums must be reset too)."""
+        self.count = 0
+        self.next_slot = 0
+        self._last = -1
+        t = self._table
+        for i in range(len(t)):
+            t[i] = 0
+
+    def sample(self, i, out):
+        """Copy slot i (0 <= i < count) into out[0:3]."""
+        if not 0 <= i < self.count:
+            raise IndexError("slot %d not in 0..%d" % (i, self.count - 1))
+        j = 3 * i
+        d = self.data
+        out[0] = d[j]
+        out[1] = d[j + 1]
+        out[2] = d[j + 2]
+
+    def slot_by_age(self, k):
+        """Slot of the k-th oldest held sample (k = 0 is the oldest)."""
+        if not 0 <= k < self.count:
+            raise IndexError("age %d not in 0..%d" % (k, self.count - 1))
+        if self.count < self.capacity:
+            return k
+        k += self.next_slot
+        return k - self.capacity if k >= self.capacity else k
+
+    def offer(self, x, y, z):
+        """Offer one raw sample (int16 counts); returns REJECTED, KEPT or REPLACED."""
+        if not (-32768 <= x <= 32767 and -32768 <= y <= 32767 and -32768 <= z <= 32767):
+            raise ValueError("sample (%d, %d, %d) is not int16" % (x, y, z))
+        self.last_cells = 0
+        self.last_probes = 0
+        s = self.separation
+        data = self.data
+        # The newest sample is the usual reason to reject at 50 Hz: test it before hashing.
+        j = 3 * self._last
+        if j >= 0:
+            d = data[j] - x
+            if -s < d < s:
+                e = data[j + 1] - y
+                if -s < e < s:
+                    f = data[j + 2] - z
+                    if -s < f < s and d * d + e * e + f * f < self._s2:
+                        return REJECTED
+        cx = x // s
+        cy = y // s
+        cz = z // s
+        if self._probe(cx, cy, cz, x, y, z) != _FAR:
+            return REJECTED  # own cell taken (or a close sample met on its chain)
+        # Neighbour cells, skipping those whose nearest integer point is already >= s away:
+        # per axis the gap to cell c-1 is (offset in cell + 1), to cell c+1 it is (s - offset).
+        s2 = self._s2
+        u = x - cx * s + 1
+        lx = u * u
+        u = s + 1 - u
+        hx = u * u
+        u = y - cy * s + 1
+        ly = u * u
+        u = s + 1 - u
+        hy = u * u
+        u = z - cz * s + 1
+        lz = u * u
+        u = s + 1 - u
+        hz = u * u
+        for a in range(-1, 2):
+            ga = lx if a < 0 else hx if a > 0 else 0
+            if ga >= s2:
+                continue
+            for b in range(-1, 2):
+                gb = ga + (ly if b < 0 else hy if b > 0 else 0)
+                if gb >= s2:
+                    continue
+                for c in range(-1, 2):
+                    gc = gb + (lz if c < 0 else hz if c > 0 else 0)
+                    if (gc >= s2) or not (a or b or c):
+                        continue
+                    if self._probe(cx + a, cy + b, cz + c, x, y, z) == _NEAR:
+                        return REJECTED
+        slot = self.next_slot
+        if self.count < self.capacity:
+            self.count += 1
+            result = KEPT
+        else:
+            self._unlink(slot)
+            j = 3 * slot
+            ev = self.evicted
+            ev[0] = data[j]
+            ev[1] = data[j + 1]
+            ev[2] = data[j + 2]
+            result = REPLACED
+        self._store(slot, x, y, z, cx, cy, cz)
+        self.next_slot = slot + 1 if slot + 1 < self.capacity else 0
+        self._last = slot
+        return result
+
+    def _probe(self, cx, cy, cz, x, y, z):
+        # Walk the chain of cell (cx, cy, cz) until its occupant or an empty entry. Any entry
+        # met that is within s of (x, y, z) decides at once: such a sample forbids keeping.
+        table = self._table
+        cells = self._cells
+        data = self.data
+        s = self.separation
+        mask = self._mask
+        i = _hash(cx, cy, cz) & mask
+        n = 0
+        result = _FAR
+        while True:
+            n += 1
+            e = table[i]
+            if e == 0:
+                break
+            j = 3 * (e - 1)
+            d = data[j] - x
+            if -s < d < s:
+                f = data[j + 1] - y
+                if -s < f < s:
+                    g = data[j + 2] - z
+                    if -s < g < s and d * d + f * f + g * g < self._s2:
+                        result = _NEAR
+                        break
+            if cells[j] == cx and cells[j + 1] == cy and cells[j + 2] == cz:
+                result = _TAKEN
+                break
+            i = (i + 1) & mask
+        self.last_cells += 1
+        self.last_probes += n
+        return result
+
+    def _store(self, slot, x, y, z, cx, cy, cz):
+        j = 3 * slot
+        data = self.data
+        data[j] = x
+        data[j + 1] = y
+        data[j + 2] = z
+        cells = self._cells
+        cells[j] = cx
+        cells[j + 1] = cy
+        cells[j + 2] = cz
+        table = self._table
+        mask = self._mask
+        i = _hash(cx, cy, cz) & mask
+        while table[i]:
+            i = (i + 1) & mask
+        table[i] = slot + 1
+
+    def _home(self, e):
+        j = 3 * (e - 1)
+        c = self._cells
+        return _hash(c[j], c[j + 1], c[j + 2]) & self._mask
+
+    def _unlink(self, slot):
+        # Linear-probing deletion by backward shift (Knuth 6.4 Algorithm R): no tombstones,
+        # so chains never lengthen with churn.
+        table = self._table
+        mask = self._mask
+        i = self._home(slot + 1)
+        while table[i] != slot + 1:
+            if table[i] == 0:
+                raise RuntimeError("sample slot %d missing from its hash chain" % slot)
+            i = (i + 1) & mask
+        table[i] = 0
+        j = i
+        while True:
+            j = (j + 1) & mask
+            e = table[j]
+            if e == 0:
+                return
+            k = self._home(e)
+            if i <= j:
+                stays = i < k <= j
+            else:
+                stays = k > i or k <= j
+            if not stays:
+                table[i] = e
+                table[j] = 0
+                i = j
+
+    def set_separation(self, d):
+        """Change the separation and rebuild the hash from the held samples (rare; allocates).
+
+        Samples that break the new rule are dropped, the newer of a conflicting pair kept;
+        the survivors stay in age order. Returns how many were dropped. The caller must
+        recompute any sums over the held samples afterwards.
+        """
+        self._check_separation(d)
+        old = [self.data[3 * s:3 * s + 3] for s in
+               [self.slot_by_age(k) for k in range(self.count)]]
+        self.separation = d
+        self._s2 = d * d
+        self.clear()
+        kept = []
+        for v in reversed(old):      # newest first: they win conflicts
+            if self.offer(v[0], v[1], v[2]) != REJECTED:
+                kept.append(v)
+        self.clear()
+        for v in reversed(kept):     # oldest first again; all compatible, so all kept
+            self.offer(v[0], v[1], v[2])
+        return len(old) - len(kept)
+
+    def coverage(self, cx, cy, cz):
+        """Percent (0..100) of the N_REGIONS equal-area regions holding a sample, seen from
+        the centre (cx, cy, cz) in counts (the current hard-iron estimate V).
+
+        Also fills region_counts (saturating at 255) and gaps_x100, MotionCal's gaps figure
+        times 100 (0 .. 10000; MotionCal calls gaps < 15, i.e. gaps_x100 < 1500, good).
+        """
+        counts = self.region_counts
+        for i in range(N_REGIONS):
+            counts[i] = 0
+        data = self.data
+        for j in range(0, 3 * self.count, 3):
+            r = region(data[j] - cx, data[j + 1] - cy, data[j + 2] - cz)
+            if r >= 0 and counts[r] < 255:
+                counts[r] += 1
+        occupied = 0
+        gaps = 0
+        for i in range(N_REGIONS):
+            c = counts[i]
+            if c == 0:
+                gaps += _GAP_EMPTY
+            else:
+                occupied += 1
+                if c == 1:
+                    gaps += _GAP_ONE
+                elif c == 2:
+                    gaps += _GAP_TWO
+        self.gaps_x100 = gaps
+        return occupied * 100 // N_REGIONS
