@@ -4,6 +4,7 @@ sat16(v)      clamp to the int16 range.
 isqrt(n)      floor square root of any non-negative int (exact; no float).
 bit_length(n) number of bits of |n| (MicroPython ints have no .bit_length()).
 rdiv(n, d)    n / d rounded to the nearest int, halves away from zero (d != 0).
+icbrt(n)      floor cube root of any int (exact; rounds toward minus infinity; for the solvers).
 
 For n < 2**30 isqrt allocates nothing and every intermediate stays a small int, so the
 per-sample path may call it; larger n (the solvers) take the Newton branch on long ints.
@@ -72,3 +73,17 @@ def rdiv(n, d):
     if n >= 0:
         return (n + (d >> 1)) // d
     return -((-n + (d >> 1)) // d)
+
+
+def icbrt(n):
+    # Newton from above on long ints: x_{k+1} = (2x + n // x^2) // 3 decreases to floor(cbrt n)
+    if n < 0:
+        return -icbrt(-n - 1) - 1  # floor for negatives: cbrt(-m) = -cbrt(m)
+    if n < 2:
+        return n
+    x = 1 << ((bit_length(n) + 2) // 3)  # 2**ceil(bits/3) > cbrt(n)
+    while True:
+        y = (2 * x + n // (x * x)) // 3
+        if y >= x:
+            return x
+        x = y

@@ -2,13 +2,27 @@ import math
 
 from hypothesis import given, strategies as st
 
-from firmware.fixedpoint import bit_length, isqrt, rdiv, sat16
+from firmware.fixedpoint import bit_length, icbrt, isqrt, rdiv, sat16
 from tests import intcheck, mp
 
 
 @given(st.integers(min_value=0, max_value=1 << 200))
 def test_isqrt_is_exact_floor(n):
     assert isqrt(n) == math.isqrt(n)
+
+
+@given(st.integers(min_value=-(1 << 300), max_value=1 << 300))
+def test_icbrt_is_exact_floor(n):
+    r = icbrt(n)
+    assert r ** 3 <= n < (r + 1) ** 3
+
+
+def test_icbrt_exact_on_cubes_and_neighbours():
+    for r in list(range(-40, 41)) + [12345678901234567, -(1 << 100) - 7]:
+        assert icbrt(r ** 3) == r
+        assert icbrt(r ** 3 - 1) == r - 1
+        if r not in (-1, 0):  # 0 and 1 are cubes themselves
+            assert icbrt(r ** 3 + 1) == r
 
 
 @given(st.integers(min_value=0, max_value=(1 << 30) - 1))

@@ -1,0 +1,496 @@
+"""The calibration solvers: min/max, 4-, 7- and 10-element fits, exact to the last step.
+
+    f = solve.fit(c, sums, 10)               # exact least squares from the 35 moment sums
+    w = solve.invw_from_a2(f.a2, f.det_a2)   # W^-1 = A^1/2, det 1, Q40
+    q = solve.q15_from_invw(w, solve.SQRT_FRAC_BITS)   # InvW, 9 Q15 ints
+(firmware/magcal.py strings these together, with the acceptance checks, time-sliced.)
+
+Models (AN4246 eq. 5: Bp = W Rx Ry Rz Br + V; locus eq. 11: (Bp-V)^T A (Bp-V) = B^2):
+  4   hard iron V + field B, W^-1 = I.  The linear least squares of eqs. 26-37: regress
+      Y = |d|^2 on X = (dx, dy, dz, 1); beta = (X^T X)^-1 X^T Y; V = beta[0:3] / 2;
+      B = sqrt(beta[3] + V.V).
+  7   V + diagonal soft iron + B.   X = (dx^2-dz^2, dy^2-dz^2, dx, dy, dz, 1).
+  10  V + symmetric W^-1 + B.       X = (dx^2-dz^2, dy^2-dz^2, dx dy, dx dz, dy dz, dx, dy, dz, 1).
+In every model the residual Y - X beta is the algebraic distance q(d) = d^T A d + b.d + e of
+a quadric whose matrix A has trace 3: |d|^2 carries the trace and the other columns span
+every trace-free change of A (7: diagonal only). Why this constraint rather than NXP's
+smallest eigenvector (||beta|| = 1): it is linear, so the exact rational solution follows
+from one fraction-free elimination of integer normal equations; it is invariant under
+translation (the quadric's A does not change when d moves, so neither does the fit; the
+reference centre of the sums only changes the size of the numbers) and, for 10 elements,
+under rotation (trace is rotation-invariant); and the 4 / 7 / 10 models are nested with one
+normalisation, so their residual sums P are comparable: P10 <= P7 <= P4 on the same samples.
+A sphere has A = I, so the 4-element case IS AN4246's fit, and with little soft iron the
+quadric stays close to A = I, far from the constraint's singular set (trace A = 0).
+
+Exactness: the 35 sums give X^T X, X^T Y and Y^T Y as integers. Bareiss elimination keeps
+every intermediate an integer and, for a positive definite X^T X, needs no pivoting (its
+pivots are the leading principal minors, all > 0); a pivot <= 0 means the samples do not
+determine the model. The solution is beta = beta_num / D with D = det(X^T X), and the
+residual P = Y^T Y - beta . X^T Y (least squares) is exact too. Then, in integers:
+  A2 = 2 D A, b2 = 2 D b, e2 = 2 D e         the quadric scaled to integer coefficients
+  d0 = -A2^-1 b2 / 2                         centre (eq. 19: V = R0), V = c + d0
+  K2 = d0^T A2 d0 - e2                       so (d - d0)^T A2 (d - d0) = K2 on the fit
+With det W^-1 = 1 (NXP's normalisation, so B is the field's geometric-mean radius):
+  W^-1 = (A2 / det(A2)^(1/3))^(1/2)          eq. 20, symmetric root (AN4246 section 5)
+  B^6 = K2^3 / det(A2)
+The square root is a Denman-Beavers iteration on 3x3 fixed-point long ints (Q40): both
+iterates stay exactly symmetric (adjugate inverses of symmetric matrices are symmetric), the
+iteration is stable and converges quadratically; det(A2)^(1/3) and B come from the exact
+integer roots icbrt / isqrt. Only these irrational steps round, far below one Q15 step.
+
+Fit error (the same for every model, min/max included): NXP's 50 sqrt(P'/N) / B^2 percent,
+where P' sums the squared residuals of the quadric normalised as |W^-1 (Bp - V)|^2 - B^2.
+That is 100 x AN4246's epsilon = sqrt(P/M) / (2 B^2) (eq. 37 text), and for small residuals
+it is the RMS radial error as a percentage of B. In the trace normalisation P' / B^4 =
+P / K^2 with K = K2 / (2 D), so fit_error = 50 sqrt(P / N) / K; kept in hundredths of a %.
+
+Q15 (AN4246 section 3): out = InvW (Bp - V) >> 15. InvW = s W^-1 with s chosen so every row's
+absolute sum is at most 32767; then for any int16 input every partial sum is below
+32767 * 32768 < 2**30 (a MicroPython small int, a C int32 with room to spare), and the
+output is the field scaled by s: field_out = B det(InvW / 32768)^(1/3).
+
+Degeneracy (Judd's degenerate ellipsoids): a model is undetermined when some column of X is
+(nearly) a combination of the others, e.g. dx dy == 0 on two circles in the planes x = 0 and
+y = 0, or dz ~ const on a flat spin. The test is the variance inflation of each parameter:
+rho_i = 1 / (N (M^-1)_ii s^deg_i) with M = X^T X and s the samples' mean squared distance from
+their mean. It is dimensionless and translation-invariant (the part of column i that no other
+column explains, per sample, relative to the spread of the data). On a uniformly covered
+sphere rho = 1/3 for the centre, 1/15 for dx dy, 1/5 for dx^2-dz^2; see firmware/magcal.py
+for the thresholds.
+"""
+from firmware.accum import EXPONENTS, index, shifted
+from firmware.fixedpoint import icbrt, isqrt, rdiv
+
+try:
+    from micropython import const
+except ImportError:  # CPython
+    def const(x):
+        return x
+
+_Q15_ROW_MAX = const(32767)     # largest row absolute sum of InvW (see module doc)
+SQRT_FRAC_BITS = const(40)      # W^-1 iteration in Q40: 2**-40 << one Q15 step
+_SQRT_MAX_ITER = const(40)      # Denman-Beavers: ~6 iterations for cond(A) 4, ~9 for 1000
+B_FRAC_BITS = const(16)         # B kept in Q16 counts between steps
+
+# Columns of X as polynomials in (dx, dy, dz): tuples of (coefficient, i, j, k).
+_COLS = {
+    4: (((1, 1, 0, 0),), ((1, 0, 1, 0),), ((1, 0, 0, 1),), ((1, 0, 0, 0),)),
+    7: (((1, 2, 0, 0), (-1, 0, 0, 2)), ((1, 0, 2, 0), (-1, 0, 0, 2)),
+        ((1, 1, 0, 0),), ((1, 0, 1, 0),), ((1, 0, 0, 1),), ((1, 0, 0, 0),)),
+    10: (((1, 2, 0, 0), (-1, 0, 0, 2)), ((1, 0, 2, 0), (-1, 0, 0, 2)),
+         ((1, 1, 1, 0),), ((1, 1, 0, 1),), ((1, 0, 1, 1),),
+         ((1, 1, 0, 0),), ((1, 0, 1, 0),), ((1, 0, 0, 1),), ((1, 0, 0, 0),)),
+}
+_Y = ((1, 2, 0, 0), (1, 0, 2, 0), (1, 0, 0, 2))  # |d|^2
+# Degree of each column (1: a centre parameter, 2: a shape parameter, 0: the constant).
+_DEG = {4: (1, 1, 1, 0), 7: (2, 2, 1, 1, 1, 0), 10: (2, 2, 2, 2, 2, 1, 1, 1, 0)}
+
+_NAMES = {4: ("Vx", "Vy", "Vz", "const"),
+          7: ("dx2-dz2", "dy2-dz2", "Vx", "Vy", "Vz", "const"),
+          10: ("dx2-dz2", "dy2-dz2", "dxdy", "dxdz", "dydz", "Vx", "Vy", "Vz", "const")}
+
+MODELS = (4, 7, 10)
+
+
+def column_degree(model, col):
+    """1 for a centre parameter, 2 for a shape parameter, 0 for the constant."""
+    return _DEG[model][col]
+
+
+def column_name(model, col):
+    return _NAMES[model][col]
+
+
+def _dot_poly(s, p, q):
+    # sum over samples of p(d) * q(d), from the moment sums
+    acc = 0
+    for a in p:
+        for b in q:
+            acc += a[0] * b[0] * s[index(a[1] + b[1], a[2] + b[2], a[3] + b[3])]
+    return acc
+
+
+def normal_equations(s, model):
+    """(M, r, yy): X^T X (list of rows), X^T Y and Y^T Y from the moment sums `s`."""
+    cols = _COLS[model]
+    n = len(cols)
+    m = [[0] * n for _ in range(n)]
+    for i in range(n):
+        for j in range(i, n):
+            v = _dot_poly(s, cols[i], cols[j])
+            m[i][j] = v
+            m[j][i] = v
+    r = [_dot_poly(s, col, _Y) for col in cols]
+    return m, r, _dot_poly(s, _Y, _Y)
+
+
+# ---- exact linear algebra -------------------------------------------------------------
+
+def bareiss_step(a, k, prev, m):
+    """One pivot of fraction-free elimination on the augmented rows `a` (length m each).
+
+    Eliminates column k below row k; `prev` is the previous pivot (1 for k = 0). Every
+    division is exact (Bareiss 1968). Returns the pivot a[k][k] (a leading principal minor).
+    """
+    p = a[k][k]
+    ak = a[k]
+    for i in range(k + 1, len(a)):
+        ai = a[i]
+        f = ai[k]
+        for j in range(k + 1, m):
+            ai[j] = (p * ai[j] - f * ak[j]) // prev
+        ai[k] = 0
+    return p
+
+
+def back_substitute(a, col, stop=0):
+    """Solve the eliminated system for right-hand side column `col`: returns x_i * det for
+    i >= stop (integers by Cramer's rule; each division is exact), zeros below `stop`."""
+    n = len(a)
+    det = a[n - 1][n - 1]
+    x = [0] * n
+    for i in range(n - 1, stop - 1, -1):
+        ai = a[i]
+        acc = det * ai[col]
+        for j in range(i + 1, n):
+            acc -= ai[j] * x[j]
+        x[i] = acc // ai[i]
+    return x
+
+
+def det3(m):
+    return (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]))
+
+
+def adj3(m):
+    """Adjugate (transposed cofactors): m adj(m) = det(m) I."""
+    return [[m[1][1] * m[2][2] - m[1][2] * m[2][1], m[0][2] * m[2][1] - m[0][1] * m[2][2],
+             m[0][1] * m[1][2] - m[0][2] * m[1][1]],
+            [m[1][2] * m[2][0] - m[1][0] * m[2][2], m[0][0] * m[2][2] - m[0][2] * m[2][0],
+             m[0][2] * m[1][0] - m[0][0] * m[1][2]],
+            [m[1][0] * m[2][1] - m[1][1] * m[2][0], m[0][1] * m[2][0] - m[0][0] * m[2][1],
+             m[0][0] * m[1][1] - m[0][1] * m[1][0]]]
+
+
+def mat_vec3(m, v):
+    return [m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2],
+            m[1][0] * v[0] + m[1][1] * v[1] + m[1][2] * v[2],
+            m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2]]
+
+
+def round_sqrt(num, den):
+    """sqrt(num / den) rounded to the nearest int (num >= 0, den > 0)."""
+    m = isqrt(4 * num // den)  # floor(2 sqrt(x)): nested floors of monotone roots are exact
+    return (m + 1) >> 1
+
+
+# ---- fits ---------------------------------------------------------------------------------
+
+class Fit:
+    """The exact result of one least-squares fit (all integers; rationals as num / den).
+
+    model, n (samples), c (reference centre), D = det(X^T X), beta_num (beta * D),
+    p_num / D (residual sum P), rho_min_ppm (smallest degeneracy ratio rho, parts per
+    million) and rho_col (its column), a2 (3x3), b2, e2 (the quadric scaled by 2D),
+    det_a2, v_num / v_den (centre V in raw counts), k2_num / k2_den (K2).
+    """
+
+    def __init__(self, model):
+        self.model = model
+        self.rho_min_ppm = None
+        self.rho_col = None
+
+
+def fit_steps(c, s, model, out, check=None):
+    """Generator: the exact least-squares fit of `model` to the sums `s` about centre `c`,
+    a bounded piece of work per step (one elimination pivot, one back-substitution).
+    Fills `out` (a Fit). Raises SolveError with a reason name on a degenerate system.
+    `check(out)`, if given, runs as soon as the degeneracy ratios are known (before the
+    quadric is examined), so a caller can refuse degenerate geometry first."""
+    if model not in MODELS:
+        raise ValueError("model %r: expected one of 4, 7, 10" % (model,))
+    n = s[0]
+    f = out
+    f.n = n
+    # Re-centre at the integer mean: the fit does not change (translation invariance) and
+    # the elimination's numbers shrink when the first sample was far from the others.
+    if n > 0:
+        cm = (c[0] + rdiv(s[1], n), c[1] + rdiv(s[2], n), c[2] + rdiv(s[3], n))
+        s = shifted(c, s, cm)
+        c = cm
+    f.c = c
+    m, r, yy = normal_equations(s, model)
+    nc = len(m)
+    yield
+    # Augmented [M | r | I]: one elimination gives beta and the diagonal of M^-1.
+    a = []
+    for i in range(nc):
+        row = m[i] + [r[i]] + [0] * nc
+        row[nc + 1 + i] = 1
+        a.append(row)
+    width = 2 * nc + 1
+    prev = 1
+    for k in range(nc):
+        p = a[k][k]
+        if p <= 0:  # X^T X is positive semi-definite: a pivot <= 0 means singular
+            raise SolveError("planar", "normal matrix singular at column %d of %d" % (k, nc))
+        if k < nc - 1:
+            prev = bareiss_step(a, k, prev, width)
+        yield
+    d = a[nc - 1][nc - 1]
+    f.D = d
+    beta = back_substitute(a, nc)
+    f.beta_num = beta
+    acc = 0
+    for i in range(nc):
+        acc += beta[i] * r[i]
+    f.p_num = yy * d - acc  # P * D, P = Y^T Y - beta . X^T Y
+    yield
+    # rho_i = 1 / (N (M^-1)_ii s^deg) with s = (N sum|d|^2 - |sum d|^2) / N^2
+    spread = n * (s[4] + s[7] + s[9]) - (s[1] * s[1] + s[2] * s[2] + s[3] * s[3])
+    degs = _DEG[model]
+    best = None
+    for i in range(nc):
+        if degs[i] == 0:
+            continue
+        inv_ii = back_substitute(a, nc + 1 + i, i)[i]  # (M^-1)_ii * D
+        # rho = D n^(2 deg - 1) / (inv_ii spread^deg), in parts per million
+        num = d * n ** (2 * degs[i] - 1) * 1000000
+        den = inv_ii * spread ** degs[i]
+        if den <= 0:
+            raise SolveError("planar", "column %d has no spread" % i)
+        rho = num // den
+        if best is None or rho < best:
+            best = rho
+            f.rho_col = i
+        yield
+    f.rho_min_ppm = best
+    if check is not None:
+        check(f)
+    # The quadric, scaled by 2D to integers: A2 = 2D (I - S(beta)), b2 = -2 beta_lin, e2.
+    bt = beta
+    if model == 4:
+        a2 = [[2 * d, 0, 0], [0, 2 * d, 0], [0, 0, 2 * d]]
+        lin = 0
+    elif model == 7:
+        a2 = [[2 * d - 2 * bt[0], 0, 0], [0, 2 * d - 2 * bt[1], 0],
+              [0, 0, 2 * d + 2 * bt[0] + 2 * bt[1]]]
+        lin = 2
+    else:
+        a2 = [[2 * d - 2 * bt[0], -bt[2], -bt[3]], [-bt[2], 2 * d - 2 * bt[1], -bt[4]],
+              [-bt[3], -bt[4], 2 * d + 2 * bt[0] + 2 * bt[1]]]
+        lin = 5
+    b2 = [-2 * bt[lin], -2 * bt[lin + 1], -2 * bt[lin + 2]]
+    e2 = -2 * bt[lin + 3]
+    f.a2 = a2
+    f.b2 = b2
+    f.e2 = e2
+    # A2 must be positive definite (an ellipsoid): leading minors > 0
+    da = det3(a2)
+    f.det_a2 = da
+    if a2[0][0] <= 0 or a2[0][0] * a2[1][1] - a2[0][1] * a2[1][0] <= 0 or da <= 0:
+        raise SolveError("singular", "fitted quadric is not an ellipsoid (A not positive "
+                         "definite)")
+    adj = adj3(a2)
+    w = mat_vec3(adj, b2)  # A2^-1 b2 = w / da
+    # V = c + d0, d0 = -w / (2 da)   (eq. 19)
+    f.v_den = 2 * da
+    f.v_num = [c[0] * 2 * da - w[0], c[1] * 2 * da - w[1], c[2] * 2 * da - w[2]]
+    # K2 = d0^T A2 d0 - e2 = (b2 . w - 4 da e2) / (4 da)
+    f.k2_num = b2[0] * w[0] + b2[1] * w[1] + b2[2] * w[2] - 4 * da * e2
+    f.k2_den = 4 * da
+    if f.k2_num <= 0:
+        raise SolveError("singular", "fitted ellipsoid has no real points (K <= 0)")
+    yield
+
+
+def fit(c, s, model, check=None):
+    """fit_steps run to completion; returns the Fit."""
+    out = Fit(model)
+    for _ in fit_steps(c, s, model, out, check):
+        pass
+    return out
+
+
+class SolveError(Exception):
+    """A fit could not be computed: .reason ('planar' or 'singular'), .detail."""
+
+    def __init__(self, reason, detail):
+        super().__init__(reason, detail)
+        self.reason = reason
+        self.detail = detail
+
+
+# ---- from a fit to the correction ---------------------------------------------------------
+
+def _inv_q(m, one):
+    # inverse of a symmetric fixed-point 3x3 (scale `one`), rounded; None if singular
+    dt = det3(m)
+    if dt == 0:
+        return None
+    adj = adj3(m)
+    k = one * one
+    return [[rdiv(adj[i][j] * k, dt) for j in range(3)] for i in range(3)]
+
+
+def sqrtm_steps(a, one, out):
+    """Generator: principal square root of a symmetric positive definite fixed-point 3x3
+    matrix `a` (entries scaled by `one`) by the Denman-Beavers iteration
+        Y <- (Y + Z^-1) / 2,  Z <- (Z + Y^-1) / 2,   Y0 = A, Z0 = I  ->  Y = A^1/2,
+    one iteration per step. Sets out[0] = root (or None if it did not settle), out[1] =
+    iterations."""
+    y = [row[:] for row in a]
+    z = [[one if i == j else 0 for j in range(3)] for i in range(3)]
+    out[0] = None
+    for it in range(1, _SQRT_MAX_ITER + 1):
+        out[1] = it
+        yi = _inv_q(y, one)
+        zi = _inv_q(z, one)
+        if yi is None or zi is None:
+            return
+        change = 0
+        for i in range(3):
+            for j in range(3):
+                ny = rdiv(y[i][j] + zi[i][j], 2)
+                dlt = ny - y[i][j]
+                if dlt < 0:
+                    dlt = -dlt
+                if dlt > change:
+                    change = dlt
+                y[i][j] = ny
+                z[i][j] = rdiv(z[i][j] + yi[i][j], 2)
+        if change <= 2:
+            out[0] = y
+            return
+        yield
+
+
+def sqrtm_sym3(a, one):
+    """sqrtm_steps run to completion: (root or None, iterations)."""
+    out = [None, 0]
+    for _ in sqrtm_steps(a, one, out):
+        pass
+    return out[0], out[1]
+
+
+def invw_steps(a2, det_a2, out):
+    """Generator: W^-1 = (A2 / det(A2)^(1/3))^(1/2) in Q40 (det W^-1 = 1) into out[0]
+    (None if the iteration did not converge), one Denman-Beavers iteration per step."""
+    one = 1 << SQRT_FRAC_BITS
+    cb = icbrt(det_a2 << (3 * SQRT_FRAC_BITS))  # det^(1/3) in Q40
+    an = [[rdiv(a2[i][j] << (2 * SQRT_FRAC_BITS), cb) for j in range(3)] for i in range(3)]
+    yield
+    for _ in sqrtm_steps(an, one, out):
+        yield
+
+
+def invw_from_a2(a2, det_a2):
+    """invw_steps run to completion: W^-1 in Q40, or None."""
+    out = [None, 0]
+    for _ in invw_steps(a2, det_a2, out):
+        pass
+    return out[0]
+
+
+def q15_from_invw(w, frac_bits):
+    """InvW in Q15, row-major 9-tuple: W^-1 (fixed point, `frac_bits`) scaled so the largest
+    row absolute sum is 32767, each entry rounded toward zero so no row sum can exceed it."""
+    rowmax = 0
+    for i in range(3):
+        t = abs(w[i][0]) + abs(w[i][1]) + abs(w[i][2])
+        if t > rowmax:
+            rowmax = t
+    out = []
+    for i in range(3):
+        for j in range(3):
+            v = w[i][j] * _Q15_ROW_MAX
+            q = v // rowmax if v >= 0 else -((-v) // rowmax)
+            out.append(q)
+    return tuple(out)
+
+
+def field_q16(k2_num, k2_den, det_a2):
+    """B in Q16 counts: B^6 = K2^3 / det(A2), floor of the exact sixth root."""
+    x = (k2_num ** 3 << (6 * B_FRAC_BITS)) // (k2_den ** 3 * det_a2)
+    return icbrt(isqrt(x))
+
+
+def field_out_counts(invw_q15, b_q16):
+    """|InvW (Bp - V)| >> 15 on the fitted ellipsoid: B det(InvW / 2**15)^(1/3), rounded."""
+    dq = det3([invw_q15[0:3], invw_q15[3:6], invw_q15[6:9]])
+    if dq <= 0:
+        return 0
+    # cbrt(dq) b / 2**15 / 2**16, with one extra bit for rounding
+    t = icbrt(dq * b_q16 ** 3 * 8)
+    return (t + (1 << (15 + B_FRAC_BITS))) >> (16 + B_FRAC_BITS)
+
+
+def fit_error_x100(fitr):
+    """Fit error in hundredths of a percent: 10000 D sqrt(P / N) / K2 (see module doc)."""
+    # fe^2 = 1e8 D (P D) K2d^2 / (N K2n^2)
+    num = 100000000 * fitr.D * fitr.p_num * fitr.k2_den * fitr.k2_den
+    den = fitr.n * fitr.k2_num * fitr.k2_num
+    if num < 0:
+        num = 0
+    return round_sqrt(num, den)
+
+
+def sum_sq_quadric(s, w):
+    """Sum over the samples of q(d)^2 for q(d) = sum_k w[k] * monomial_k(d) over the 10
+    monomials of degree <= 2 in accum.EXPONENTS order (1, x, y, z, xx, xy, xz, yy, yz, zz)."""
+    acc = 0
+    for a in range(10):
+        if w[a] == 0:
+            continue
+        ea = EXPONENTS[a]
+        for b in range(10):
+            if w[b] == 0:
+                continue
+            eb = EXPONENTS[b]
+            acc += w[a] * w[b] * s[index(ea[0] + eb[0], ea[1] + eb[1], ea[2] + eb[2])]
+    return acc
+
+
+def minmax_fit(lo, hi, c, s):
+    """Min/max calibration (seed 002) of the samples whose per-axis extremes are lo, hi and
+    whose moment sums about `c` are `s`.
+
+    V = (max + min) / 2 per axis; half-ranges h; W^-1 = diag(g / h) with g the geometric
+    mean of h (det W^-1 = 1, like the other models; seed 002 uses the arithmetic mean, which
+    differs only by a common factor: headings are identical). B = g. The fit error uses the
+    same definition as the fits: P' / B^4 = sum (sum_i ((d_i - v_i) / h_i)^2 - 1)^2.
+    Returns (v_num (3, over 2), h2 (3: max - min), b_q16, fit_error_x100, w_q40) or raises
+    SolveError if an axis has no range.
+    """
+    h2 = [hi[i] - lo[i] for i in range(3)]
+    for i in range(3):
+        if h2[i] <= 0:
+            raise SolveError("planar", "axis %d has no range (min = max = %d)" % (i, lo[i]))
+    v2 = [hi[i] + lo[i] for i in range(3)]  # 2 V
+    # q(d) = sum_i (2 d_i - m_i)^2 L / H_i^2 - L,  m_i = 2 V_i - 2 c_i, L = prod H_i^2
+    big_l = h2[0] * h2[0] * h2[1] * h2[1] * h2[2] * h2[2]
+    w = [0] * 10
+    w[0] = -big_l
+    quad = (4, 7, 9)
+    lin = (1, 2, 3)
+    for i in range(3):
+        g = big_l // (h2[i] * h2[i])
+        mi = v2[i] - 2 * c[i]
+        w[quad[i]] += 4 * g
+        w[lin[i]] += -4 * mi * g
+        w[0] += mi * mi * g
+    n = s[0]
+    p = sum_sq_quadric(s, w)  # = L^2 * sum(...)^2
+    fe = round_sqrt(25000000 * p, n * big_l * big_l)
+    # g = (H0 H1 H2)^(1/3) / 2 in Q16
+    prod = h2[0] * h2[1] * h2[2]
+    b_q16 = icbrt(prod << (3 * B_FRAC_BITS)) >> 1
+    one = 1 << SQRT_FRAC_BITS
+    gq = icbrt(prod << (3 * SQRT_FRAC_BITS))  # cbrt(H0 H1 H2) in Q40
+    wq = [[0, 0, 0], [0, 0, 0], [0, 0, 0]]
+    for i in range(3):
+        wq[i][i] = rdiv(gq, h2[i])  # g / h_i = cbrt(prod) / H_i
+    return v2, h2, b_q16, fe, wq, one
