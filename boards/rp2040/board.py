@@ -1,0 +1,17 @@
+"""Raspberry Pi Pico (RP2040) wiring. Only what differs per board lives here.
+
+GY-271 / GY-273 / GY-87 breakout -> Pico: VCC 3V3(OUT) pin 36, GND pin 38,
+SDA GP4 (pin 6), SCL GP5 (pin 7) — I2C0's default pins.
+"""
+I2C_ID = 0
+SCL_PIN = 5
+SDA_PIN = 4
+I2C_FREQ = 400000           # Hz
+BREAKOUT = "gy271"          # sensor mounting: see boards/breakouts.py (gy271, gy273, gy87)
+DECLINATION_CDEG = 0        # local magnetic declination, centidegrees east-positive (NOAA/WMM)
+STORE_DIR = "/"             # LittleFS on the Pico's flash
+
+
+def make_i2c():
+    from machine import I2C, Pin
+    return I2C(I2C_ID, scl=Pin(SCL_PIN), sda=Pin(SDA_PIN), freq=I2C_FREQ)

@@ -1,0 +1,30 @@
+"""Print the mip package.json for `mpremote mip install github:ORG/REPO`.
+
+`make package-json` writes it; tests/test_packaging.py checks the committed file is current,
+so a module added to firmware/ cannot be left out of the installable package.
+"""
+import json
+import os
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+def package_json():
+    sys.path.insert(0, ROOT)
+    from firmware import __version__
+    mods = sorted(f for f in os.listdir(os.path.join(ROOT, "firmware")) if f.endswith(".py"))
+    return {
+        "urls": [["firmware/" + m, "firmware/" + m] for m in mods],
+        "deps": [],
+        "version": __version__,
+    }
+
+
+def main(argv=()):
+    print(json.dumps(package_json(), indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
