@@ -22,15 +22,18 @@ CalibrationRejected(Exception) a new calibration failed an acceptance check. Car
                           ``.reason`` (one of the REASON_* names in firmware.magcal) and
                           ``.detail`` (a human-readable string with the numbers). Caller: keep
                           the current calibration; show the reason to the user.
-StoreError(Exception)     a stored calibration record cannot be used (bad magic, CRC, version,
-                          another sensor). Carries ``.reason``. Caller: keep running
-                          uncalibrated or with the other slot; never use the record.
+StoreError(Exception)     a stored calibration record cannot be used. Carries ``.reason``, one
+                          of firmware.calstore's: missing, truncated, bad_length, bad_magic,
+                          bad_crc, unknown_version, other_sensor, other_range, verify_failed
+                          (a save read back different bytes). Caller: keep running uncalibrated
+                          or with the other slot; never use the record.
 """
 
 
 class SensorNotFound(OSError):
     def __init__(self, msg, address=None, tried=(), found=()):
         super().__init__(msg)
+        self.errno = None  # not a bus errno (MicroPython would otherwise return the message)
         self.address = address
         self.tried = tuple(tried)
         self.found = tuple(found)
@@ -47,6 +50,7 @@ class BusError(OSError):
 class DataReadyTimeout(OSError):
     def __init__(self, msg, address=None, waited_us=0):
         super().__init__(msg)
+        self.errno = None  # not a bus errno (MicroPython would otherwise return the message)
         self.address = address
         self.waited_us = waited_us
 

@@ -140,6 +140,7 @@ class Calibration:
         self.model = model
         self.offset = (offset[0], offset[1], offset[2])
         self.invw = tuple(invw)
+        self._k = self.invw + self.offset  # correct()'s single tuple: InvW (0..8), V (9..11)
         self.field = field
         self.field_out = field_out
         self.fit_error = fit_error
@@ -150,16 +151,17 @@ class Calibration:
         """out[0:3] = InvW sat16(raw - V) >> 15, rounded (AN4246 section 3).
 
         |InvW row| <= 32767 and |sat16| <= 32768 keep every partial sum below 2**30 - 2**15,
-        so it stays a small int on a 32-bit board and allocates nothing.
+        so it stays a small int on a 32-bit board and allocates nothing - not even its call
+        frame: InvW and V sit in one tuple so that locals plus stack stay within the 11
+        words MicroPython keeps on the C stack (more and the frame goes to the heap).
         """
-        v = self.offset
-        m = self.invw
-        x = sat16(raw[0] - v[0])
-        y = sat16(raw[1] - v[1])
-        z = sat16(raw[2] - v[2])
-        out[0] = (m[0] * x + m[1] * y + m[2] * z + 16384) >> 15
-        out[1] = (m[3] * x + m[4] * y + m[5] * z + 16384) >> 15
-        out[2] = (m[6] * x + m[7] * y + m[8] * z + 16384) >> 15
+        k = self._k
+        x = sat16(raw[0] - k[9])
+        y = sat16(raw[1] - k[10])
+        z = sat16(raw[2] - k[11])
+        out[0] = (k[0] * x + k[1] * y + k[2] * z + 16384) >> 15
+        out[1] = (k[3] * x + k[4] * y + k[5] * z + 16384) >> 15
+        out[2] = (k[6] * x + k[7] * y + k[8] * z + 16384) >> 15
 
     def to_bytes(self):
         """The 46-byte little-endian payload (storage adds its own header and CRC)."""

@@ -104,6 +104,7 @@ def test_correct_allocates_nothing_on_micropython():
     out = json.loads(mp.run(["tests/scenarios/magcal_alloc.py"], micro=True))
     assert out["correct_calls"] == 280 and out["correct_allocated"] == 0
     assert out["buffer_full"] and out["add_calls"] == 40 and out["add_allocated"] == 0
+    assert out["correct_mem_total_bytes_per_1000"] == 0
 
 
 def test_uncalibrated_correction_is_the_identity_for_half_the_int16_range():

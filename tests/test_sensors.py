@@ -237,3 +237,12 @@ def test_read_into_allocates_nothing_on_micropython():
     timeouts = [o for o in out if "board_timeout_us" in o]
     assert timeouts and timeouts[0]["waited_us"] >= timeouts[0]["board_timeout_us"]
     assert timeouts[0]["elapsed_us"] < timeouts[0]["board_timeout_us"] + 20000
+
+
+def test_non_bus_errors_carry_no_errno_on_either_interpreter():
+    from firmware.errors import DataReadyTimeout, SensorNotFound
+    from tests import mp
+    code = ("from firmware.errors import DataReadyTimeout, SensorNotFound\n"
+            "print(SensorNotFound('x', address=13).errno, DataReadyTimeout('y', 13, 5).errno)")
+    assert mp.parity(["-c", code]).strip() == "None None"
+    assert SensorNotFound("x").errno is None

@@ -62,4 +62,13 @@ for i in range(cb.count):
     if alloc or kept:
         results["add_allocated"] += 1
 results["buffer_full"] = cb.count == cb.capacity
+
+# heap_lock misses a call frame moved to the heap (it falls back to the C stack when locked);
+# mem_total counts every byte allocated, frames included: correct() must add none.
+raw[0] = 20000
+micropython.mem_total()
+t0 = micropython.mem_total()
+for _ in range(1000):
+    cal.correct(raw, out)
+results["correct_mem_total_bytes_per_1000"] = micropython.mem_total() - t0
 print(json.dumps(results))
