@@ -28,7 +28,7 @@ except ImportError:  # CPython
         return x
 
 from firmware.errors import BusError, SensorNotFound, SensorOverflow
-from firmware.sensors import Device
+from firmware.sensors import Device, option_code
 
 # Registers (datasheet register list)
 _CRA = const(0x00)
@@ -61,22 +61,15 @@ _ST_HIGH = const(575)
 _SETTLE_MARGIN_US = const(2000)
 
 
-def _code(value, table, name):
-    if value not in table:
-        raise ValueError("HMC5883L %s=%s: expected one of %s"
-                         % (name, value, ", ".join(str(v) for v in table)))
-    return table.index(value)
-
-
 class HMC5883L(Device):
     KIND = "hmc5883l"
     OPTIONS = ("gain", "rate", "averaging", "delay_us", "timeout_us")
 
     def __init__(self, i2c, address=0x1E, *, gain=1, rate=15, averaging=8, delay_us=None,
                  timeout_us=None):
-        gn = _code(gain, _GAINS, "gain")
-        ri = _code(rate, _RATES_HZ, "rate")
-        ma = _code(averaging, _AVERAGING, "averaging")
+        gn = option_code("HMC5883L", "gain", gain, _GAINS)
+        ri = option_code("HMC5883L", "rate", rate, _RATES_HZ)
+        ma = option_code("HMC5883L", "averaging", averaging, _AVERAGING)
         super().__init__(i2c, address, _PERIODS_US[ri], delay_us, timeout_us)
         self._probe_id()
         self._cra = ma << 5 | _RATE_DO[ri] << 2 | _MS_NORMAL
@@ -111,7 +104,7 @@ class HMC5883L(Device):
 
     def set_gain(self, gain):
         """Change the GN code (0..7); returns once samples carry the new gain."""
-        self._set_gain_code(_code(gain, _GAINS, "gain"))
+        self._set_gain_code(option_code("HMC5883L", "gain", gain, _GAINS))
         self._settle(self._period_us)
 
     def read_into(self, buf):

@@ -27,7 +27,7 @@ except ImportError:  # CPython
         return x
 
 from firmware.errors import SensorNotFound, SensorOverflow
-from firmware.sensors import Device
+from firmware.sensors import Device, option_code
 
 # Registers (datasheet register map)
 _XOUT_L = const(0x00)      # X, Y, Z int16 LSB first in 0x00..0x05
@@ -58,22 +58,15 @@ _PERIODS_US = (100000, 20000, 10000, 5000)
 _OSRS = (512, 256, 128, 64)                # OSR[7:6] code = index
 
 
-def _code(value, table, name):
-    if value not in table:
-        raise ValueError("QMC5883L %s=%s: expected one of %s"
-                         % (name, value, ", ".join(str(v) for v in table)))
-    return table.index(value)
-
-
 class QMC5883L(Device):
     KIND = "qmc5883l"
     OPTIONS = ("range", "odr", "osr", "delay_us", "timeout_us")
 
     def __init__(self, i2c, address=0x0D, *, range=2, odr=50, osr=512, delay_us=None,
                  timeout_us=None):
-        rng = _code(range, _RANGES_G, "range")
-        rate = _code(odr, _ODRS_HZ, "odr")
-        over = _code(osr, _OSRS, "osr")
+        rng = option_code("QMC5883L", "range", range, _RANGES_G)
+        rate = option_code("QMC5883L", "odr", odr, _ODRS_HZ)
+        over = option_code("QMC5883L", "osr", osr, _OSRS)
         super().__init__(i2c, address, _PERIODS_US[rate], delay_us, timeout_us)
         self.range_code = rng
         self.counts_per_gauss = _COUNTS_PER_GAUSS[rng]

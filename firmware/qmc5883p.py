@@ -23,7 +23,7 @@ except ImportError:  # CPython
         return x
 
 from firmware.errors import SensorNotFound, SensorOverflow
-from firmware.sensors import Device
+from firmware.sensors import Device, option_code
 
 # Registers (hardware.md)
 _CHIP_ID = const(0x00)
@@ -52,23 +52,16 @@ _OSRS = (8, 4, 2, 1)                       # OSR[5:4] code = index
 _DSRS = (1, 2, 4, 8)                       # DSR[7:6] code = index
 
 
-def _code(value, table, name):
-    if value not in table:
-        raise ValueError("QMC5883P %s=%s: expected one of %s"
-                         % (name, value, ", ".join(str(v) for v in table)))
-    return table.index(value)
-
-
 class QMC5883P(Device):
     KIND = "qmc5883p"
     OPTIONS = ("range", "odr", "osr", "dsr", "delay_us", "timeout_us")
 
     def __init__(self, i2c, address=0x2C, *, range=8, odr=50, osr=8, dsr=1, delay_us=None,
                  timeout_us=None):
-        rng = _code(range, _RANGES_G, "range")
-        rate = _code(odr, _ODRS_HZ, "odr")
-        over = _code(osr, _OSRS, "osr")
-        down = _code(dsr, _DSRS, "dsr")
+        rng = option_code("QMC5883P", "range", range, _RANGES_G)
+        rate = option_code("QMC5883P", "odr", odr, _ODRS_HZ)
+        over = option_code("QMC5883P", "osr", osr, _OSRS)
+        down = option_code("QMC5883P", "dsr", dsr, _DSRS)
         super().__init__(i2c, address, _PERIODS_US[rate], delay_us, timeout_us)
         self.range_code = rng
         self.counts_per_gauss = _COUNTS_PER_GAUSS[rng]

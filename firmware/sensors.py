@@ -72,6 +72,14 @@ def bus_error(e, address, register):
                     address=address, register=register, errno=n)
 
 
+def option_code(chip, name, value, table):
+    """The register code of a keyword option: its index in `table`, or ValueError naming it."""
+    if value not in table:
+        raise ValueError("%s %s=%s: expected one of %s"
+                         % (chip, name, value, ", ".join(str(v) for v in table)))
+    return table.index(value)
+
+
 def _no_delay(us):
     pass
 
