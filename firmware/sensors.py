@@ -41,6 +41,14 @@ try:
 except ImportError:
     sleep_us = None
 
+try:
+    import micropython
+except ImportError:  # CPython: the code emitters are MicroPython's; run as plain bytecode
+    class micropython:
+        @staticmethod
+        def native(f):
+            return f
+
 from firmware.errors import BusError, DataReadyTimeout, SensorNotFound
 
 _QMC5883L_ADDR = const(0x0D)
@@ -112,10 +120,12 @@ class Device:
         self._poll_us = max(period_us >> 4, _MIN_POLL_US)  # latency <= 1/16 of a period
 
     # -- bus access: every OSError becomes BusError naming address and register
+    @micropython.native
     def _read_into(self, reg, buf):
-        # The only frame of the read path above MicroPython's 11-word on-stack limit (any
-        # try/except is): while the heap is unlocked it borrows one ~200-byte block per
-        # transfer, freed at return (tests/scenarios/drivers_alloc.py measures it).
+        # Native code: a bytecode function with try/except exceeds the 11 words MicroPython
+        # keeps on the C stack, so its frame would come from the heap on every transfer
+        # (~190 bytes, freed at return, but able to start a GC); a native frame lives on the
+        # C stack (tests/scenarios/drivers_alloc.py measures 0 bytes).
         try:
             self._i2c.readfrom_mem_into(self.address, reg, buf)
         except OSError as e:
@@ -125,6 +135,7 @@ class Device:
         self._read_into(reg, self._b1)
         return self._buf[0]
 
+    @micropython.native
     def _write_u8(self, reg, value):
         self._buf[0] = value
         try:

@@ -14,7 +14,8 @@
 #                 words, and falls back to the C stack only when the heap is locked; such a
 #                 transient allocation passes the heap_lock test but can still start a GC on a
 #                 board. The driver frames are live at every transfer, so a nonzero peak there
-#                 shows it. ReplayBus's own frames are calibrated to 0 first (printed).
+#                 shows it (the try/except transfer helpers are @micropython.native for this
+#                 reason). ReplayBus's own frames are calibrated to 0 first (printed).
 import gc
 import json
 import micropython
