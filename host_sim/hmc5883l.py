@@ -49,6 +49,7 @@ except ImportError:
 
 from host_sim.bus import RegisterDevice
 from host_sim.prng import Prng
+from host_sim.world import sensor_counts
 
 ADDRESS = 0x1E
 
@@ -79,7 +80,6 @@ _NOISE_G = 0.002                    # datasheet noise floor, 2 mG (1 sigma)
 _ADC_MIN = const(-2048)
 _ADC_MAX = const(2047)
 _OVERFLOW = const(-4096)
-_UT_PER_G = 100.0
 
 
 class HMC5883LSim(RegisterDevice):
@@ -181,20 +181,25 @@ class HMC5883LSim(RegisterDevice):
         self._advance_gain()   # the first measurement after a gain change used the old gain
         if self.injected:
             return self.injected.pop(0)
-        if self.world is None:
-            f = (0.0, 0.0, 0.0)
-        else:
-            f = self.world.sensor_field(t_us, self.mount)
         ms = self.cra & 0x03
-        bias = 1.0 if ms == 1 else (-1.0 if ms == 2 else 0.0)
         g = Prng(self.seed, stream=t_us) if self.noise else None
         sigma = _NOISE_G * cpg / math.sqrt(self.averages())
-        raw = [0, 0, 0]
+        ext = sensor_counts(self.world, t_us, self.mount, cpg, sigma, g)
+        raw = [int(math.floor(ext[i] + 0.5)) for i in range(3)]
+        if ms not in (1, 2):
+            return raw
+        # Self test (datasheet "Self Test Operation"): a second acquisition with the offset
+        # straps excited (+-1.1 G plus the external field); the first is subtracted from it and
+        # the net goes to the output. Either acquisition out of the ADC range -> -4096.
+        sign = 1.0 if ms == 1 else -1.0
+        bias = [sign * _SELF_TEST_G[i] for i in range(3)]
+        both = sensor_counts(self.world, t_us, self.mount, cpg, sigma, g, bias)
         for i in range(3):
-            v = (f[i] / _UT_PER_G + bias * _SELF_TEST_G[i]) * cpg
-            if g is not None:
-                v += g.gauss(sigma)
-            raw[i] = int(math.floor(v + 0.5))
+            b = int(math.floor(both[i] + 0.5))
+            if not (_ADC_MIN <= raw[i] <= _ADC_MAX and _ADC_MIN <= b <= _ADC_MAX):
+                raw[i] = _OVERFLOW
+            else:
+                raw[i] = b - raw[i]
         return raw
 
     # --- registers --------------------------------------------------------------------

@@ -44,6 +44,7 @@ except ImportError:
 
 from host_sim.bus import RegisterDevice
 from host_sim.prng import Prng
+from host_sim.world import sensor_counts
 
 ADDRESS = 0x0D
 
@@ -70,7 +71,6 @@ _COUNTS_PER_G = (12000, 3000, 3000, 3000)       # RNG 00 +-2 G, 01 +-8 G (1x res
 _NOISE_G = 0.002                                # 2 mG RMS at OSR 512 (QST datasheet 1.0)
 _TEMP_COUNTS_PER_C = const(100)                 # hardware.md: about 100 counts/degC
 _TEMP_NOISE_COUNTS = 3.0                        # model choice: a few counts of jitter
-_UT_PER_G = 100.0
 
 
 def _sat16(v):
@@ -169,22 +169,11 @@ class QMC5883LSim(RegisterDevice):
     def _measure(self, t_us):
         if self.injected:
             return self.injected.pop(0)
-        if self.world is None:
-            f = (0.0, 0.0, 0.0)
-        else:
-            f = self.world.sensor_field(t_us, self.mount)
         cpg = self.counts_per_gauss()
-        scale = cpg / _UT_PER_G
-        raw = [0, 0, 0]
-        g = None
-        if self.noise:
-            g = Prng(self.seed, stream=t_us)
-            sigma = _NOISE_G * cpg * math.sqrt(512 / self.osr())
-        for i in range(3):
-            v = f[i] * scale
-            if g is not None:
-                v += g.gauss(sigma)
-            raw[i] = int(math.floor(v + 0.5))
+        g = Prng(self.seed, stream=t_us) if self.noise else None
+        sigma = _NOISE_G * cpg * math.sqrt(512 / self.osr())
+        v = sensor_counts(self.world, t_us, self.mount, cpg, sigma, g)
+        raw = [int(math.floor(v[i] + 0.5)) for i in range(3)]
         tc = 25.0 if self.world is None else self.world.temperature_c
         tv = tc * _TEMP_COUNTS_PER_C
         if g is not None:

@@ -36,6 +36,7 @@ except ImportError:
 
 from host_sim.bus import RegisterDevice
 from host_sim.prng import Prng
+from host_sim.world import sensor_counts
 
 ADDRESS = 0x2C
 
@@ -57,7 +58,6 @@ _MODE_SINGLE = const(0x02)
 _ODR_PERIOD_US = (100000, 20000, 10000, 5000)   # 10 / 50 / 100 / 200 Hz
 _COUNTS_PER_G = (1000, 2500, 3750, 15000)        # RNG +-30 / +-12 / +-8 / +-2 G
 _NOISE_G = 0.002                                 # 2 mG (datasheet feature table)
-_UT_PER_G = 100.0
 
 
 class QMC5883PSim(RegisterDevice):
@@ -114,15 +114,10 @@ class QMC5883PSim(RegisterDevice):
         if self.injected:
             raw = self.injected.pop(0)
         else:
-            f = (0.0, 0.0, 0.0) if self.world is None else self.world.sensor_field(t_us, self.mount)
             cpg = self.counts_per_gauss()
             g = Prng(self.seed, stream=t_us) if self.noise else None
-            raw = [0, 0, 0]
-            for i in range(3):
-                v = f[i] / _UT_PER_G * cpg
-                if g is not None:
-                    v += g.gauss(_NOISE_G * cpg)
-                raw[i] = int(math.floor(v + 0.5))
+            v = sensor_counts(self.world, t_us, self.mount, cpg, _NOISE_G * cpg, g)
+            raw = [int(math.floor(v[i] + 0.5)) for i in range(3)]
         ovfl = False
         for i in range(3):
             v = raw[i]

@@ -25,6 +25,9 @@ _DEG = 0.017453292519943295  # pi / 180
 IDENTITY = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
+UT_PER_GAUSS = 100.0  # 1 G = 100 uT
+
+
 def check_mount(mount):
     """Validate a signed permutation (see module docstring); returns it as a tuple."""
     m = tuple(int(a) for a in mount)
@@ -207,6 +210,24 @@ class World:
         pointing up). The board's own accelerations are not modelled (slow hand motion)."""
         g = self.gravity_body(t_us)
         return mount_apply(mount, [-g[0], -g[1], -g[2]])
+
+
+def sensor_counts(world, t_us, mount, counts_per_gauss, sigma_counts, g, bias_g=None):
+    """The three float counts a magnetometer converts at t_us: the sensor-frame field (zero
+    without a world) plus an optional bias field in gauss, times the sensitivity, plus
+    Gaussian noise of sigma_counts from Prng g (None: noise-free). The chip models round,
+    clip and flag these their own way."""
+    f = (0.0, 0.0, 0.0) if world is None else world.sensor_field(t_us, mount)
+    out = [0.0, 0.0, 0.0]
+    for i in range(3):
+        v = f[i] / UT_PER_GAUSS
+        if bias_g is not None:
+            v += bias_g[i]
+        v *= counts_per_gauss
+        if g is not None:
+            v += g.gauss(sigma_counts)
+        out[i] = v
+    return out
 
 
 def random_iron(seed, hard_max_ut=60.0, soft_dev=0.15):

@@ -271,3 +271,10 @@ def test_decode_bound_and_range_check_on_any_bytes(raw):
         assert e.value.raw == (x, y, z)
         assert ("-4096" in str(e.value)) == (-4096 in (x, y, z))
     assert stats.max_abs < 1 << 30
+
+
+def test_self_test_passes_in_the_earth_field_upside_down():
+    w = World(field_ut=50.0, inclination_deg=70.0, motion=motion.still(30, 180, 0))
+    b, d = board_and_driver(world=w, noise=True)
+    passed, raw = d.self_test()
+    assert passed, raw

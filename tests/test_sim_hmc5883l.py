@@ -214,3 +214,15 @@ def test_writes_to_read_only_registers_are_ignored():
     wr(b, 0x03, 1, 2, 3, 4, 5, 6)
     wr(b, 0x0A, 0x00)
     assert rd(b, 0x03, 6) == before[:6] and rd(b, 0x0A, 3) == b"H43"
+
+
+def test_self_test_outputs_the_bias_alone_whatever_the_earth_field():
+    # Datasheet "Self Test Operation": the unbiased acquisition is subtracted from the biased
+    # one, so the output is the ~1.1 G strap field even in a 0.5 G field, board upside down.
+    w = World(field_ut=50.0, inclination_deg=60.0, motion=motion.still(0, 180, 0))
+    b = board(w)
+    wr(b, 0x01, 0xA0)
+    single(b)
+    wr(b, 0x00, 0x11)
+    x, z, y = single(b)
+    assert abs(x - 452) <= 2 and abs(y - 452) <= 2 and abs(z - 421) <= 2
