@@ -15,6 +15,17 @@ except ImportError:  # CPython
     def const(x):
         return x
 
+try:
+    import micropython  # re-exported: `from firmware.fixedpoint import micropython`
+except ImportError:  # CPython: the code emitters are MicroPython's; run as plain bytecode
+    class micropython:
+        """@micropython.native on CPython: the function unchanged. On MicroPython the native
+        emitter is used where a bytecode frame would be too big for the C stack: a frame over
+        11 words (any try/except is) is taken from the heap on every call."""
+        @staticmethod
+        def native(f):
+            return f
+
 INT16_MIN = const(-32768)
 INT16_MAX = const(32767)
 SMALL_INT_LIMIT = const(0x40000000)  # 2**30: MicroPython's small-int bound on 32-bit ports

@@ -39,7 +39,7 @@ import struct
 
 from firmware import accum, solve
 from firmware.errors import CalibrationRejected
-from firmware.fixedpoint import bit_length, rdiv, sat16
+from firmware.fixedpoint import bit_length, micropython, rdiv, sat16
 from firmware.samples import REJECTED, REPLACED, SampleBuffer, separation_for
 
 try:
@@ -292,6 +292,7 @@ class Calibrator:
         if self._auto:
             self.buffer.set_separation(1)
 
+    @micropython.native  # keeps its frame off the heap (see firmware.fixedpoint)
     def add(self, x, y, z):
         """Offer one raw sample (int16 counts). O(1); returns True if the buffer kept it.
 

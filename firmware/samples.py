@@ -32,7 +32,7 @@ on MicroPython and every intermediate stays below 2**30 for int16 input and sepa
 """
 from array import array
 
-from firmware.fixedpoint import isqrt
+from firmware.fixedpoint import isqrt, micropython
 
 try:
     from micropython import const
@@ -235,6 +235,7 @@ class SampleBuffer:
         k += self.next_slot
         return k - self.capacity if k >= self.capacity else k
 
+    @micropython.native  # a frame over 11 words would come from the heap per call
     def offer(self, x, y, z):
         """Offer one raw sample (int16 counts); returns REJECTED, KEPT or REPLACED."""
         if not (-32768 <= x <= 32767 and -32768 <= y <= 32767 and -32768 <= z <= 32767):
@@ -304,6 +305,7 @@ class SampleBuffer:
         self._last = slot
         return result
 
+    @micropython.native
     def _probe(self, cx, cy, cz, x, y, z):
         # Walk the chain of cell (cx, cy, cz) until its occupant or an empty entry. Any entry
         # met that is within s of (x, y, z) decides at once: such a sample forbids keeping.

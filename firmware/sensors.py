@@ -41,15 +41,8 @@ try:
 except ImportError:
     sleep_us = None
 
-try:
-    import micropython
-except ImportError:  # CPython: the code emitters are MicroPython's; run as plain bytecode
-    class micropython:
-        @staticmethod
-        def native(f):
-            return f
-
 from firmware.errors import BusError, DataReadyTimeout, SensorNotFound
+from firmware.fixedpoint import micropython
 
 _QMC5883L_ADDR = const(0x0D)
 _HMC5883L_ADDR = const(0x1E)

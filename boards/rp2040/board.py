@@ -8,6 +8,8 @@ SCL_PIN = 5
 SDA_PIN = 4
 I2C_FREQ = 400000           # Hz
 BREAKOUT = "gy271"          # sensor mounting: see boards/breakouts.py (gy271, gy273, gy87)
+MAG_AXES = "x,-y,-z"        # sensor -> body of BREAKOUT's magnetometer (boards/breakouts.py;
+ACCEL_AXES = "-x,y,z"       # a GY-521 MPU6050 lying the same way; tests/test_app.py checks both)
 DECLINATION_CDEG = 0        # local magnetic declination, centidegrees east-positive (NOAA/WMM)
 STORE_DIR = "/"             # LittleFS on the Pico's flash
 

@@ -1,0 +1,29 @@
+"""eCompass: runs at boot (main.py). Prints a status line every 0.5 s; calibrates as you move.
+
+First run: no stored calibration, so the heading is raw until you turn the board through a
+figure-8 (every direction: over and around); the line shows coverage and samples grow, then
+"model 4" or "model 10" once a calibration is accepted - it is saved and used at every boot.
+"""
+import time
+
+import board
+from firmware.app import CompassApp, status_line
+from firmware.calstore import CalStore
+
+i2c = board.make_i2c()
+while True:
+    try:
+        app = CompassApp(i2c, mag_axes=board.MAG_AXES, accel_axes=board.ACCEL_AXES,
+                         declination_cdeg=board.DECLINATION_CDEG,
+                         store=CalStore(board.STORE_DIR),
+                         # None on a real board (time.sleep_us, time.ticks_us); the
+                         # simulated board (boards/host) brings its own clock
+                         delay_us=getattr(board, "delay_us", None),
+                         ticks_us=getattr(board, "ticks_us", None))
+        break
+    except OSError as e:  # SensorNotFound, BusError: wiring or power; say so and retry
+        print("eCompass: %s" % e)
+        time.sleep(2)
+print("eCompass: %s, accelerometer %s, stored calibration: %s" % (
+    app.mag.KIND, "yes" if app.accel else "no", app.load_reason or "loaded"))
+app.run(None, report=lambda a: print(status_line(a)), every_us=500000)

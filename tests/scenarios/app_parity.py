@@ -1,0 +1,60 @@
+# Parity: one simulated session of the app, run on CPython and on MicroPython, must print the
+# same lines (ints and strings only). A GY-271 (QMC5883L) + MPU6050 with strong iron, a 40 s
+# figure-8 with faults on the way (a NACK burst, an overflow, a magnet, a brown-out reset of
+# the magnetometer), then still, tilted poses. Prints per second the heading (KANG), status and
+# progress; every accepted calibration's bytes (hex) and the record the store holds; the
+# headings of the still poses.
+import json
+import sys
+
+sys.path.append("tests/scenarios")
+from app_world import TILTED_POSES, hold, make_app, make_sim, mem_store  # noqa: E402
+
+from binascii import hexlify  # noqa: E402
+
+b = make_sim("gy271", seed=5)
+b.world.add_magnet((0.0, 90.0, 40.0), 22.0, 25.0, ramp_s=0.3, frame="sensor")
+store = mem_store()
+app = make_app(b, store=store)
+state = {"accepted": 0, "t": 0}
+events = [(8000000, "nack"), (12000000, "overflow"), (30000000, "reset")]
+
+
+def each(a):
+    now = b.clock.now_us
+    while events and now >= events[0][0]:
+        ev = events.pop(0)[1]
+        if ev == "nack":
+            b.bus.inject_nack(after=0, count=3)
+        elif ev == "overflow":
+            b.mag.inject_raw(40000, 0, 0)
+        else:
+            b.bus.writeto_mem(0x0D, 0x0A, b"\x80")  # SOFT_RST: the chip is back in standby
+        print(json.dumps(["event", ev, now]))
+    if a.accepted != state["accepted"]:
+        state["accepted"] = a.accepted
+        c = a.calibration
+        print(json.dumps(["accepted", now, c.model, c.fit_error, c.samples,
+                          hexlify(c.to_bytes()).decode()]))
+    if now >= state["t"]:
+        state["t"] += 1000000
+        p = a.progress()
+        print(json.dumps(["t", now // 1000000, a.heading_kang, a.status, p["coverage"],
+                          p["samples"], p["model"], p["fit_error"], p["last_reason"]]))
+
+
+end = 40000000
+while b.clock.now_us < end:
+    app.step()
+    each(app)
+for pose in TILTED_POSES:
+    hold(b, pose[0], pose[1], pose[2])
+    hs = []
+    for i in range(12):
+        app.step()
+        hs.append(app.heading_kang)
+    print(json.dumps(["pose", [int(v) for v in pose], hs]))
+record = hexlify(store.load()).decode()
+print(json.dumps(["store", store.seq, record]))
+print(json.dumps(["end", app.accepted, app.refused, app.solves, app.slices, app.stored,
+                  app.reinits, sorted(app.errors.items())]))

@@ -1,0 +1,130 @@
+# Shared by tests/test_app.py, tests/test_reliability.py and the app_* scenarios (CPython and
+# MicroPython): the simulated boards, a world with strong iron, an in-memory filesystem with
+# power cuts, and small helpers to drive CompassApp through simulated time.
+from host_sim import motion
+from host_sim.boards import make_board
+from host_sim.world import World
+
+from firmware.app import CompassApp
+from firmware.calstore import CalStore
+
+# Strong iron (issue 5): |V| = 64 uT, 1.3 Earth fields; W symmetric, eigenvalues ~0.83..1.22.
+HARD_IRON_UT = (45.0, -35.0, 30.0)
+SOFT_IRON = ((1.18, 0.09, -0.06), (0.09, 0.88, 0.07), (-0.06, 0.07, 1.04))
+FIELD_UT = 50.0
+INCLINATION_DEG = 60.0
+DECLINATION_DEG = 4.0
+DECLINATION_CDEG = 400
+# host_sim.boards mounts every chip x forward, y left, z up (boards/breakouts.py: gy271, gy87)
+MAG_AXES = "x,-y,-z"
+ACCEL_AXES = "-x,y,z"
+# (board, accel) per setup: a GY-271 (QMC5883L) with a GY-521 (MPU6050) module, and a GY-87
+SETUPS = {"gy271": ("gy271", True), "gy87": ("gy87", None)}
+TILTED_POSES = ((30.0, 20.0, -15.0), (135.0, -25.0, 10.0), (250.0, 10.0, 30.0),
+                (300.0, -15.0, -25.0), (80.0, 0.0, 0.0))
+
+
+def make_world(m=None, hard_iron_ut=HARD_IRON_UT, soft_iron=SOFT_IRON):
+    return World(field_ut=FIELD_UT, inclination_deg=INCLINATION_DEG,
+                 declination_deg=DECLINATION_DEG, hard_iron_ut=hard_iron_ut,
+                 soft_iron=soft_iron, motion=m if m is not None else motion.figure8())
+
+
+def make_sim(setup="gy271", m=None, seed=3, world=None):
+    chip, accel = SETUPS[setup]
+    return make_board(chip, world=world if world is not None else make_world(m), seed=seed,
+                      accel=accel)
+
+
+def make_app(b, store=None, **kw):
+    return CompassApp(b.bus, mag_axes=MAG_AXES, accel_axes=ACCEL_AXES,
+                      declination_cdeg=DECLINATION_CDEG, store=store, delay_us=b.sleep_us,
+                      ticks_us=b.clock.ticks_us, **kw)
+
+
+def run_until(app, b, t_s, each=None):
+    """step() until the simulated clock reaches t_s seconds; each(app) after every step."""
+    end = int(t_s * 1000000)
+    n = 0
+    while b.clock.now_us < end:
+        app.step()
+        n += 1
+        if each is not None:
+            each(app)
+    return n
+
+
+def hold(b, yaw, pitch, roll):
+    b.world.motion = motion.still(yaw, pitch, roll)
+
+
+def heading_error_cdeg(app, b):
+    """The app's heading minus the world's true heading, centidegrees in -18000..17999."""
+    true_cdeg = int(b.world.true_heading_deg(b.clock.now_us) * 100 + 0.5)
+    h = app.heading_kang * 36000 // 65536
+    return (h - true_cdeg + 18000) % 36000 - 18000
+
+
+class PowerCut(OSError):
+    pass
+
+
+class MemFs:
+    """A filesystem for CalStore in memory. budget: bytes that may still be written before
+    the power fails (None: never); a cut write keeps the bytes written so far (as FAT does)
+    and raises PowerCut (an OSError, EIO)."""
+
+    def __init__(self):
+        self.files = {}
+        self.budget = None
+        self.cuts = 0
+
+    def open(self, path, mode):
+        if "w" in mode:
+            self.files[path] = b""
+            return _Writer(self, path)
+        if path not in self.files:
+            raise OSError(2, "ENOENT")
+        return _Reader(self.files[path])
+
+    def remove(self, path):
+        if path not in self.files:
+            raise OSError(2, "ENOENT")
+        del self.files[path]
+
+
+class _Reader:
+    def __init__(self, data):
+        self.data = data
+
+    def read(self, n=-1):
+        return self.data if n < 0 else self.data[:n]
+
+    def close(self):
+        pass
+
+
+class _Writer:
+    def __init__(self, fs, path):
+        self.fs = fs
+        self.path = path
+
+    def write(self, data):
+        fs = self.fs
+        data = bytes(data)
+        if fs.budget is not None and len(data) > fs.budget:
+            fs.files[self.path] += data[:fs.budget]
+            fs.budget = 0
+            fs.cuts += 1
+            raise PowerCut(5, "power cut")
+        fs.files[self.path] += data
+        if fs.budget is not None:
+            fs.budget -= len(data)
+        return len(data)
+
+    def close(self):
+        pass
+
+
+def mem_store(fs=None):
+    return CalStore("/", sensor="qmc5883l", range_code=0, fs=fs if fs is not None else MemFs())

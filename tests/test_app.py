@@ -1,0 +1,266 @@
+"""CompassApp end to end through host_sim: detection, calibration in the background, storage,
+heading accuracy after calibration, progress, the solve policy, aging, allocation and parity.
+
+Tolerances (independent of the code's output): the simulated chips carry their datasheet
+noise (QMC5883L 2 mG RMS per axis, MPU6050 6.4 mg), which at 60 deg dip is about 0.5 deg of
+heading per single sample (2 mG over a 0.25 G horizontal field), so one sample may be off by
+~2 deg (4 sigma); the mean of 16 samples must be within 1 deg of the world's true heading. The
+fitted hard iron must match the world's to 1 uT (2 % of the field).
+"""
+import json
+import os
+import sys
+
+import pytest
+
+from firmware.app import CompassApp, status_line
+from firmware.calstore import CalStore
+from firmware.magcal import Calibration
+from tests import mp
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "scenarios"))
+import app_world as W  # noqa: E402
+from host_sim import motion  # noqa: E402
+
+SESSION_S = 40                 # a 30 s figure8() period and then some
+MEAN_TOL_CDEG = 100            # mean of 16 samples within 1 deg of the true heading
+SINGLE_TOL_CDEG = 300          # any single sample within 3 deg
+HARD_IRON_TOL_UT = 1.0
+REASONS = ("too_few_samples", "planar", "singular", "low_coverage", "offset_out_of_range",
+           "soft_iron_out_of_range", "field_out_of_range", "fit_error_high", "not_better")
+
+
+class Session:
+    def __init__(self, setup, **kw):
+        self.b = W.make_sim(setup)
+        self.fs = W.MemFs()
+        self.store = W.mem_store(self.fs)
+        self.app = W.make_app(self.b, store=self.store, **kw)
+        self.progress = []      # (t_s, progress dict) once per simulated second
+        self.accepts = []       # (t_us, Calibration) in order
+        self._next = 0
+        W.run_until(self.app, self.b, SESSION_S, self._watch)
+        self.final = self.app.progress()  # other tests go on stepping the app
+        self.final_count = self.app.calibrator.count
+        self.final_coverage = self.app.calibrator.coverage()
+
+    def _watch(self, app):
+        now = self.b.clock.now_us
+        if app.accepted > len(self.accepts):
+            self.accepts.append((now, app.calibration))
+        if now >= self._next:
+            self._next += 1000000
+            self.progress.append((now // 1000000, app.progress()))
+
+
+@pytest.fixture(scope="module", params=sorted(W.SETUPS))
+def session(request):
+    return Session(request.param)
+
+
+def ut(app, counts):
+    return counts * 100.0 / app.mag.counts_per_gauss
+
+
+def still_errors(app, b, pose, n=16):
+    W.hold(b, *pose)
+    for _ in range(3):  # the set latched before the move, and one more
+        app.step()
+    errs = []
+    for _ in range(n):
+        assert app.step(), app.status
+        errs.append(W.heading_error_cdeg(app, b))
+    return errs
+
+
+def test_board_axis_constants_match_the_breakout_derivation():
+    from boards.breakouts import breakout
+    from boards.esp32 import board as esp32
+    from boards.rp2040 import board as rp2040
+    for board in (esp32, rp2040):
+        spec = breakout(board.BREAKOUT)
+        assert board.MAG_AXES == spec["mag"]
+        # no accelerometer on a GY-271/273: the GY-521 module lying the same way, as GY-87's
+        assert board.ACCEL_AXES == spec.get("accel", breakout("gy87")["accel"])
+    host = pytest.importorskip("boards.host.board")
+    assert host.MAG_AXES == breakout(host.BREAKOUT)["mag"]
+    assert host.ACCEL_AXES == breakout("gy87")["accel"]
+
+
+def test_the_app_detects_the_magnetometer_and_the_accelerometer(session):
+    kind = {"gy271": "qmc5883l", "gy87": "hmc5883l"}[session.b.chip]
+    assert session.app.mag.KIND == kind
+    assert session.app.accel is not None
+    assert session.app.load_reason == "missing"  # first run: an empty store
+
+
+def test_a_figure8_is_calibrated_stored_and_matches_the_world_iron(session):
+    app = session.app
+    c = app.calibration
+    assert app.accepted >= 1 and c.model == 10
+    assert app.stored == app.accepted and app.save_errors == 0
+    assert session.store.load() == c.to_bytes()
+    for i in range(3):
+        assert abs(ut(app, c.offset[i]) - W.HARD_IRON_UT[i]) < HARD_IRON_TOL_UT
+    assert app.errors.get("bus_error", 0) == 0 and app.errors.get("timeout", 0) == 0
+
+
+@pytest.mark.parametrize("pose", W.TILTED_POSES)
+def test_tilted_still_headings_after_calibration_are_within_a_degree(session, pose):
+    errs = still_errors(session.app, session.b, pose)
+    assert abs(sum(errs)) / len(errs) < MEAN_TOL_CDEG, errs
+    assert max(abs(e) for e in errs) < SINGLE_TOL_CDEG, errs
+
+
+def test_restart_with_the_same_store_loads_the_calibration_and_reports_heading_at_once(session):
+    pose = (210.0, 15.0, -20.0)
+    b = W.make_sim(session.b.chip, m=motion.still(*pose), seed=11)
+    store = CalStore("/", fs=session.fs)  # a fresh store object over the same "flash"
+    app = W.make_app(b, store=store)
+    assert app.load_reason is None
+    assert app.calibration == session.app.calibration
+    assert app.calibrator.current == app.calibration  # a new fit must beat it
+    app.step()  # the chip's first set was measured before the clock started: skip it
+    assert app.step() and app.status == "ok"
+    assert abs(W.heading_error_cdeg(app, b)) < SINGLE_TOL_CDEG
+
+
+def test_progress_reports_coverage_samples_model_fit_error_and_refusals(session):
+    app = session.app
+    prog = session.progress
+    first_accept_s = session.accepts[0][0] // 1000000
+    before = [p for t, p in prog if t < first_accept_s]
+    assert before and all(p["model"] is None and p["fit_error"] is None for p in before)
+    reasons = [p["last_reason"] for t, p in prog if p["last_reason"]]
+    assert reasons and set(reasons) <= set(REASONS)
+    samples = [p["samples"] for t, p in prog]
+    assert samples == sorted(samples)  # the buffer only grows below its capacity
+    cov = [p["coverage"] for t, p in prog]
+    assert all(0 <= c <= 100 for c in cov) and cov[-1] >= 50
+    assert any(p["solving"] for t, p in prog)
+    last = session.final
+    c = session.accepts[-1][1]
+    assert last["model"] == c.model == 10
+    assert last["fit_error"] == c.fit_error
+    assert last["accepted"] == len(session.accepts)
+    assert last["coverage"] == session.final_coverage  # the cache is up to date
+    assert last["samples"] == session.final_count >= samples[-1]
+
+
+def test_worst_stall_is_measured_and_solves_run_in_many_slices(session):
+    app = session.app
+    assert app.worst_stall_us > 0
+    assert app.solves >= 2 and app.slices >= 10 * app.accepted
+
+
+def test_four_element_fallback_gives_an_early_heading_then_ten_elements_replace_it(session):
+    models = [c.model for t, c in session.accepts]
+    if session.b.chip == "gy87":
+        assert models[-1] == 10  # the 4-element fit may be refused (fit error) on this iron
+        return
+    assert models[0] == 4 and session.accepts[0][1].samples < 100  # before 10 could run
+    assert models[-1] == 10 and session.accepts[-1][0] > session.accepts[0][0]
+
+
+def test_without_fallback_the_first_calibration_is_the_configured_model():
+    s = Session("gy271", fallback=False)
+    assert [c.model for t, c in s.accepts][0] == 10
+
+
+def test_the_calibration_ages_by_measured_time():
+    # a stored calibration with a large fit error: aging adds fe * seconds / 60000
+    b = W.make_sim("gy271", m=motion.still(10.0, 0.0, 0.0))
+    fs = W.MemFs()
+    st = W.mem_store(fs)
+    fe = 6000
+    st.save(Calibration(model=4, offset=(5400, -4200, 3600), field=6000, field_out=6000,
+                        fit_error=fe, samples=100, coverage=60).to_bytes())
+    app = W.make_app(b, store=CalStore("/", fs=fs))
+    t0 = b.clock.now_us
+    W.run_until(app, b, 30.5)
+    elapsed_s = (b.clock.now_us - t0) // 1000000
+    assert elapsed_s == 30
+    assert app.calibrator.aged_fit_error() == fe + fe * elapsed_s // 60000
+
+
+def test_mirror_axis_maps_are_refused_at_construction():
+    b = W.make_sim("gy271", m=motion.still())
+    with pytest.raises(ValueError, match="mirror"):
+        CompassApp(b.bus, mag_axes="x,y,-z", delay_us=b.sleep_us, ticks_us=b.clock.ticks_us)
+    with pytest.raises(ValueError, match="rotation"):
+        CompassApp(b.bus, accel_axes="x,-y,-z", delay_us=b.sleep_us, ticks_us=b.clock.ticks_us)
+
+
+def test_the_store_is_bound_to_the_sensor_found():
+    b = W.make_sim("gy87", m=motion.still())
+    store = CalStore("/", sensor="qmc5883l", range_code=0, fs=W.MemFs())
+    app = W.make_app(b, store=store)
+    assert (store.sensor, store.range_code) == ("hmc5883l", app.mag.range_code)
+
+
+def test_run_reports_every_n_steps_or_every_interval_and_the_status_line_reads():
+    b = W.make_sim("gy271")
+    app = W.make_app(b)
+    lines = []
+    good = app.run(100, report=lambda a: lines.append(status_line(a)), every=25)
+    assert good == 100 and len(lines) == 4
+    times = []
+    app.run(200, report=lambda a: times.append(b.clock.now_us), every_us=500000)
+    assert len(times) >= 7 and all(500000 <= y - x < 600000 for x, y in zip(times, times[1:]))
+    W.run_until(app, b, 12)
+    line = status_line(app)
+    h = app.heading_kang * 3600 // 65536
+    assert ("heading %d." % (h // 10)) in line or ("heading %d." % ((h + 1) // 10)) in line
+    assert "model 10 fit" in line and "coverage" in line and "samples" in line
+
+
+def test_the_app_path_allocates_nothing_and_a_ten_element_solve_is_sliced_on_micropython():
+    out = json.loads(mp.run(["tests/scenarios/app_alloc.py"], micro=True))
+    assert out["instrument_bytes"] == 0
+    assert out["model"] == 10 and out["passes"] < 20
+    # drivers, correct, axes, heading and the app's bookkeeping: not one byte, frames included
+    assert out["app_path_bytes_per_step"] == 0
+    # the whole step, Calibrator.add included, frames counted (mem_total): nothing
+    assert out["mem_total_bytes_per_step"] == 0
+    assert out["calibrator_add_bytes_per_call"] == 0
+    assert out["gc_net_bytes"] == 0
+    assert out["heap_locked_steps"] == out["steps"]
+    # the solve: ~30 slices, none near a 50 Hz sample period (20 ms) on the unix port
+    assert out["solve_steps"] >= 20
+    assert 0 < out["solve_worst_stall_us"] < 5000
+
+
+def test_a_session_gives_the_same_calibration_bytes_and_headings_on_both_interpreters():
+    lines = mp.json_lines(mp.parity(["tests/scenarios/app_parity.py"]))
+    accepted = [ln for ln in lines if ln[0] == "accepted"]
+    assert accepted and accepted[-1][2] == 10
+    store = [ln for ln in lines if ln[0] == "store"][0]
+    assert store[2] == accepted[-1][5]  # the store holds the last accepted calibration
+    poses = [ln for ln in lines if ln[0] == "pose"]
+    assert len(poses) == len(W.TILTED_POSES)
+    for ln in poses:
+        want = (ln[1][0] * 100 + W.DECLINATION_CDEG) * 65536 // 36000
+        for h in ln[2]:
+            assert abs((h - want + 32768) % 65536 - 32768) < SINGLE_TOL_CDEG * 65536 // 36000
+    end = [ln for ln in lines if ln[0] == "end"][0]
+    errors = dict(end[7])
+    assert errors.get("bus_error") and errors.get("overflow") and errors.get("timeout")
+    assert errors.get("interference") and end[6] >= 1  # re-initialised after the reset
+
+
+def test_the_board_main_runs_on_the_simulated_board_and_boots_with_its_stored_calibration(
+        tmp_path):
+    src = open(os.path.join(mp.ROOT, "boards", "esp32", "main.py")).read()
+    assert open(os.path.join(mp.ROOT, "boards", "rp2040", "main.py")).read() == src
+    out = mp.run(["tests/scenarios/app_main.py", "boards/esp32/main.py", str(tmp_path), "15"],
+                 micro=False).splitlines()
+    assert out[0] == "eCompass: qmc5883l, accelerometer yes, stored calibration: missing"
+    status = [ln for ln in out if ln.startswith("heading ")]
+    assert 28 <= len(status) <= 31  # every 0.5 s
+    assert "uncalibrated" in status[0] and "model 10 fit" in status[-1]
+    assert out[-1] == "stopped at 15 s"
+    # reboot, on MicroPython this time: the calibration comes from the store at once
+    out = mp.run(["tests/scenarios/app_main.py", "boards/rp2040/main.py", str(tmp_path), "2"],
+                 micro=True).splitlines()
+    assert out[0] == "eCompass: qmc5883l, accelerometer yes, stored calibration: loaded"
+    assert "model 10 fit" in out[1]
