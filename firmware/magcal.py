@@ -99,6 +99,9 @@ _MIN_FIELD_COUNTS = const(16)       # unknown sensitivity: 1 count is then >= 6 
 DEFAULT_MAX_FIT_ERROR = const(1500) # hundredths of a percent
 _FIT_ERROR_UPGRADE = const(350)     # NXP: a higher-order model is accepted at <= 3.5 %
 _FIT_ERROR_DOUBLING_S = const(60000)  # aging: NXP's e-folding time of 24 h = 59890 s x ln 2
+_COVERAGE_GAIN = const(15)          # points of coverage that make a wider fit "better"...
+_COVERAGE_FIT_NUM = const(3)        # ...if its fit error is within 3/2 of the current's:
+_COVERAGE_FIT_DEN = const(2)        # a fit over part of the sphere looks better than it is
 _POWER_ITER = const(24)             # eigenvalue ratio check; see _cond_x100
 
 _MIN_SAMPLES = {MINMAX: _MIN_SAMPLES_MINMAX, 4: _MIN_SAMPLES_4, 7: _MIN_SAMPLES_7,
@@ -518,10 +521,15 @@ class Calibrator:
         if cur.model is not None:
             aged = self.aged_fit_error()
             upgrade = _ORDER[model] > _ORDER[cur.model] and fe <= _FIT_ERROR_UPGRADE
-            if fe >= aged and not upgrade:
-                _reject(REASON_NOT_BETTER, "fit error %d.%02d %% is not below the current "
-                        "calibration's %d.%02d %% (model %s, aged)"
-                        % (fe // 100, fe % 100, aged // 100, aged % 100, cur.model))
+            # A fit over more of the sphere is worth a somewhat higher fit error: the first
+            # fit, on ~100 samples from part of it, would otherwise never be replaced.
+            wider = (cov >= cur.coverage + _COVERAGE_GAIN and _ORDER[model] >= _ORDER[cur.model]
+                     and fe * _COVERAGE_FIT_DEN <= aged * _COVERAGE_FIT_NUM)
+            if fe >= aged and not upgrade and not wider:
+                _reject(REASON_NOT_BETTER, "fit error %d.%02d %% at %d %% coverage is not "
+                        "better than the current calibration's %d.%02d %% (aged) at %d %% "
+                        "(model %s)" % (fe // 100, fe % 100, cov, aged // 100, aged % 100,
+                                        cur.coverage, cur.model))
         result = Calibration(model=model, offset=offset, invw=invw, field=field,
                              field_out=field_out, fit_error=fe, samples=n, coverage=cov)
         if accept:

@@ -467,3 +467,22 @@ def test_constructor_refuses_unknown_models():
         Calibrator(model=5)
     with pytest.raises(ValueError, match="model"):
         Calibrator().solve(model=9)
+
+
+def test_a_fit_over_more_of_the_sphere_replaces_a_partial_one_with_a_lower_fit_error():
+    # The first fit of a session sees part of the sphere and looks better than it is; a later
+    # fit covering >= 15 points more replaces it if its fit error is within 3/2 of the current's.
+    pts = sphere(3000, (100, 200, 300), 6000, seed=11, noise=30)
+    partial = Calibration(model=10, offset=(100, 200, 300), field=6000, field_out=6000,
+                          fit_error=40, coverage=55)
+    cal = calibrator_with(pts, counts_per_gauss=CPG, current=partial)
+    fe = cal.solve(accept=False).fit_error
+    assert partial.fit_error < fe <= partial.fit_error * 3 // 2
+    c = cal.solve()
+    assert cal.current is c and c.coverage >= partial.coverage + 15
+    # the same fit error at the same coverage is still refused
+    same = Calibration(model=10, offset=(100, 200, 300), field=6000, field_out=6000,
+                       fit_error=40, coverage=c.coverage)
+    cal.current = same
+    e = rejected(cal, 10)
+    assert e.reason == magcal.REASON_NOT_BETTER and "coverage" in e.detail
