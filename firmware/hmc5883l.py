@@ -28,6 +28,7 @@ except ImportError:  # CPython
         return x
 
 from firmware.errors import BusError, SensorNotFound, SensorOverflow
+from firmware.fixedpoint import micropython
 from firmware.sensors import Device, option_code
 
 # Registers (datasheet register list)
@@ -107,6 +108,7 @@ class HMC5883L(Device):
         self._set_gain_code(option_code("HMC5883L", "gain", gain, _GAINS))
         self._settle(self._period_us)
 
+    @micropython.native  # per-sample path: C-stack frame, fewer VM dispatches
     def read_into(self, buf):
         """Wait for RDY, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
         self.wait_ready(_STATUS, _RDY)

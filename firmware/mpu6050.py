@@ -18,6 +18,7 @@ except ImportError:  # CPython
         return x
 
 from firmware.errors import SensorNotFound
+from firmware.fixedpoint import micropython
 from firmware.sensors import Device
 
 # Registers (register map rev 4.2)
@@ -58,6 +59,7 @@ class MPU6050(Device):
         self._write_u8(_USER_CTRL, self._read_u8(_USER_CTRL) & ~_I2C_MST_EN)
         self._write_u8(_INT_PIN_CFG, self._read_u8(_INT_PIN_CFG) | _I2C_BYPASS_EN)
 
+    @micropython.native  # per-sample path: C-stack frame, fewer VM dispatches
     def read_accel_into(self, buf):
         """Read the accelerometer (counts) into buf[0..2]. Allocates nothing."""
         d = self._buf

@@ -23,6 +23,7 @@ except ImportError:  # CPython
         return x
 
 from firmware.errors import SensorNotFound, SensorOverflow
+from firmware.fixedpoint import micropython
 from firmware.sensors import Device, option_code
 
 # Registers (hardware.md)
@@ -83,6 +84,7 @@ class QMC5883P(Device):
                                      "reads back 0x%02X" % (address, reg, want, got),
                                      address=address)
 
+    @micropython.native  # per-sample path: C-stack frame, fewer VM dispatches
     def read_into(self, buf):
         """Wait for DRDY, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
         status = self.wait_ready(_STATUS, _DRDY)

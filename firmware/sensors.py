@@ -144,6 +144,7 @@ class Device:
             raise SensorNotFound("no %s at 0x%02X: reading ID register 0x%02X failed (errno %s)"
                                  % (name, self.address, reg, e.errno), address=self.address)
 
+    @micropython.native  # per-sample path: C-stack frame, fewer VM dispatches
     def wait_ready(self, reg, mask):
         """Poll status register `reg` until a bit of `mask` is set; return the status byte."""
         # Few locals and the raise in its own method: a frame above 11 words would make

@@ -167,8 +167,13 @@ def test_field_magnitude_is_within_a_count_of_exact_norm(b):
     c = Compass()
     c.update(b)
     exact = math.sqrt(sum(v * v for v in b))
-    # the vector is scaled to 14 bits first: a right shift (|b| > 2**14) costs up to 4 counts
-    tol = 1.0 if max(abs(v) for v in b) < 16384 else 4.0
+    # the vector is scaled to 14 bits first: after s right shifts each component is off by
+    # up to half a step (sqrt(3)/2 on the norm) and isqrt floors by < 1 step, a step = 2**s
+    m, s = max(abs(v) for v in b), 0
+    while m >= 16384:
+        m >>= 1
+        s += 1
+    tol = 1.0 if s == 0 else (1 + math.sqrt(3) / 2) * (1 << s)
     assert abs(c.magnitude - exact) <= tol
 
 
