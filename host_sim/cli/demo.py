@@ -15,10 +15,17 @@ The world (seeded by --seed, so each seed is a different, reproducible world):
 The sensor range is the one an installer would pick: the most sensitive range whose datasheet
 full scale holds max_i (|V_i| + B |row_i(W)|), the largest reading on any axis, with 10 %
 margin (QMC5883L: +-2 or +-8 G; HMC5883L: gain code 0..7).
+
+Heading accuracy is measured on a grid of still orientations (GRID_*), AVERAGE_N readings
+each, the true heading from the world (magnetic yaw + declination). What limits it: on the
+QMC5883L (12000 counts/G) the fit's own error, on the HMC5883L the integer-count offset V
+(half a count at 820 counts/G is 0.06 uT, up to 0.2 deg of a 25 uT horizontal field), then
+the accelerometer's tilt noise.
 """
 import json
 import math
 import sys
+from array import array
 
 USAGE = """usage: python -m host_sim demo [--chip CHIP] [--seed N] [options]
 
@@ -28,16 +35,16 @@ options:
   --chip CHIP     qmc5883l (GY-271 + MPU6050 module), hmc5883l (GY-273 + MPU6050
                   module) or gy87 (MPU6050 + HMC5883L on one board); default qmc5883l
   --seed N        the world (iron) and the sensors' noise; default 1
-  --seconds S     the figure-8 session, simulated seconds (default %d); the session goes
-                  on up to %d x S while no calibration has been accepted
+  --seconds S     the figure-8 session, simulated seconds (default %d); it goes on, up
+                  to %d x S, until a 10-element calibration is in force
   --samples N     readings averaged per orientation of the heading grid (default %d)
   --json          print one JSON object (heading_error_deg, calibration, ...) and nothing else
   --plot PATH     write the PNG there (default %s; CPython with matplotlib only)
   --no-plot       no PNG
   -h, --help      this text
 
-exit status: 0 a calibration was accepted; 2 none was (the last refusal is printed);
-1 bad usage.
+exit status: 0 a 10-element calibration was accepted; 2 none was (the last refusal is
+printed); 1 bad usage.
 """
 
 CHIP_CHOICES = ("qmc5883l", "hmc5883l", "gy87")
@@ -59,23 +66,29 @@ HARD_IRON_MAX = 3.0
 SOFT_IRON_EIGS = ((0.75, 0.90), (0.90, 1.10), (1.10, 1.30))  # W eigenvalue ranges
 RANGE_MARGIN = 1.10          # installer's margin over the largest expected reading
 QMC_RANGES_G = (2, 8)        # hardware.md: +-2 G / +-8 G
+HMC_RATE_HZ = 75             # its fastest continuous rate (default 15 Hz): more samples per
+                             # gesture and a 128-reading average in 1.7 s, not 8.5 s
 HMC_RANGES_G = (0.88, 1.3, 1.9, 2.5, 4.0, 4.7, 5.6, 8.1)  # hardware.md, per gain code 0..7
 
+MODEL = 10                   # the app's calibration model: AN4246's full 10 elements
 SESSION_S = 30               # one figure8() period: waves through every field direction
 TIME_LIMIT_FACTOR = 3        # keep going while nothing is accepted, up to 3 x the session
 TICK_S = 2                   # progress line period when stdout is not a terminal
+TTY_TICK_MS = 100            # on a terminal the line is rewritten in place this often
 # Heading grid: every 30 deg of yaw, level and tilted 25 deg in pitch and roll at once.
 GRID_YAWS = tuple(range(0, 360, 30))
 GRID_TILTS = ((0, 0), (25, 25), (25, -25), (-25, 25), (-25, -25))  # (pitch, roll) deg
-# Readings averaged per orientation. One MPU6050 reading has 6.4 mg of noise at its power-on
-# filter setting, a 0.37 deg tilt error, which costs up to tan(60 deg) x 0.37 = 0.64 deg of
-# heading at 60 deg dip; 32 readings bring that to 0.11 deg (about 1 s of a compass's filter).
-AVERAGE_N = 32
+# Readings averaged per orientation (2.6 s at the QMC5883L's 50 Hz, 1.7 s at 75 Hz): the
+# grid measures the calibration, so its own noise must stay well below 0.5 deg. One MPU6050
+# reading has 6.4 mg of noise at its power-on filter setting, a 0.37 deg tilt error, worth up
+# to tan(60 deg) x 0.37 = 0.64 deg of heading at 60 deg dip, and one magnetometer reading
+# 2 mG / 25 uT horizontal = 0.46 deg; over 60 orientations the largest error is ~2.5 sigma.
+# Measured with the world's exact iron (tests/test_demo.py's perfect_calibration), seeds
+# 1-12, worst max error: QMC5883L 0.46 / 0.33 / 0.27 deg with 32 / 64 / 128 readings;
+# HMC5883L 0.44 / 0.49 / 0.47 (a floor of 12-bit counts and integer offsets, not noise).
+AVERAGE_N = 128
 SETTLE_N = 2                 # readings dropped after each move (the chip's latched old set)
 DEFAULT_PLOT = "build/calibration.png"
-
-_DEG = 0.017453292519943295
-
 
 class UsageError(Exception):
     pass
@@ -101,7 +114,8 @@ def parse_args(argv):
             i += 1
             if a == "--chip":
                 if val not in CHIP_CHOICES:
-                    raise UsageError("--chip %s: expected one of %s" % (val, ", ".join(CHIP_CHOICES)))
+                    raise UsageError("--chip %s: expected one of %s"
+                                     % (val, ", ".join(CHIP_CHOICES)))
                 opts["chip"] = val
             elif a == "--plot":
                 opts["plot"] = val
@@ -122,11 +136,6 @@ def parse_args(argv):
 # --- small float linear algebra (host side) ---------------------------------------------
 def _mat_t(a):
     return [[a[j][i] for j in range(3)] for i in range(3)]
-
-
-def _mat_mul(a, b):
-    return [[a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j] for j in range(3)]
-            for i in range(3)]
 
 
 def _det(a):
@@ -171,6 +180,7 @@ def _round(x, nd):
 def demo_iron(seed):
     """(V in uT, W) for a seed: see the module docstring."""
     from host_sim.prng import Prng
+    from host_sim.world import mat_mul
     g = Prng(seed, stream=0xDE30)
     d = [g.gauss(), g.gauss(), g.gauss()]
     n = _norm(d)
@@ -180,7 +190,7 @@ def demo_iron(seed):
     n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
     r = _rotation_from_quaternion([c / n for c in q])
     e = [lo + (hi - lo) * g.uniform() for lo, hi in SOFT_IRON_EIGS]
-    w = _mat_mul(_mat_mul(r, [[e[0], 0, 0], [0, e[1], 0], [0, 0, e[2]]]), _mat_t(r))
+    w = mat_mul(mat_mul(r, [[e[0], 0, 0], [0, e[1], 0], [0, 0, e[2]]]), _mat_t(r))
     for i in range(3):  # exactly symmetric
         for j in range(i):
             w[i][j] = w[j][i]
@@ -216,7 +226,8 @@ class Stage:
         self.duration_us = None
 
     def switch(self, t_us, script):
-        self.parts = [(0, self.parts[-1][1])] if t_us <= 0 else [self.parts[-1], (t_us, script)]
+        # the chips compute samples lazily, so times before t_us may still be asked for
+        self.parts = [(0, script)] if t_us <= 0 else [self.parts[-1], (t_us, script)]
 
     def at(self, t_us):
         start, script = self.parts[0]
@@ -229,7 +240,7 @@ class Stage:
 class Setup:
     """The simulated board, its world and the firmware drivers on it."""
 
-    def __init__(self, chip, seed, seconds):
+    def __init__(self, chip, seed, seconds, noise=True):
         from firmware import sensors
         from host_sim import motion
         from host_sim.boards import make_board
@@ -246,11 +257,15 @@ class Setup:
         self.world = World(field_ut=FIELD_UT, inclination_deg=INCLINATION_DEG,
                            declination_deg=DECLINATION_CDEG / 100, hard_iron_ut=self.hard_iron_ut,
                            soft_iron=self.soft_iron, motion=self.stage, seed=seed)
-        self.board = make_board(board_chip, world=self.world, seed=seed, accel=accel)
+        self.board = make_board(board_chip, world=self.world, seed=seed, accel=accel,
+                                noise=noise)
         self.need_ut = largest_reading_ut(self.hard_iron_ut, self.soft_iron)
         opt, val, self.full_scale_g = pick_range(self.kind, self.need_ut)
         b = self.board
-        self.mag = sensors.detect(b.bus, delay_us=b.sleep_us, **{opt: val})
+        opts = {opt: val}
+        if self.kind == "hmc5883l":
+            opts["rate"] = HMC_RATE_HZ
+        self.mag = sensors.detect(b.bus, delay_us=b.sleep_us, **opts)
         self.accel = sensors.detect_accel(b.bus)
         if self.accel is None:
             raise RuntimeError("demo: no MPU6050 on the simulated %s board" % chip)
@@ -305,61 +320,83 @@ def _isatty():
         return False
 
 
+def _columns():
+    try:
+        import shutil
+        return shutil.get_terminal_size().columns
+    except (ImportError, AttributeError):  # MicroPython
+        return 80
+
+
+def _show(line, tty):
+    line = "  " + line
+    if tty:  # rewrite the same line; a wrapped line could not be rewritten
+        w = _columns() - 1
+        print(line[:w] + " " * (w - len(line)), end="\r")
+    else:
+        print(line)
+
+
 def progress_line(app, t_s):
+    """coverage, samples held, model in force, its fit error, the last refusal, accepted."""
     p = app.progress()
-    fe = p.get("fit_error")
-    parts = ["t %5.1f s" % t_s, "coverage %3d %%" % p.get("coverage", 0),
-             "samples %3d" % p.get("samples", 0), "model %s" % (p.get("model"),),
-             "fit error %s" % ("-" if fe is None else "%d.%02d %%" % (fe // 100, fe % 100)),
-             "accepted %d" % p.get("accepted", 0)]
-    r = p.get("last_reason")
-    if r:
-        parts.append("last refusal: %s" % r)
+    fe = p["fit_error"]
+    parts = ["t %4.1f s" % t_s, "coverage %2d %%" % p["coverage"], "samples %3d" % p["samples"],
+             "model %s" % ("-" if p["model"] is None else p["model"]),
+             "fit error %s" % ("-" if fe is None else "%d.%02d %%" % (fe // 100, fe % 100))]
+    if p["last_reason"]:
+        parts.append("last refusal: %s" % p["last_reason"])
+    parts.append("accepted %d" % p["accepted"])
     return "  ".join(parts)
 
 
 def run_session(setup, seconds, quiet=False):
-    """The figure-8 while CompassApp runs. Returns (app, minmax Calibrator, raw samples,
-    info). Feeds every raw sample the app read to a min/max Calibrator too."""
+    """The figure-8 while CompassApp runs. Returns (app, minmax Calibrator, raw samples
+    as a flat array('h') x0 y0 z0 x1 ..., info). Feeds every raw sample the app read to a
+    min/max Calibrator too."""
     from firmware.app import CompassApp
     from firmware.magcal import MINMAX, Calibrator
 
     b = setup.board
     app = CompassApp(b.bus, mag=setup.mag, accel=setup.accel, mag_axes=setup.mag_axes,
-                     accel_axes=setup.accel_axes, model=10, declination_cdeg=DECLINATION_CDEG,
+                     accel_axes=setup.accel_axes, model=MODEL, declination_cdeg=DECLINATION_CDEG,
                      store=None, delay_us=b.sleep_us, ticks_us=b.clock.ticks_us)
     minmax = Calibrator(model=MINMAX, counts_per_gauss=setup.cpg)
-    raws = []
+    raws = array("h")  # every raw sample, x y z flat: 6 bytes each (MicroPython's heap)
     end_us = seconds * 1000000
     limit_us = TIME_LIMIT_FACTOR * end_us
     tty = _isatty() and not quiet
+    tick_us = (TTY_TICK_MS * 1000) if tty else (TICK_S * 1000000)
     next_tick = 0
+    shown = None  # the simulated time of the last progress line
     steps = 0
     while True:
-        app.step()
+        got = app.step()  # True: a sample was read and made a heading
         steps += 1
         now = b.clock.now_us
-        if app.status == "ok":
+        if got:
             r = app.raw
-            raws.append((r[0], r[1], r[2]))
+            raws.append(r[0])
+            raws.append(r[1])
+            raws.append(r[2])
             minmax.add(r[0], r[1], r[2])
-        if not quiet and (now >= next_tick or tty):
-            line = progress_line(app, now / 1000000)
-            if tty:
-                print(line + "   ", end="\r")
-            else:
-                print("  " + line)
-            if now >= next_tick:
-                next_tick += TICK_S * 1000000
-        if now >= end_us and app.accepted and not app.progress().get("solving"):
+        if not quiet and now >= next_tick:
+            _show(progress_line(app, now / 1000000), tty)
+            shown = now
+            next_tick += tick_us
+        # done when the gesture is over and the configured model is in force (the app
+        # may first accept a quick 4-element fit: a user watching the line keeps going)
+        if now >= end_us and app.calibration.model == MODEL and not app.progress()["solving"]:
             break
         if now >= limit_us:
             break
     if not quiet:
-        line = progress_line(app, b.clock.now_us / 1000000)
-        print(("" if tty else "  ") + line + ("   " if tty else ""))
+        if shown != b.clock.now_us:
+            _show(progress_line(app, b.clock.now_us / 1000000), tty)
+        if tty:
+            print("")
     info = {"seconds": _round(b.clock.now_us / 1000000, 3), "steps": steps,
-            "samples_read": len(raws), "accepted": app.accepted,
+            "samples_read": len(raws) // 3, "accepted": app.accepted,
             "last_reason": app.last_reason, "errors": dict(app.errors)}
     return app, minmax, raws, info
 
@@ -374,20 +411,35 @@ def wrap180(d):
     return d
 
 
+def _mean(s, n):
+    """The mean of n vectors from their sum, with as many fractional bits as keep every
+    component within 14 bits (heading.Compass takes any scale). Rounding the mean to whole
+    counts would throw away what averaging gained: an HMC5883L's corrected field is only
+    ~300 counts, so half a count is 0.1-0.2 deg of heading."""
+    from firmware.fixedpoint import bit_length, rdiv
+    m = max(abs(s[0]), abs(s[1]), abs(s[2])) // n
+    k = 14 - bit_length(m)
+    if k < 0:
+        k = 0
+    return [rdiv(s[i] << k, n) for i in range(3)]
+
+
 def measure_grid(setup, cals, declination_kang, n=AVERAGE_N):
     """Hold the board still at every grid orientation, read n samples through the drivers
     and compute the heading with each Calibration in `cals` from the same readings:
     mean of the corrected body-frame fields and of the accelerometer, then heading.Compass.
+    A None calibration is skipped (its headings are None).
     Returns rows (yaw, pitch, roll, true_deg, [heading_deg per calibration])."""
     from firmware.axes import AxisMap
-    from firmware.fixedpoint import rdiv
     from firmware.heading import Compass
     from host_sim import motion
 
     b = setup.board
     mmap = AxisMap(setup.mag_axes)
     amap = AxisMap(setup.accel_axes)
-    compasses = [Compass(field=c.field_out, declination_kang=declination_kang) for c in cals]
+    # no reference field: the scaled means would only raise the interference flag
+    compasses = [None if c is None else Compass(declination_kang=declination_kang)
+                 for c in cals]
     raw = [0, 0, 0]
     acc = [0, 0, 0]
     out = [0, 0, 0]
@@ -407,15 +459,20 @@ def measure_grid(setup, cals, declination_kang, n=AVERAGE_N):
                 for i in range(3):
                     sg[i] += body[i]
                 for k in range(len(cals)):
+                    if cals[k] is None:
+                        continue
                     cals[k].correct(raw, out)
                     mmap.apply(out, body)
                     s = sb[k]
                     for i in range(3):
                         s[i] += body[i]
-            g = [rdiv(sg[i], n) for i in range(3)]
+            g = _mean(sg, n)
             heads = []
             for k in range(len(cals)):
-                bm = [rdiv(sb[k][i], n) for i in range(3)]
+                if cals[k] is None:
+                    heads.append(None)
+                    continue
+                bm = _mean(sb[k], n)
                 h = compasses[k].update(bm, g)
                 heads.append(None if h < 0 else h * 360.0 / 65536)
             rows.append((yaw, pitch, roll, setup.world.true_heading_deg(b.clock.now_us), heads))
@@ -423,7 +480,10 @@ def measure_grid(setup, cals, declination_kang, n=AVERAGE_N):
 
 
 def error_stats(rows, k):
-    """max |error| and rms error (degrees) of calibration k over the grid."""
+    """max |error| and rms error (degrees) of calibration k over the grid; a missing
+    heading counts as 180 deg. None when calibration k was skipped altogether."""
+    if all(row[4][k] is None for row in rows):
+        return None
     worst = 0.0
     ss = 0.0
     for row in rows:
@@ -447,9 +507,10 @@ def print_world(setup, seconds):
     print("  hard iron V  (%s, %s, %s) uT   |V| = %s uT = %s x B"
           % (_fmt(v[0], 1), _fmt(v[1], 1), _fmt(v[2], 1), _fmt(_norm(v), 1),
              _fmt(_norm(v) / FIELD_UT, 2)))
-    print("  soft iron W  [%s]   eigenvalues %s, axes rotated"
-          % ("; ".join(" ".join("%6.3f" % w[i][j] for j in range(3)) for i in range(3)),
-             " ".join("%.3f" % e for e in setup.soft_eigs)))
+    print("  soft iron W  [%s]"
+          % "; ".join(" ".join("%6.3f" % w[i][j] for j in range(3)) for i in range(3)))
+    print("               eigenvalues %s, principal axes rotated"
+          % " ".join("%.3f" % e for e in setup.soft_eigs))
     if setup.kind == "qmc5883l":
         rng = "+-%d G" % setup.full_scale_g
     else:
@@ -482,22 +543,31 @@ def print_calibration(setup, c, info):
           % (" ".join("%d" % q for q in c.invw), c.field, c.field_out))
 
 
-def print_grid(rows, stats, n):
+def print_grid(rows, stats, n, refused=None):
     print("")
-    print("Heading accuracy: board held still, %d orientations (yaw every 30 deg x pitch/roll "
-          "%s), %d readings averaged each; same readings, three calibrations"
-          % (len(rows), " ".join("%d/%d" % t for t in GRID_TILTS), n))
-    print("  pitch  roll   true  | uncalibrated   | min/max        | calibrated")
+    print("Heading accuracy: the board held still at %d orientations, yaw every 30 deg x"
+          % len(rows))
+    print("(pitch, roll) in %s deg," % ", ".join("(%d, %d)" % t for t in GRID_TILTS))
+    print("%d readings averaged at each, the same readings through three calibrations."
+          % n)
+    print("Heading (error) in deg:")
+    print("  pitch  roll   true | %-16s | %-16s | %s" % ("uncalibrated", "min/max", "calibrated"))
     for yaw, pitch, roll, true, heads in rows:
         cells = []
         for h in heads:
             if h is None:
-                cells.append("   (no heading)")
+                cells.append("%-16s" % "  -")
             else:
                 cells.append("%6s (%7s)" % (_fmt(h, 1), _fmt(wrap180(h - true), 2)))
-        print("  %5d %5d  %5s  | %s" % (pitch, roll, _fmt(true, 1), " | ".join(cells)))
-    print("  error (deg)   max / rms   " + "   ".join(
-        "%s %s / %s" % (m, _fmt(stats[m]["max"], 2), _fmt(stats[m]["rms"], 2)) for m in METHODS))
+        print("  %5d %5d  %5s | %s" % (pitch, roll, _fmt(true, 1), " | ".join(cells)))
+    cells = []
+    for m in METHODS:
+        st = stats[m]
+        cells.append("%-16s" % ("refused" if st is None else "%s / %s" % (_fmt(st["max"], 2),
+                                                                           _fmt(st["rms"], 2))))
+    print("  error max / rms    | %s" % " | ".join(cells))
+    if refused:
+        print("  (min/max calibration refused: %s)" % refused)
 
 
 def main(argv):
@@ -524,23 +594,27 @@ def main(argv):
                         "hard_iron_ut": setup.hard_iron_ut, "soft_iron": setup.soft_iron,
                         "counts_per_gauss": setup.cpg, "full_scale_g": setup.full_scale_g}}
     c = app.calibration
-    if not app.accepted or c is None or c.model is None:
-        result["rejected"] = info["last_reason"]
+    if c.model != MODEL:
+        # the last refusal, or "time_limit" when the time ran out before any solve refused
+        result["rejected"] = info["last_reason"] or "time_limit"
+        result["in_force"] = c.model
         if quiet:
             print(json.dumps(result))
         else:
-            print("no calibration accepted in %s s; last refusal: %s"
-                  % (_fmt(info["seconds"], 1), info["last_reason"]))
+            print("no %d-element calibration accepted in %s s (in force: %s); last refusal: %s"
+                  % (MODEL, _fmt(info["seconds"], 1), c.model, result["rejected"]))
         return 2
     try:
         mm = minmax.solve()
     except CalibrationRejected as e:
         mm = None
         result["minmax_rejected"] = e.reason
-    cals = [UNCALIBRATED, mm if mm is not None else UNCALIBRATED, c]
+    cals = [UNCALIBRATED, mm, c]
     decl = getattr(getattr(app, "compass", None), "declination_kang", None)
     if decl is None:
         decl = cdeg_to_kang(DECLINATION_CDEG)
+    setup.mag = app.mag  # the app's drivers (it re-creates them after a chip reset)
+    setup.accel = app.accel
     rows = measure_grid(setup, cals, decl, opts["samples"])
     stats = {}
     for k in range(3):
@@ -562,7 +636,7 @@ def main(argv):
         plot_path = None
     if not quiet:
         print_calibration(setup, c, info)
-        print_grid(rows, stats, opts["samples"])
+        print_grid(rows, stats, opts["samples"], result.get("minmax_rejected"))
     if plot_path is not None:
         written = _plot(plot_path, setup, c, raws, quiet)
         if written:
