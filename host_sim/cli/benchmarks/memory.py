@@ -1,0 +1,122 @@
+"""Issue 6 item 4: heap in use by the firmware (MicroPython; CPython prints nothing useful).
+
+    micropython -m host_sim.cli.benchmarks.memory SESSION.bin [--smoke]
+
+SESSION.bin: a recorded session (mag bytes then accel bytes, 6 per sample each; bench.py
+writes it with host_sim on CPython, so host_sim is never imported here and its memory does
+not count). Steps, each after gc.collect() (gc.mem_alloc = live heap):
+  base       the interpreter, this script and the session bytes
+  imported   + every firmware module a board loads (app, drivers, calibration, store)
+  app        + CompassApp over ReplayBus (drivers, Calibrator with its preallocated
+             300-sample buffer and hash, Compass), before the first sample
+  peak       the largest live heap seen while solves run in the first lap of the session
+             (gc.collect() after every step that ran a solver slice)
+  running    after a second lap: the buffer holds what the session gives it (a distance-
+             separated buffer saturates near 3/4 of its capacity on one sphere; its arrays
+             are preallocated, so the fill hardly changes the heap)
+  fast       + firmware.fast (the viper kernels and their tables)
+Also: the moment sums that are small ints on this 64-bit port but long ints (heap objects)
+on a 32-bit board, to estimate the 32-bit figure.
+"""
+import gc
+import sys
+
+from host_sim.cli.benchmarks import common
+
+SMOKE = common.smoke()
+PERIOD_US = 5000
+
+
+class Clock:
+    def __init__(self):
+        self.now = 0
+
+    def ticks(self):
+        return self.now
+
+
+def live():
+    gc.collect()
+    gc.collect()
+    return gc.mem_alloc()
+
+
+def load(path):
+    with open(path, "rb") as f:
+        data = f.read()
+    n = len(data) // 12
+    return data[:6 * n], data[6 * n:12 * n]
+
+
+def main():
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    if not common.IS_MP:
+        common.emit({"interpreter": common.interpreter(), "skipped": "needs gc.mem_alloc"})
+        return
+    mag, acc = load(args[0])
+    steps = len(mag) // 6
+    res = {"interpreter": common.interpreter(), "session_samples": steps}
+    m = {"base": live()}
+    import firmware.app  # noqa: F401
+    import firmware.calstore  # noqa: F401
+    import firmware.hmc5883l  # noqa: F401
+    import firmware.mpu6050  # noqa: F401
+    import firmware.qmc5883l  # noqa: F401
+    import firmware.qmc5883p  # noqa: F401
+    m["imported"] = live()
+    from firmware.app import CompassApp
+    from firmware.mpu6050 import MPU6050
+    from firmware.qmc5883l import QMC5883L
+    bus = common.replay_board(mag, acc)
+    clock = Clock()
+    app = CompassApp(bus, mag=QMC5883L(bus, odr=200), accel=MPU6050(bus),
+                     ticks_us=clock.ticks, store=None)
+    m["app"] = live()
+    peak = 0
+    solving = 0
+    for _ in range(steps):  # first lap: the buffer fills and solves run
+        clock.now += PERIOD_US
+        s0 = app.slices
+        app.step()
+        if app.slices != s0:
+            solving += 1
+            a = live()
+            peak = a if a > peak else peak
+    for _ in range(steps):
+        clock.now += PERIOD_US
+        app.step()
+    m["peak_solving"] = peak if solving else None
+    m["running"] = live()
+    m["after"] = m["running"]
+    import firmware.fast  # noqa: F401
+    m["fast"] = live()
+    res["heap_bytes"] = m
+    base = m["base"]
+    res["firmware_bytes"] = {"imports": m["imported"] - base, "app_start": m["app"] - base,
+                             "app_running": m["running"] - base,
+                             "peak_solving": (peak - base) if solving else None,
+                             "fast_module": m["fast"] - m["after"]}
+    res["held"] = app.calibrator.count
+    res["capacity"] = app.calibrator.capacity
+    res["solve_slices_seen"] = solving
+    mid = 0
+    big = 0
+    for v in app.calibrator.moments.s:
+        a = v if v >= 0 else -v
+        if a >= (1 << 62):
+            big += 1
+        elif a >= (1 << 30):
+            mid += 1
+    res["moment_sums"] = {"long_on_32bit_only": mid, "long_on_both": big,
+                          "total": len(app.calibrator.moments.s)}
+    # preallocated arrays: the same bytes on every port (the rest is object words)
+    buf = app.calibrator.buffer
+    arrays = [buf.data, buf.evicted, buf._cells, buf._table, buf.region_counts, app.raw,
+              app.body, app.gravity, app._cor, app._acc]
+    res["array_bytes"] = sum(len(bytes(a)) for a in arrays)
+    res["frozen_or_mpy"] = "mpy" if firmware.app.__file__.endswith(".mpy") else "py"
+    common.emit(res)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,156 @@
+"""make bench (host_sim/cli/bench.py): the smoke run completes on both interpreters, writes a
+JSON of the agreed shape, and its figures are sane. No timing assertions: times depend on the
+machine; what is asserted has a reason independent of the code measured."""
+import json
+import math
+import os
+import subprocess
+import sys
+
+import pytest
+
+from host_sim.cli import bench
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+@pytest.fixture(scope="module")
+def smoke(tmp_path_factory):
+    out = str(tmp_path_factory.mktemp("bench") / "bench.json")
+    readme = os.path.join(ROOT, "README.md")
+    before = open(readme).read()
+    p = subprocess.run([sys.executable, "-m", "host_sim", "bench", "--smoke", "--json", out],
+                       cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
+    assert open(readme).read() == before  # smoke numbers never reach the README
+    with open(out) as f:
+        return json.load(f), p.stdout
+
+
+def test_smoke_writes_the_json_with_every_item_on_both_interpreters(smoke):
+    d, _ = smoke
+    assert d["smoke"] is True
+    for k in ("date_utc", "uname_m", "cpu", "python", "micropython"):
+        assert d["machine"][k]
+    res = d["results"]
+    for name in ("yardstick", "hot", "collector", "solver", "appbench"):
+        for interp in ("cpython", "micropython"):
+            r = res[name][interp]
+            assert "error" not in r, (name, interp, r)
+            assert r["interpreter"].startswith("CPython" if interp == "cpython" else
+                                               "MicroPython")
+    for name in ("accuracy", "intcount"):
+        assert "error" not in res[name]["cpython"], res[name]
+    assert "error" not in res["memory"]["py"] and "error" not in res["memory"]["mpy"]
+    assert res["memory"]["mpy"]["frozen_or_mpy"] == "mpy"
+    assert all(len(row) == 5 for row in d["table"])
+
+
+def test_smoke_prints_the_table(smoke):
+    d, out = smoke
+    assert "ratio / goal" in out and "verdict" in out
+    for row in d["table"]:
+        assert row[0] in out
+
+
+def test_per_sample_path_allocates_nothing_and_fast_path_gives_the_same_headings(smoke):
+    d, _ = smoke
+    mp = d["results"]["hot"]["micropython"]
+    # proven elsewhere with heap_lock and mem_total (drivers_alloc, heading_alloc,
+    # fast_parity): the measurement must agree
+    for path in ("ours", "ours_fast"):
+        assert mp["bytes_per_sample"][path] == {"mem_alloc": 0, "mem_total": 0}
+        assert mp["heap_locked"][path] == "ok"
+    # the float path boxes every float on MicroPython: the instrument does see allocation
+    assert mp["bytes_per_sample"]["float"]["mem_alloc"] > 0
+    assert mp["viper"] is True and d["results"]["hot"]["cpython"]["viper"] is False
+    same, total = mp["fast_identical"]
+    assert same == total > 0
+    # both paths compute a heading from the same bytes: a real calibration each, so they
+    # agree to a few degrees (min/max cannot undo the rotated soft iron entirely)
+    assert mp["heading_diff_deg"]["median"] < 10
+
+
+def test_times_are_positive_and_parts_add_up(smoke):
+    d, _ = smoke
+    for interp in ("cpython", "micropython"):
+        h = d["results"]["hot"][interp]
+        for k, v in h["us_per_sample"].items():
+            assert v > 0, (interp, k)
+        assert h["float_cpu_us"] > 0 and h["ours_cpu_us"] > 0 and h["fast_cpu_us"] > 0
+        c = d["results"]["collector"][interp]
+        assert c["phases"]["empty"]["us_per_raw"] > 0 and c["phases"]["full"]["us_per_raw"] > 0
+        s = d["results"]["solver"][interp]
+        assert all(s["solve_us"][m] > 0 for m in ("minmax", "4", "7", "10"))
+        assert s["sliced_10"]["longest_us"] <= s["sliced_10"]["total_us"]
+        # a real fit: more parameters, a smaller residual on the same rotated soft iron
+        assert s["fit_error_x100"]["10"] < s["fit_error_x100"]["4"]
+        a = d["results"]["appbench"][interp]
+        assert a["solves"] > 0 and a["accepted"] > 0 and a["model"] == 10
+
+
+def test_memory_figures_are_consistent(smoke):
+    d, _ = smoke
+    m = d["results"]["memory"]["py"]
+    fb = m["firmware_bytes"]
+    assert 0 < fb["imports"] < fb["app_start"] <= fb["peak_solving"]
+    assert m["held"] <= m["capacity"]
+    # the buffer's arrays alone: data and cells 2 x 6 bytes per slot plus the hash table
+    assert m["array_bytes"] >= 12 * m["capacity"]
+
+
+def test_accuracy_figures(smoke):
+    d, _ = smoke
+    acc = d["results"]["accuracy"]["cpython"]
+    rot = acc["headings"]["rotated_soft_iron"]
+    # min/max scales the axes only: it cannot undo a rotated soft-iron matrix; the
+    # 10-element fit can
+    assert rot["10"]["ours"]["rms_deg"] < rot["minmax_seed004_float"]["rms_deg"]
+    assert rot["10"]["ratio_rms"] > 0
+    logs = acc["logs"]
+    assert logs and all(isinstance(v, dict) for v in logs.values())
+
+
+def test_yardstick_and_board_estimates(smoke):
+    d, _ = smoke
+    y = d["results"]["yardstick"]["micropython"]
+    assert y["pi_1000_check"] == "3141592653589793238462643383279"  # pi, 30 decimals
+    b = d["boards"]
+    # three reads per sample at 400 kHz: 9 bits per byte, 3 address/register bytes each,
+    # START + repeated START + STOP: (4 + 9 + 9) x 9 + 3 x 3 = 207 bits
+    assert b["i2c_wire_us_per_sample"] == pytest.approx(207 / 400000 * 1e6)
+    for board in ("rp2040_125mhz", "esp32_160mhz", "esp32_240mhz"):
+        e = b[board]
+        assert e["scale_int"] > 1 and e["long_int_op_us"] > 0
+        assert e["solve"]["10"]["estimate_ms"] <= e["solve"]["10"]["upper_ms"]
+    # the 240 MHz figure is the 160 MHz one scaled by the clock
+    assert b["esp32_240mhz"]["scale_int"] == pytest.approx(b["esp32_160mhz"]["scale_int"]
+                                                           * 160 / 240)
+
+
+def test_merge_takes_the_median_of_each_number():
+    runs = [{"a": 1, "b": [1, 5], "c": {"d": 3.0}, "s": "x"},
+            {"a": 9, "b": [2, 6], "c": {"d": 1.0}, "s": "y"},
+            {"a": 2, "b": [3, 4], "c": {"d": 2.0}, "s": "z"}]
+    m = bench.merge(runs)
+    assert m["a"] == 2 and m["b"] == [2, 5] and m["c"] == {"d": 2.0} and m["s"] == "x"
+    assert m["processes"] == 3
+    assert bench.merge([{"error": "boom"}]) == {"error": "boom"}
+
+
+def test_readme_section_replaces_only_the_marked_text(tmp_path):
+    p = tmp_path / "README.md"
+    p.write_text("# T\n\nintro\n")
+    bench.update_readme(bench.BEGIN + "\none\n" + bench.END, str(p))
+    text = p.read_text()
+    assert text.startswith("# T\n\nintro\n") and "## Benchmarks" in text and "one" in text
+    p.write_text(text + "\n## After\nkept\n")
+    bench.update_readme(bench.BEGIN + "\ntwo\n" + bench.END, str(p))
+    text = p.read_text()
+    assert "two" in text and "one" not in text and text.endswith("## After\nkept\n")
+    assert text.count(bench.BEGIN) == 1
+
+
+def test_wire_time_formula():
+    assert bench.wire_us(6) == pytest.approx((9 * 9 + 3) * 2.5)
+    assert not math.isnan(bench.wire_us(0))
