@@ -28,7 +28,7 @@ except ImportError:  # CPython
 
 from firmware.errors import SensorNotFound, SensorOverflow
 from firmware.fixedpoint import micropython
-from firmware.sensors import Device, option_code
+from firmware.sensors import Device, le16x3_into, option_code
 
 # Registers (datasheet register map)
 _XOUT_L = const(0x00)      # X, Y, Z int16 LSB first in 0x00..0x05
@@ -103,17 +103,13 @@ class QMC5883L(Device):
             self.skipped += 1
         if status & _OVL:
             self._overflow()
-        # int16 LSB first, sign-extended by hand (struct.unpack would allocate a tuple)
-        v = d[1] << 8 | d[0]
-        buf[0] = v - 0x10000 if v & 0x8000 else v
-        v = d[3] << 8 | d[2]
-        buf[1] = v - 0x10000 if v & 0x8000 else v
-        v = d[5] << 8 | d[4]
-        buf[2] = v - 0x10000 if v & 0x8000 else v
+        le16x3_into(d, buf)
 
     def _overflow(self):
         d = self._buf
-        raw = tuple((d[i + 1] << 8 | d[i]) - ((d[i + 1] & 0x80) << 9) for i in (0, 2, 4))
+        v = [0, 0, 0]
+        le16x3_into(d, v)
+        raw = tuple(v)
         raise SensorOverflow("QMC5883L at 0x%02X: OVL set (an axis is beyond +-%d G), raw %s; "
                              "use range=8 or move the magnet away"
                              % (self.address, _RANGES_G[self.range_code], raw),

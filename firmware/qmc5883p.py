@@ -24,7 +24,7 @@ except ImportError:  # CPython
 
 from firmware.errors import SensorNotFound, SensorOverflow
 from firmware.fixedpoint import micropython
-from firmware.sensors import Device, option_code
+from firmware.sensors import Device, le16x3_into, option_code
 
 # Registers (hardware.md)
 _CHIP_ID = const(0x00)
@@ -92,16 +92,13 @@ class QMC5883P(Device):
         self._read_into(_XOUT_L, d)  # the whole block in one transaction
         if status & _OVFL:
             self._overflow()
-        v = d[1] << 8 | d[0]  # int16 LSB first, sign-extended by hand (no struct tuple)
-        buf[0] = v - 0x10000 if v & 0x8000 else v
-        v = d[3] << 8 | d[2]
-        buf[1] = v - 0x10000 if v & 0x8000 else v
-        v = d[5] << 8 | d[4]
-        buf[2] = v - 0x10000 if v & 0x8000 else v
+        le16x3_into(d, buf)
 
     def _overflow(self):
         d = self._buf
-        raw = tuple((d[i + 1] << 8 | d[i]) - ((d[i + 1] & 0x80) << 9) for i in (0, 2, 4))
+        v = [0, 0, 0]
+        le16x3_into(d, v)
+        raw = tuple(v)
         raise SensorOverflow("QMC5883P at 0x%02X: OVFL set (an axis is beyond +-%d G), raw %s; "
                              "use a larger range" % (self.address, _RANGES_G[self.range_code],
                                                      raw), address=self.address, raw=raw)

@@ -81,6 +81,18 @@ def option_code(chip, name, value, table):
     return table.index(value)
 
 
+@micropython.native
+def le16x3_into(d, buf):
+    """buf[0..2] = the three int16, LSB first, of d[0..5] (QMC5883L and QMC5883P data blocks),
+    sign-extended by hand: struct.unpack would allocate a tuple."""
+    v = d[1] << 8 | d[0]
+    buf[0] = v - 0x10000 if v & 0x8000 else v
+    v = d[3] << 8 | d[2]
+    buf[1] = v - 0x10000 if v & 0x8000 else v
+    v = d[5] << 8 | d[4]
+    buf[2] = v - 0x10000 if v & 0x8000 else v
+
+
 def _no_delay(us):
     pass
 

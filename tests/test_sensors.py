@@ -246,3 +246,13 @@ def test_non_bus_errors_carry_no_errno_on_either_interpreter():
             "print(SensorNotFound('x', address=13).errno, DataReadyTimeout('y', 13, 5).errno)")
     assert mp.parity(["-c", code]).strip() == "None None"
     assert SensorNotFound("x").errno is None
+
+
+@given(st.binary(min_size=6, max_size=6))
+def test_le16x3_decode_is_exact_and_stays_small_int(raw):
+    import struct
+    mod, stats = intcheck.load("sensors")
+    out = [0, 0, 0]
+    mod.le16x3_into(raw, out)
+    assert tuple(out) == struct.unpack("<hhh", raw)
+    assert stats.max_abs < 1 << 30
