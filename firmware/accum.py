@@ -44,6 +44,7 @@ def _build_tables():
 
 
 EXPONENTS, _INDEX = _build_tables()
+INDEX_TABLE = _INDEX  # bytes: INDEX_TABLE[i * 25 + j * 5 + k] = index(i, j, k) (255: none)
 
 
 def index(i, j, k):
@@ -160,6 +161,50 @@ def shifted(c, s, new_c):
         out[n] = acc
         n += 1
     return out
+
+
+_BINOM = ((1,), (1, 1), (1, 2, 1), (1, 3, 3, 1), (1, 4, 6, 4, 1))
+_STRIDE = (25, 5, 1)  # _INDEX key step of one unit of dx, dy, dz
+
+
+def shifted_steps(c, s, new_c, out, ops=40):
+    """shifted() as a generator for a time-sliced solve: out[:] = shifted(c, s, new_c),
+    with at most `ops` operations on the sums between two yields.
+
+    The binomial shift factorises by axis, so it runs as three one-axis passes: each new sum
+    is at most 5 terms of (binomial x power of -t) x (old sum), 2 long-int operations a term
+    (the integers are the same as shifted()'s, summed in another order: exact)."""
+    cur = s
+    for axis in range(3):
+        t = new_c[axis] - c[axis]
+        if t == 0:
+            continue
+        p = _powers(-t)
+        coef = [[_BINOM[i][a] * p[i - a] for a in range(i + 1)] for i in range(_MAX_DEGREE + 1)]
+        yield
+        nxt = [0] * NUM_MOMENTS
+        stride = _STRIDE[axis]
+        used = 0
+        for n in range(NUM_MOMENTS):
+            e = EXPONENTS[n]
+            i = e[axis]
+            if i == 0:
+                nxt[n] = cur[n]
+                continue
+            if used + 2 * i + 1 > ops:
+                yield
+                used = 0
+            key = e[0] * 25 + e[1] * 5 + e[2] - i * stride  # the sum with this axis' power 0
+            cf = coef[i]
+            acc = cf[0] * cur[_INDEX[key]]
+            for a in range(1, i + 1):
+                acc += cf[a] * cur[_INDEX[key + a * stride]]
+            nxt[n] = acc
+            used += 2 * i + 1
+        cur = nxt
+        yield
+    for n in range(NUM_MOMENTS):
+        out[n] = cur[n]
 
 
 def batch(samples, c):

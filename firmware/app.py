@@ -28,8 +28,14 @@ One step (AN4246 / AN4248 pipeline):
             heading (KANG) and its flags. Allocation-free (tests/scenarios/app_alloc.py).
   feed      calibrator.add(raw) unless the field magnitude says interference: a magnet near
             the board would poison the fit (seed 004).
-  solve     one next() of Calibrator.solve_steps() when a solve is running (NXP time-slices
-            its solver the same way). .worst_stall_us is the longest such slice: the time the
+  solve     when a solve is running, a few slices of Calibrator.solve_steps(group=1) (NXP
+            time-slices its solver the same way): each slice is at most solve.SLICE_OPS (40)
+            long-int operations (make bench estimates 1-2 ms on an RP2040), and a step runs
+            period / 4 ms of them (at least one): 1 at 200 Hz, 5 at 50 Hz, 16 at 15 Hz - a
+            quarter to half of the sample period on an RP2040 - so a solve (~400 slices)
+            takes ~2 s at any rate. Counted in slices, not measured time, so runs are
+            repeatable on every interpreter.
+            .worst_stall_us is the longest such step's solver work: the time the
             sample loop was held up by the solve, on the wall clock (time.ticks_us; CPython:
             perf_counter), never the simulated one, on which a solve takes no time. The
             data-ready wait is not a stall and not counted; a save is (.worst_save_us).
@@ -43,7 +49,7 @@ user stopped moving: say now why it is not enough, e.g. "planar" after half a tu
 than wait for solve_every more); or when none ran for _SOLVE_IDLE_US and samples are held
 (once the sphere is covered almost nothing is kept, yet aging can make a fit on the same
 samples acceptable). solve_every = 25: a covered sphere holds ~225 samples, so about nine
-solves while the user fills it, each ~30 slices (~0.6 s at 50 Hz) - the fit follows the
+solves while the user fills it, each ~2 s - the fit follows the
 user without solving all the time. The configured model is tried; while no calibration of
 4 elements or more is in force (or while relearning), a refusal for too_few_samples is
 followed by a 4-element attempt: hard iron is the largest error (seed 004) and a 4-element
@@ -127,6 +133,11 @@ REPORT_EVERY = const(25)      # run(): steps between reports (0.5 s at 50 Hz)
 _RANGE_OPTION = {"qmc5883l": ("range", (2, 8)), "qmc5883p": ("range", (30, 12, 8, 2)),
                  "hmc5883l": ("gain", (0, 1, 2, 3, 4, 5, 6, 7))}
 _ACCEL_RANGE = {16384: 2, 8192: 4, 4096: 8, 2048: 16}  # MPU6050 counts/g -> accel_range
+
+
+_SLICE_US = const(1000)        # budget per solver slice (make bench: ~1-2 ms on an RP2040)
+_SOLVE_SHARE = const(4)        # slices per step = period / (4 x _SLICE_US), at least one
+_DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
 
 
 def _sub(a, b):
@@ -224,6 +235,7 @@ class CompassApp:
 
         self._job = None
         self._job_model = None
+        self._slices_per_step = 1
         self._next_model = None     # a fallback model to try at the next slice
         self._kept = 0              # samples kept since the last solve started
         self._fails = 0             # failed reads in a row
@@ -487,7 +499,10 @@ class CompassApp:
         t = self._wall()
         if self._job is None:
             self._start()
-        self._advance()
+        n = self._slices_per_step
+        while n and self._job is not None:
+            self._advance()
+            n -= 1
         d = self._wall_diff(self._wall(), t)
         self.slices = (self.slices + 1) & 0x3FFFFFFF
         if d > self.worst_stall_us:
@@ -504,7 +519,10 @@ class CompassApp:
         self.solves += 1
         self._job_model = m
         self.last_model = m
-        self._job = self.calibrator.solve_steps(m)
+        self._job = self.calibrator.solve_steps(m, group=1)
+        period = getattr(self.mag, "period_us", _DEFAULT_PERIOD_US)
+        n = period // (_SOLVE_SHARE * _SLICE_US)
+        self._slices_per_step = n if n > 0 else 1
 
     def _advance(self):
         try:

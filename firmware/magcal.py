@@ -13,8 +13,10 @@ A^1/2 (firmware/solve.py) -> named acceptance checks ("sour grapes", Judd; NXP; 
 running extremes of every raw sample since clear(), as users know it; its fit error and its
 geometry check use the held samples like the other models.
 
-solve_steps() is the same solve as a generator, one bounded step per next() (one pivot of
-the elimination, one square-root iteration, the coverage count...), for the app's loop.
+solve_steps() is the same solve as a generator for the app's loop, bounded work per next():
+at most solve.SLICE_OPS (40) operations on long ints (a few entries of the normal equations
+or of one elimination row, a third of a 3x3 inverse, one power-iteration step...) or
+samples.COVERAGE_CHUNK samples of the coverage count (tests/test_slices.py bounds both).
 
 Acceptance, in this order; each refusal raises CalibrationRejected(REASON_*, detail):
   too_few_samples   fewer held samples than the model needs (_MIN_SAMPLES_*).
@@ -103,6 +105,10 @@ _COVERAGE_GAIN = const(15)          # points of coverage that make a wider fit "
 _COVERAGE_FIT_NUM = const(3)        # ...if its fit error is within 3/2 of the current's:
 _COVERAGE_FIT_DEN = const(2)        # a fit over part of the sphere looks better than it is
 _POWER_ITER = const(24)             # eigenvalue ratio check; see _cond_x100
+# solve_steps(): slices per next() by default: one slice is at most solve.SLICE_OPS long-int
+# operations (~1 ms on an RP2040); the caller decides how many fit between samples (the app
+# runs a quarter of the sample period's worth per step, firmware/app.py).
+DEFAULT_SLICE_GROUP = const(1)
 
 _MIN_SAMPLES = {MINMAX: _MIN_SAMPLES_MINMAX, 4: _MIN_SAMPLES_4, 7: _MIN_SAMPLES_7,
                 10: _MIN_SAMPLES_10}
@@ -206,35 +212,55 @@ def _reject(reason, detail):
     raise CalibrationRejected(reason, detail)
 
 
-def _cond_x100(q):
-    """Eigenvalue ratio of InvW (9 Q15 ints, symmetric positive definite), in hundredths;
-    None if it is not positive definite. Power iteration on InvW and on its adjugate (whose
-    largest eigenvalue is det / the smallest of InvW); each Rayleigh quotient is a lower
-    bound whose error shrinks as (l2 / l1)**(2 * _POWER_ITER) of the eigenvalue gap."""
+def _cond_steps(q, out):
+    """Generator: out[0] = the eigenvalue ratio of InvW (9 Q15 ints, symmetric positive
+    definite), in hundredths; None if it is not positive definite. Power iteration on InvW
+    and on its adjugate (whose largest eigenvalue is det / the smallest of InvW); each
+    Rayleigh quotient is a lower bound whose error shrinks as (l2 / l1)**(2 * _POWER_ITER)
+    of the eigenvalue gap. One power step (~25 operations, long ints on a 32-bit board)
+    per next()."""
+    out[0] = None
     m = [[q[0], q[1], q[2]], [q[3], q[4], q[5]], [q[6], q[7], q[8]]]
     dt = solve.det3(m)
     if dt <= 0 or m[0][0] <= 0 or m[0][0] * m[1][1] - m[0][1] * m[1][0] <= 0:
-        return None
-    big = _power_max(m)
-    big_adj = _power_max(solve.adj3(m))
+        return
+    r = [0]
+    yield from _power_steps(m, r)
+    big = r[0]
+    yield
+    adj = solve.adj3(m)
+    yield from _power_steps(adj, r)
+    big_adj = r[0]
     if big <= 0 or big_adj <= 0:
-        return None
+        return
     # cond = big / (dt / big_adj); Rayleigh quotients in Q16
-    return big * big_adj * 100 // (dt << 32)
+    out[0] = big * big_adj * 100 // (dt << 32)
 
 
-def _power_max(m):
-    # Rayleigh quotient (Q16) after _POWER_ITER power steps; vectors rescaled by shifts
+def _cond_x100(q):
+    """_cond_steps run to completion."""
+    out = [None]
+    for _ in _cond_steps(q, out):
+        pass
+    return out[0]
+
+
+def _power_steps(m, out):
+    # out[0] = Rayleigh quotient (Q16) after _POWER_ITER power steps; vectors rescaled by
+    # shifts; one power step per next()
+    out[0] = 0
     v = [1 << 14, 1 << 13, 1 << 12]
     for _ in range(_POWER_ITER):
+        yield
         u = solve.mat_vec3(m, v)
         a = max(abs(u[0]), abs(u[1]), abs(u[2]))
         if a == 0:
-            return 0
+            return
         sh = bit_length(a) - 15
         v = [u[0] >> sh, u[1] >> sh, u[2] >> sh] if sh > 0 else u
+    yield
     u = solve.mat_vec3(m, v)
-    return ((u[0] * v[0] + u[1] * v[1] + u[2] * v[2]) << 16) // (
+    out[0] = ((u[0] * v[0] + u[1] * v[1] + u[2] * v[2]) << 16) // (
         v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
 
 
@@ -274,6 +300,7 @@ class Calibrator:
         self._fresh = True  # no raw sample since construction or clear()
         self._lo = [0, 0, 0]
         self._hi = [0, 0, 0]
+        self.slice_group = DEFAULT_SLICE_GROUP
 
     @property
     def count(self):
@@ -417,13 +444,35 @@ class Calibrator:
             except StopIteration as e:
                 return e.value
 
-    def solve_steps(self, model=None, accept=True):
+    def solve_steps(self, model=None, accept=True, group=None):
         """The solve as a generator doing bounded work per next() (for the app's loop):
             job = cal.solve_steps()
             ... each tick:  next(job)   -> StopIteration when done (.value = Calibration),
                                            CalibrationRejected on refusal.
+        One next() runs `group` slices (None: .slice_group), each at most solve.SLICE_OPS
+        long-int operations or samples.COVERAGE_CHUNK samples of the coverage count
+        (tests/test_slices.py); group=1 gives the finest slices, for a caller that runs as
+        many as its sample period allows. The result does not depend on the slicing.
         The moment sums are copied at the start, so samples added meanwhile do not disturb
-        the fit (coverage is measured on the buffer as it is at the end)."""
+        the fit (coverage is counted on the buffer as each slot is reached, at the end)."""
+        k = self.slice_group if group is None else group
+        if k < 1:
+            raise ValueError("slice group %d < 1" % k)
+        job = self._solve_slices(model, accept)
+        if k == 1:
+            return (yield from job)
+        n = 0
+        while True:
+            try:
+                next(job)
+            except StopIteration as e:
+                return e.value
+            n += 1
+            if n >= k:
+                n = 0
+                yield
+
+    def _solve_slices(self, model, accept):
         model = self._pick_model(model)
         n = self.buffer.count
         need = _MIN_SAMPLES[model]
@@ -436,8 +485,7 @@ class Calibrator:
                 for gm in ((4, model) if model in (7, 10) and n > 2 * model else (4,)):
                     f = solve.Fit(gm)
                     try:
-                        for _ in solve.fit_steps(c, s, gm, f):
-                            yield
+                        yield from solve.fit_steps(c, s, gm, f)
                     except solve.SolveError as e:
                         planar = e.reason == REASON_PLANAR
                     if f.rho_min_ppm is not None and f.rho_min_ppm < self._rho_limit(f):
@@ -449,28 +497,29 @@ class Calibrator:
             _reject(REASON_TOO_FEW_SAMPLES, "%d samples held, model %s needs %d"
                     % (n, model, need))
         yield
+        r = [None]
         if model == MINMAX:
             # seed 002: the running extremes of every raw sample since clear() (what users
             # know; unlike the buffer they never forget a transient - clear() does)
             lo = self._lo[:]
             hi = self._hi[:]
             try:
-                v2, h2, b_q16, fe, w, one = solve.minmax_fit(lo, hi, c, s)
+                yield from solve.minmax_steps(lo, hi, c, s, r)
             except solve.SolveError as e:
                 _reject(e.reason, e.detail)
+            v2, h2, b_q16, fe, w, one = r[0]
             offset = [rdiv(v2[i], 2) for i in range(3)]
+            yield
             # the samples' geometry, judged as for the 4-element fit of the same sums
             f = solve.Fit(4)
             try:
-                for _ in solve.fit_steps(c, s, 4, f, self._check_rho):
-                    yield
+                yield from solve.fit_steps(c, s, 4, f, self._check_rho)
             except solve.SolveError as e:
                 _reject(REASON_PLANAR, e.detail)
         else:
             f = solve.Fit(model)
             try:
-                for _ in solve.fit_steps(c, s, model, f, self._check_rho):
-                    yield
+                yield from solve.fit_steps(c, s, model, f, self._check_rho)
             except solve.SolveError as e:
                 _reject(e.reason, e.detail)
             one = 1 << solve.SQRT_FRAC_BITS
@@ -478,29 +527,39 @@ class Calibrator:
                 w = [[one, 0, 0], [0, one, 0], [0, 0, one]]
             else:
                 res = [None, 0]
-                for _ in solve.invw_steps(f.a2, f.det_a2, res):
-                    yield
+                yield from solve.invw_steps(f.a2, f.det_a2, res)
                 w = res[0]
                 if w is None:
                     _reject(REASON_SINGULAR, "W^-1 = A^1/2 did not converge")
             yield
-            b_q16 = solve.field_q16(f.k2_num, f.k2_den, f.det_a2)
-            fe = solve.fit_error_x100(f)
+            yield from solve.field_q16_steps(f.k2_num, f.k2_den, f.det_a2, r)
+            b_q16 = r[0]
+            yield
+            yield from solve.fit_error_steps(f, r)
+            fe = r[0]
+            yield
             offset = [rdiv(f.v_num[i], f.v_den) for i in range(3)]
-        invw = solve.q15_from_invw(w, solve.SQRT_FRAC_BITS)
-        field_out = solve.field_out_counts(invw, b_q16)
+        yield
+        yield from solve.q15_steps(w, solve.SQRT_FRAC_BITS, r)
+        invw = r[0]
+        yield
+        yield from solve.field_out_steps(invw, b_q16, r)
+        field_out = r[0]
         field = rdiv(b_q16, 1 << solve.B_FRAC_BITS)
         yield
         for i in range(3):
             if not -32768 <= offset[i] <= 32767:
                 _reject(REASON_OFFSET_OUT_OF_RANGE, "V = (%d, %d, %d) counts is outside int16"
                         % (offset[0], offset[1], offset[2]))
-        cov = self.buffer.coverage(offset[0], offset[1], offset[2])
+        yield from self.buffer.coverage_steps(offset[0], offset[1], offset[2], r)
+        cov = r[0]
         yield
         if cov < _MIN_COVERAGE[model]:
             _reject(REASON_LOW_COVERAGE, "%d %% of sphere regions covered around V, model %s "
                     "needs %d %%" % (cov, model, _MIN_COVERAGE[model]))
-        cond = _cond_x100(invw)
+        yield from _cond_steps(invw, r)
+        cond = r[0]
+        yield
         if cond is None or cond > _MAX_SOFT_IRON_COND_X100 or field_out <= 0:
             _reject(REASON_SOFT_IRON_OUT_OF_RANGE, "W^-1 eigenvalue ratio %s/100 > %d/100"
                     % (cond, _MAX_SOFT_IRON_COND_X100))

@@ -47,6 +47,7 @@ REPLACED = const(2)  # offer(): stored over the oldest sample, now in .evicted
 MAX_CAPACITY = const(16383)     # table entries are uint16 slot+1; the table is 3-6x capacity
 MAX_SEPARATION = const(16384)   # counts: keeps 3*s**2 < 2**30 (small int on 32-bit boards)
 N_REGIONS = const(100)          # equal-area sphere regions for coverage(), as MotionCal uses
+COVERAGE_CHUNK = const(4)       # coverage_steps(): samples per slice (~10 us on the unix port)
 
 # Spatial hash: odd multipliers < 2**14 keep |c * m| < 2**29 for cell coordinates |c| <= 2**15,
 # and the xor of three such values stays below 2**29 too; a fold, a second multiply on 15 bits
@@ -439,3 +440,48 @@ class SampleBuffer:
                     gaps += _GAP_TWO
         self.gaps_x100 = gaps
         return occupied * 100 // N_REGIONS
+
+    def coverage_steps(self, cx, cy, cz, out, chunk=COVERAGE_CHUNK):
+        """coverage() as a generator for a time-sliced solve: each next() clears or tallies
+        at most 4 * chunk regions or classifies at most `chunk` held samples (region() is
+        the cost: ~40 bytecode lines a sample). Sets out[0] to the percent coverage() would
+        return, with region_counts and gaps_x100 filled the same way. Samples offered
+        meanwhile may land in the slots not yet visited: the count covers the buffer as each
+        slot is reached (as coverage() would at that moment)."""
+        if chunk < 1:
+            raise ValueError("coverage chunk %d < 1" % chunk)
+        counts = self.region_counts
+        step = 4 * chunk
+        for i0 in range(0, N_REGIONS, step):
+            for i in range(i0, i0 + step if i0 + step < N_REGIONS else N_REGIONS):
+                counts[i] = 0
+            yield
+        data = self.data
+        j = 0
+        while j < 3 * self.count:
+            end = j + 3 * chunk
+            if end > 3 * self.count:
+                end = 3 * self.count
+            while j < end:
+                r = region(data[j] - cx, data[j + 1] - cy, data[j + 2] - cz)
+                if r >= 0 and counts[r] < 255:
+                    counts[r] += 1
+                j += 3
+            yield
+        occupied = 0
+        gaps = 0
+        for i0 in range(0, N_REGIONS, step):
+            for i in range(i0, i0 + step if i0 + step < N_REGIONS else N_REGIONS):
+                c = counts[i]
+                if c == 0:
+                    gaps += _GAP_EMPTY
+                else:
+                    occupied += 1
+                    if c == 1:
+                        gaps += _GAP_ONE
+                    elif c == 2:
+                        gaps += _GAP_TWO
+            if i0 + step < N_REGIONS:
+                yield
+        self.gaps_x100 = gaps
+        out[0] = occupied * 100 // N_REGIONS

@@ -122,6 +122,7 @@ class Device:
             raise ValueError("timeout_us=%s: expected 1..%d" % (timeout_us, _MAX_TIMEOUT_US))
         self.timeout_us = timeout_us
         self._period_us = period_us
+        self.period_us = period_us  # the output data period: the app sizes its work by it
         self._poll_us = max(period_us >> 4, _MIN_POLL_US)  # latency <= 1/16 of a period
 
     # -- bus access: every OSError becomes BusError naming address and register

@@ -59,8 +59,8 @@ column explains, per sample, relative to the spread of the data). On a uniformly
 sphere rho = 1/3 for the centre, 1/15 for dx dy, 1/5 for dx^2-dz^2; see firmware/magcal.py
 for the thresholds.
 """
-from firmware.accum import EXPONENTS, index, shifted
-from firmware.fixedpoint import icbrt, isqrt, rdiv
+from firmware.accum import EXPONENTS, INDEX_TABLE, NUM_MOMENTS, index, shifted_steps
+from firmware.fixedpoint import bit_length, isqrt, rdiv
 
 try:
     from micropython import const
@@ -72,6 +72,14 @@ _Q15_ROW_MAX = const(32767)     # largest row absolute sum of InvW (see module d
 SQRT_FRAC_BITS = const(40)      # W^-1 iteration in Q40: 2**-40 << one Q15 step
 _SQRT_MAX_ITER = const(40)      # Denman-Beavers: ~6 iterations for cond(A) 4, ~9 for 1000
 B_FRAC_BITS = const(16)         # B kept in Q16 counts between steps
+# Time slicing: every *_steps generator does at most SLICE_OPS arithmetic operations on the
+# solver's numbers (long ints on a 32-bit board) between two yields. At the bench's ~20 us
+# per long-int result on an RP2040 that is <= ~0.8 ms a slice, plus its bytecode (a few
+# us on the unix port, x ~160 on the board): a 200 Hz sample loop keeps up while solving.
+SLICE_OPS = const(40)
+_TWO_256 = 1 << 256             # _bits(): long-int shifts of 256 bits, then 30, then 1
+_MUL_CHUNK_BITS = const(256)    # mul_steps(): bits of the second factor per step
+_MUL_CHUNK_MASK = (1 << 256) - 1
 
 # Columns of X as polynomials in (dx, dy, dz): tuples of (coefficient, i, j, k).
 _COLS = {
@@ -204,9 +212,171 @@ class Fit:
         self.rho_col = None
 
 
+def _bits(n):
+    # bit_length(n), n >= 0, in few long-int shifts: 256 bits, then 30, then small ints
+    b = 0
+    while n >= _TWO_256:
+        n >>= 256
+        b += 256
+    while n >= 0x40000000:
+        n >>= 30
+        b += 30
+    return b + bit_length(n)
+
+
+def _weight(nb):
+    # cost of one operation on an nb-bit number, in SLICE_OPS units: 1 up to 512 bits, then
+    # growing with the size (the unix port's time per long-int operation does)
+    return 1 + (nb >> 9)
+
+
+def isqrt_steps(n, out):
+    """Generator: out[0] = fixedpoint.isqrt(n) by the same Newton iterates (from
+    2**ceil(bits / 2) down), at most SLICE_OPS operations between yields."""
+    if n < 0x40000000:
+        out[0] = isqrt(n)  # small ints: the digit-by-digit branch
+        return
+    nb = _bits(n)
+    x = 1 << ((nb + 1) >> 1)
+    cost = 3 * _weight(nb)
+    used = 24  # _bits of a number below 2**1280 and the shift
+    while True:
+        if used + cost > SLICE_OPS:
+            yield
+            used = 0
+        y = (x + n // x) >> 1
+        used += cost
+        if y >= x:
+            out[0] = x
+            return
+        x = y
+
+
+def icbrt_steps(n, out):
+    """Generator: out[0] = fixedpoint.icbrt(n) for n >= 0 by the same Newton iterates, at
+    most SLICE_OPS operations between yields."""
+    if n < 2:
+        out[0] = n
+        return
+    nb = _bits(n)
+    x = 1 << ((nb + 2) // 3)
+    cost = 5 * _weight(nb)
+    used = 24
+    while True:
+        if used + cost > SLICE_OPS:
+            yield
+            used = 0
+        y = (2 * x + n // (x * x)) // 3
+        used += cost
+        if y >= x:
+            out[0] = x
+            return
+        x = y
+
+
+def _run(gen):
+    for _ in gen:
+        pass
+
+
+def _normal_steps(s, model, m, r, yy):
+    # normal_equations() into m, r and yy[0], a few entries per slice. Every coefficient of
+    # the columns is +-1, so an entry is a signed sum of moment sums: one long-int add each.
+    cols = _COLS[model]
+    nc = len(cols)
+    used = 0
+    for i in range(nc + 1):
+        p = cols[i] if i < nc else _Y
+        for j in range(i, nc + 1):
+            if i == nc:
+                q = _Y
+            elif j == nc:
+                q = _Y
+            else:
+                q = cols[j]
+            k = 2 * len(p) * len(q)  # 1 long-int add a product, weighted for its bytecode
+            if used + k > SLICE_OPS:
+                yield
+                used = 0
+            acc = 0
+            for a in p:
+                for b in q:
+                    v = s[INDEX_TABLE[(a[1] + b[1]) * 25 + (a[2] + b[2]) * 5 + a[3] + b[3]]]
+                    if a[0] == b[0]:
+                        acc += v
+                    else:
+                        acc -= v
+            used += k
+            if i == nc:
+                yy[0] = acc
+            elif j == nc:
+                r[i] = acc
+            else:
+                m[i][j] = acc
+                m[j][i] = acc
+
+
+def _bareiss_steps(a, nc, width):
+    # Bareiss elimination (bareiss_step per pivot) of the first nc columns of the augmented
+    # rows, at most SLICE_OPS // 4 updated entries per slice (4 operations each), fewer for
+    # big pivots. Raises SolveError('planar') on a pivot <= 0.
+    left = 0
+    prev = 1
+    for k in range(nc):
+        p = a[k][k]
+        if p <= 0:  # X^T X is positive semi-definite: a pivot <= 0 means singular
+            raise SolveError("planar", "normal matrix singular at column %d of %d" % (k, nc))
+        if k == nc - 1:
+            break
+        # entries per slice: 4 operations each, weighted by the pivot's size (the entries
+        # are minors of the same order); at least one
+        per = SLICE_OPS // (4 * _weight(_bits(p) << 1))
+        if per < 1:
+            per = 1
+        if left > per:
+            left = per
+        left -= 3  # _bits(p): up to 9 shifts (< 2**512) in this slice
+        ak = a[k]
+        for i in range(k + 1, nc):
+            ai = a[i]
+            f = ai[k]
+            j = k + 1
+            while j < width:
+                if left <= 0:
+                    yield
+                    left = per
+                e = j + left if j + left < width else width
+                left -= e - j
+                while j < e:
+                    ai[j] = (p * ai[j] - f * ak[j]) // prev
+                    j += 1
+            ai[k] = 0
+        prev = p
+
+
+def _back_steps(a, col, stop, x):
+    # back_substitute(a, col, stop) into x (zeros below stop), rows packed into slices
+    n = len(a)
+    det = a[n - 1][n - 1]
+    wgt = _weight(_bits(det) << 1)  # x_j (= minors) and the row entries: det's size
+    used = 8  # _bits(det)
+    for i in range(n - 1, stop - 1, -1):
+        cost = 2 * (n - i) * wgt
+        if used + cost > SLICE_OPS:
+            yield
+            used = 0
+        ai = a[i]
+        acc = det * ai[col]
+        for j in range(i + 1, n):
+            acc -= ai[j] * x[j]
+        x[i] = acc // ai[i]
+        used += cost
+
+
 def fit_steps(c, s, model, out, check=None):
     """Generator: the exact least-squares fit of `model` to the sums `s` about centre `c`,
-    a bounded piece of work per step (one elimination pivot, one back-substitution).
+    at most SLICE_OPS operations on its numbers per step (a few entries of the normal
+    equations, ~10 entries of one elimination row, a few back-substitution rows...).
     Fills `out` (a Fit). Raises SolveError with a reason name on a degenerate system.
     `check(out)`, if given, runs as soon as the degeneracy ratios are known (before the
     quadric is examined), so a caller can refuse degenerate geometry first."""
@@ -219,11 +389,18 @@ def fit_steps(c, s, model, out, check=None):
     # the elimination's numbers shrink when the first sample was far from the others.
     if n > 0:
         cm = (c[0] + rdiv(s[1], n), c[1] + rdiv(s[2], n), c[2] + rdiv(s[3], n))
-        s = shifted(c, s, cm)
+        yield
+        s2 = [0] * NUM_MOMENTS
+        yield from shifted_steps(c, s, cm, s2, SLICE_OPS)
+        s = s2
         c = cm
     f.c = c
-    m, r, yy = normal_equations(s, model)
-    nc = len(m)
+    nc = len(_COLS[model])
+    m = [[0] * nc for _ in range(nc)]
+    r = [0] * nc
+    yyo = [0]
+    yield from _normal_steps(s, model, m, r, yyo)
+    yy = yyo[0]
     yield
     # Augmented [M | r | I]: one elimination gives beta and the diagonal of M^-1.
     a = []
@@ -232,23 +409,18 @@ def fit_steps(c, s, model, out, check=None):
         row[nc + 1 + i] = 1
         a.append(row)
     width = 2 * nc + 1
-    prev = 1
-    for k in range(nc):
-        p = a[k][k]
-        if p <= 0:  # X^T X is positive semi-definite: a pivot <= 0 means singular
-            raise SolveError("planar", "normal matrix singular at column %d of %d" % (k, nc))
-        if k < nc - 1:
-            prev = bareiss_step(a, k, prev, width)
-        yield
+    yield from _bareiss_steps(a, nc, width)
+    yield
     d = a[nc - 1][nc - 1]
     f.D = d
-    beta = back_substitute(a, nc)
+    beta = [0] * nc
+    yield from _back_steps(a, nc, 0, beta)
     f.beta_num = beta
+    yield
     acc = 0
     for i in range(nc):
         acc += beta[i] * r[i]
     f.p_num = yy * d - acc  # P * D, P = Y^T Y - beta . X^T Y
-    yield
     # rho_i = 1 / (N (M^-1)_ii s^deg) with s = (N sum|d|^2 - |sum d|^2) / N^2
     spread = n * (s[4] + s[7] + s[9]) - (s[1] * s[1] + s[2] * s[2] + s[3] * s[3])
     degs = _DEG[model]
@@ -256,7 +428,11 @@ def fit_steps(c, s, model, out, check=None):
     for i in range(nc):
         if degs[i] == 0:
             continue
-        inv_ii = back_substitute(a, nc + 1 + i, i)[i]  # (M^-1)_ii * D
+        yield
+        x = [0] * nc
+        yield from _back_steps(a, nc + 1 + i, i, x)
+        inv_ii = x[i]  # (M^-1)_ii * D
+        yield
         # rho = D n^(2 deg - 1) / (inv_ii spread^deg), in parts per million
         num = d * n ** (2 * degs[i] - 1) * 1000000
         den = inv_ii * spread ** degs[i]
@@ -266,10 +442,10 @@ def fit_steps(c, s, model, out, check=None):
         if best is None or rho < best:
             best = rho
             f.rho_col = i
-        yield
     f.rho_min_ppm = best
     if check is not None:
         check(f)
+    yield
     # The quadric, scaled by 2D to integers: A2 = 2D (I - S(beta)), b2 = -2 beta_lin, e2.
     bt = beta
     if model == 4:
@@ -288,17 +464,21 @@ def fit_steps(c, s, model, out, check=None):
     f.a2 = a2
     f.b2 = b2
     f.e2 = e2
+    yield
     # A2 must be positive definite (an ellipsoid): leading minors > 0
     da = det3(a2)
     f.det_a2 = da
     if a2[0][0] <= 0 or a2[0][0] * a2[1][1] - a2[0][1] * a2[1][0] <= 0 or da <= 0:
         raise SolveError("singular", "fitted quadric is not an ellipsoid (A not positive "
                          "definite)")
+    yield
     adj = adj3(a2)
+    yield
     w = mat_vec3(adj, b2)  # A2^-1 b2 = w / da
     # V = c + d0, d0 = -w / (2 da)   (eq. 19)
     f.v_den = 2 * da
     f.v_num = [c[0] * 2 * da - w[0], c[1] * 2 * da - w[1], c[2] * 2 * da - w[2]]
+    yield
     # K2 = d0^T A2 d0 - e2 = (b2 . w - 4 da e2) / (4 da)
     f.k2_num = b2[0] * w[0] + b2[1] * w[1] + b2[2] * w[2] - 4 * da * e2
     f.k2_den = 4 * da
@@ -326,42 +506,66 @@ class SolveError(Exception):
 
 # ---- from a fit to the correction ---------------------------------------------------------
 
+def _inv_q_steps(m, one, out):
+    # out[0] = the inverse of a fixed-point 3x3 (scale `one`), rounded; None if singular.
+    # det from the adjugate's first column (Laplace along row 0): the same integer as det3.
+    adj = adj3(m)                                    # 27 operations
+    yield
+    dt = m[0][0] * adj[0][0] + m[0][1] * adj[1][0] + m[0][2] * adj[2][0]
+    if dt == 0:
+        out[0] = None
+        return
+    k = one * one
+    inv = [None, None, None]
+    for i in range(3):
+        if i == 1:                                   # 6 + 18 ops, then 36
+            yield
+        ai = adj[i]
+        inv[i] = [rdiv(ai[0] * k, dt), rdiv(ai[1] * k, dt), rdiv(ai[2] * k, dt)]
+    out[0] = inv
+
+
 def _inv_q(m, one):
     # inverse of a symmetric fixed-point 3x3 (scale `one`), rounded; None if singular
-    dt = det3(m)
-    if dt == 0:
-        return None
-    adj = adj3(m)
-    k = one * one
-    return [[rdiv(adj[i][j] * k, dt) for j in range(3)] for i in range(3)]
+    out = [None]
+    _run(_inv_q_steps(m, one, out))
+    return out[0]
 
 
 def sqrtm_steps(a, one, out):
     """Generator: principal square root of a symmetric positive definite fixed-point 3x3
     matrix `a` (entries scaled by `one`) by the Denman-Beavers iteration
         Y <- (Y + Z^-1) / 2,  Z <- (Z + Y^-1) / 2,   Y0 = A, Z0 = I  ->  Y = A^1/2,
-    one iteration per step. Sets out[0] = root (or None if it did not settle), out[1] =
-    iterations."""
+    at most SLICE_OPS operations per step (one iteration is ~12 steps: each inverse in
+    three, the update two entries a step). Sets out[0] = root (or None if it did not
+    settle), out[1] = iterations."""
     y = [row[:] for row in a]
     z = [[one if i == j else 0 for j in range(3)] for i in range(3)]
     out[0] = None
+    inv = [None]
     for it in range(1, _SQRT_MAX_ITER + 1):
         out[1] = it
-        yi = _inv_q(y, one)
-        zi = _inv_q(z, one)
+        yield from _inv_q_steps(y, one, inv)
+        yi = inv[0]
+        yield
+        yield from _inv_q_steps(z, one, inv)
+        zi = inv[0]
         if yi is None or zi is None:
             return
         change = 0
-        for i in range(3):
-            for j in range(3):
-                ny = rdiv(y[i][j] + zi[i][j], 2)
-                dlt = ny - y[i][j]
-                if dlt < 0:
-                    dlt = -dlt
-                if dlt > change:
-                    change = dlt
-                y[i][j] = ny
-                z[i][j] = rdiv(z[i][j] + yi[i][j], 2)
+        for e in range(9):
+            if e & 1 == 0:  # <= 14 operations an entry
+                yield
+            i = e // 3
+            j = e - 3 * i
+            ny = rdiv(y[i][j] + zi[i][j], 2)
+            dlt = ny - y[i][j]
+            if dlt < 0:
+                dlt = -dlt
+            if dlt > change:
+                change = dlt
+            y[i][j] = ny
+            z[i][j] = rdiv(z[i][j] + yi[i][j], 2)
         if change <= 2:
             out[0] = y
             return
@@ -371,100 +575,185 @@ def sqrtm_steps(a, one, out):
 def sqrtm_sym3(a, one):
     """sqrtm_steps run to completion: (root or None, iterations)."""
     out = [None, 0]
-    for _ in sqrtm_steps(a, one, out):
-        pass
+    _run(sqrtm_steps(a, one, out))
     return out[0], out[1]
 
 
 def invw_steps(a2, det_a2, out):
     """Generator: W^-1 = (A2 / det(A2)^(1/3))^(1/2) in Q40 (det W^-1 = 1) into out[0]
-    (None if the iteration did not converge), one Denman-Beavers iteration per step."""
+    (None if the iteration did not converge), at most SLICE_OPS operations per step."""
     one = 1 << SQRT_FRAC_BITS
-    cb = icbrt(det_a2 << (3 * SQRT_FRAC_BITS))  # det^(1/3) in Q40
-    an = [[rdiv(a2[i][j] << (2 * SQRT_FRAC_BITS), cb) for j in range(3)] for i in range(3)]
-    yield
-    for _ in sqrtm_steps(an, one, out):
+    r = [0]
+    for _ in icbrt_steps(det_a2 << (3 * SQRT_FRAC_BITS), r):  # det^(1/3) in Q40
         yield
+    cb = r[0]
+    an = [None, None, None]
+    for i in range(3):
+        yield  # one row: 3 x (shift + rdiv) <= 18 operations
+        an[i] = [rdiv(a2[i][j] << (2 * SQRT_FRAC_BITS), cb) for j in range(3)]
+    yield
+    yield from sqrtm_steps(an, one, out)
 
 
 def invw_from_a2(a2, det_a2):
     """invw_steps run to completion: W^-1 in Q40, or None."""
     out = [None, 0]
-    for _ in invw_steps(a2, det_a2, out):
-        pass
+    _run(invw_steps(a2, det_a2, out))
     return out[0]
 
 
-def q15_from_invw(w, frac_bits):
-    """InvW in Q15, row-major 9-tuple: W^-1 (fixed point, `frac_bits`) scaled so the largest
-    row absolute sum is 32767, each entry rounded toward zero so no row sum can exceed it."""
+def q15_steps(w, frac_bits, out):
+    """Generator: out[0] = q15_from_invw(w, frac_bits), two steps."""
     rowmax = 0
     for i in range(3):
         t = abs(w[i][0]) + abs(w[i][1]) + abs(w[i][2])
         if t > rowmax:
             rowmax = t
-    out = []
+    yield  # 15 operations, then 9 x <= 4
+    q = []
     for i in range(3):
         for j in range(3):
             v = w[i][j] * _Q15_ROW_MAX
-            q = v // rowmax if v >= 0 else -((-v) // rowmax)
-            out.append(q)
-    return tuple(out)
+            q.append(v // rowmax if v >= 0 else -((-v) // rowmax))
+    out[0] = tuple(q)
+
+
+def q15_from_invw(w, frac_bits):
+    """InvW in Q15, row-major 9-tuple: W^-1 (fixed point, `frac_bits`) scaled so the largest
+    row absolute sum is 32767, each entry rounded toward zero so no row sum can exceed it."""
+    out = [None]
+    _run(q15_steps(w, frac_bits, out))
+    return out[0]
+
+
+def mul_steps(a, b, out):
+    """Generator: out[0] = a * b, exactly, in pieces: b is cut into _MUL_CHUNK_BITS chunks,
+    one partial product a * chunk (and a shift-add) per step, so a step's long-int work
+    grows with a's size only (a 1500 x 3000-bit product is ~20 000 digit products in one
+    go, several ms on a board)."""
+    neg = b < 0
+    if neg:
+        b = -b
+    nb = _bits(b)
+    sh = (nb - 1) // _MUL_CHUNK_BITS * _MUL_CHUNK_BITS if nb > 0 else 0
+    acc = a * (b >> sh)
+    while sh > 0:
+        yield
+        sh -= _MUL_CHUNK_BITS
+        acc = (acc << _MUL_CHUNK_BITS) + a * ((b >> sh) & _MUL_CHUNK_MASK)
+    out[0] = -acc if neg else acc
+
+
+def field_q16_steps(k2_num, k2_den, det_a2, out):
+    """Generator: out[0] = field_q16(k2_num, k2_den, det_a2) (products of ~1000-bit numbers
+    made in chunks: mul_steps)."""
+    r = [0]
+    yield from mul_steps(k2_num, k2_num, r)
+    yield
+    yield from mul_steps(r[0], k2_num, r)
+    num = r[0] << (6 * B_FRAC_BITS)
+    yield
+    yield from mul_steps(k2_den, k2_den, r)
+    yield
+    yield from mul_steps(r[0], k2_den, r)
+    yield
+    yield from mul_steps(r[0], det_a2, r)
+    yield
+    x = num // r[0]
+    yield
+    yield from isqrt_steps(x, r)
+    yield
+    yield from icbrt_steps(r[0], r)
+    out[0] = r[0]
 
 
 def field_q16(k2_num, k2_den, det_a2):
     """B in Q16 counts: B^6 = K2^3 / det(A2), floor of the exact sixth root."""
-    x = (k2_num ** 3 << (6 * B_FRAC_BITS)) // (k2_den ** 3 * det_a2)
-    return icbrt(isqrt(x))
+    out = [0]
+    _run(field_q16_steps(k2_num, k2_den, det_a2, out))
+    return out[0]
+
+
+def field_out_steps(invw_q15, b_q16, out):
+    """Generator: out[0] = field_out_counts(invw_q15, b_q16)."""
+    dq = det3([invw_q15[0:3], invw_q15[3:6], invw_q15[6:9]])
+    if dq <= 0:
+        out[0] = 0
+        return
+    # cbrt(dq) b / 2**15 / 2**16, with one extra bit for rounding
+    x = dq * b_q16 ** 3 * 8
+    yield
+    r = [0]
+    yield from icbrt_steps(x, r)
+    out[0] = (r[0] + (1 << (15 + B_FRAC_BITS))) >> (16 + B_FRAC_BITS)
 
 
 def field_out_counts(invw_q15, b_q16):
     """|InvW (Bp - V)| >> 15 on the fitted ellipsoid: B det(InvW / 2**15)^(1/3), rounded."""
-    dq = det3([invw_q15[0:3], invw_q15[3:6], invw_q15[6:9]])
-    if dq <= 0:
-        return 0
-    # cbrt(dq) b / 2**15 / 2**16, with one extra bit for rounding
-    t = icbrt(dq * b_q16 ** 3 * 8)
-    return (t + (1 << (15 + B_FRAC_BITS))) >> (16 + B_FRAC_BITS)
+    out = [0]
+    _run(field_out_steps(invw_q15, b_q16, out))
+    return out[0]
+
+
+def round_sqrt_steps(num, den, out):
+    """Generator: out[0] = round_sqrt(num, den)."""
+    r = [0]
+    yield from isqrt_steps(4 * num // den, r)
+    out[0] = (r[0] + 1) >> 1
+
+
+def fit_error_steps(fitr, out):
+    """Generator: out[0] = fit_error_x100(fitr) (big products in chunks: mul_steps)."""
+    r = [0]
+    yield from mul_steps(100000000 * fitr.D, fitr.p_num, r)
+    yield
+    yield from mul_steps(r[0], fitr.k2_den, r)
+    yield
+    yield from mul_steps(r[0], fitr.k2_den, r)
+    num = r[0]
+    yield
+    yield from mul_steps(fitr.n * fitr.k2_num, fitr.k2_num, r)
+    den = r[0]
+    if num < 0:
+        num = 0
+    yield
+    yield from round_sqrt_steps(num, den, out)
 
 
 def fit_error_x100(fitr):
     """Fit error in hundredths of a percent: 10000 D sqrt(P / N) / K2 (see module doc)."""
     # fe^2 = 1e8 D (P D) K2d^2 / (N K2n^2)
-    num = 100000000 * fitr.D * fitr.p_num * fitr.k2_den * fitr.k2_den
-    den = fitr.n * fitr.k2_num * fitr.k2_num
-    if num < 0:
-        num = 0
-    return round_sqrt(num, den)
+    out = [0]
+    _run(fit_error_steps(fitr, out))
+    return out[0]
 
 
-def sum_sq_quadric(s, w):
-    """Sum over the samples of q(d)^2 for q(d) = sum_k w[k] * monomial_k(d) over the 10
-    monomials of degree <= 2 in accum.EXPONENTS order (1, x, y, z, xx, xy, xz, yy, yz, zz)."""
+def _sum_sq_steps(s, w, out):
+    # sum_sq_quadric into out[0], one row of the 10 x 10 double sum per step (<= 30 ops)
     acc = 0
     for a in range(10):
         if w[a] == 0:
             continue
+        yield
         ea = EXPONENTS[a]
         for b in range(10):
             if w[b] == 0:
                 continue
             eb = EXPONENTS[b]
             acc += w[a] * w[b] * s[index(ea[0] + eb[0], ea[1] + eb[1], ea[2] + eb[2])]
-    return acc
+    out[0] = acc
 
 
-def minmax_fit(lo, hi, c, s):
-    """Min/max calibration (seed 002) of the samples whose per-axis extremes are lo, hi and
-    whose moment sums about `c` are `s`.
+def sum_sq_quadric(s, w):
+    """Sum over the samples of q(d)^2 for q(d) = sum_k w[k] * monomial_k(d) over the 10
+    monomials of degree <= 2 in accum.EXPONENTS order (1, x, y, z, xx, xy, xz, yy, yz, zz)."""
+    out = [0]
+    _run(_sum_sq_steps(s, w, out))
+    return out[0]
 
-    V = (max + min) / 2 per axis; half-ranges h; W^-1 = diag(g / h) with g the geometric
-    mean of h (det W^-1 = 1, like the other models; seed 002 uses the arithmetic mean, which
-    differs only by a common factor: headings are identical). B = g. The fit error uses the
-    same definition as the fits: P' / B^4 = sum (sum_i ((d_i - v_i) / h_i)^2 - 1)^2.
-    Returns (v_num (3, over 2), h2 (3: max - min), b_q16, fit_error_x100, w_q40) or raises
-    SolveError if an axis has no range.
-    """
+
+def minmax_steps(lo, hi, c, s, out):
+    """Generator: out[0] = minmax_fit(lo, hi, c, s), at most SLICE_OPS operations a step."""
     h2 = [hi[i] - lo[i] for i in range(3)]
     for i in range(3):
         if h2[i] <= 0:
@@ -483,14 +772,40 @@ def minmax_fit(lo, hi, c, s):
         w[lin[i]] += -4 * mi * g
         w[0] += mi * mi * g
     n = s[0]
-    p = sum_sq_quadric(s, w)  # = L^2 * sum(...)^2
-    fe = round_sqrt(25000000 * p, n * big_l * big_l)
+    r = [0]
+    for _ in _sum_sq_steps(s, w, r):  # = L^2 * sum(...)^2
+        yield
+    p = r[0]
+    yield
+    yield from round_sqrt_steps(25000000 * p, n * big_l * big_l, r)
+    fe = r[0]
     # g = (H0 H1 H2)^(1/3) / 2 in Q16
     prod = h2[0] * h2[1] * h2[2]
-    b_q16 = icbrt(prod << (3 * B_FRAC_BITS)) >> 1
+    yield
+    yield from icbrt_steps(prod << (3 * B_FRAC_BITS), r)
+    b_q16 = r[0] >> 1
     one = 1 << SQRT_FRAC_BITS
-    gq = icbrt(prod << (3 * SQRT_FRAC_BITS))  # cbrt(H0 H1 H2) in Q40
+    yield
+    for _ in icbrt_steps(prod << (3 * SQRT_FRAC_BITS), r):  # cbrt(H0 H1 H2) in Q40
+        yield
+    gq = r[0]
     wq = [[0, 0, 0], [0, 0, 0], [0, 0, 0]]
     for i in range(3):
         wq[i][i] = rdiv(gq, h2[i])  # g / h_i = cbrt(prod) / H_i
-    return v2, h2, b_q16, fe, wq, one
+    out[0] = (v2, h2, b_q16, fe, wq, one)
+
+
+def minmax_fit(lo, hi, c, s):
+    """Min/max calibration (seed 002) of the samples whose per-axis extremes are lo, hi and
+    whose moment sums about `c` are `s`.
+
+    V = (max + min) / 2 per axis; half-ranges h; W^-1 = diag(g / h) with g the geometric
+    mean of h (det W^-1 = 1, like the other models; seed 002 uses the arithmetic mean, which
+    differs only by a common factor: headings are identical). B = g. The fit error uses the
+    same definition as the fits: P' / B^4 = sum (sum_i ((d_i - v_i) / h_i)^2 - 1)^2.
+    Returns (v_num (3, over 2), h2 (3: max - min), b_q16, fit_error_x100, w_q40) or raises
+    SolveError if an axis has no range.
+    """
+    out = [None]
+    _run(minmax_steps(lo, hi, c, s, out))
+    return out[0]

@@ -455,7 +455,7 @@ def test_a_failed_save_is_retried_and_the_next_boot_loads_it(good_qmc):
 def test_a_failing_solve_is_a_refusal_and_the_loop_goes_on(good_qmc, exc, reason):
     b, app, _ = good_qmc.app(m=motion.figure8())
 
-    def broken(model=None, accept=True):
+    def broken(model=None, accept=True, group=None):
         yield
         raise exc("boom")
 

@@ -445,6 +445,20 @@ def rows(res, derived):
                                                            "%.0f"),
               _f(_get(mp, "sliced_10", "longest_us"), "%.0f"),
               "%s steps" % _get(mp, "sliced_10", "steps"), ""))
+    if _get(mp, "sliced_10_app", "steps") is not None:
+        R.append(("3 sliced solve (10), app's group of %s slices: longest step [us]"
+                  % _get(mp, "sliced_10_app", "group"),
+                  _f(_get(cp, "sliced_10_app", "longest_us"), "%.0f"),
+                  _f(_get(mp, "sliced_10_app", "longest_us"), "%.0f"),
+                  "%s steps" % _get(mp, "sliced_10_app", "steps"), ""))
+    per_slice = _get(res, "intcount", "cpython", "sliced_10_per_step") or []
+    if per_slice:
+        longs = [s[1] + s[2] for s in per_slice]
+        mids = [s[1] for s in per_slice]
+        R.append(("3 sliced solve (10): long-int ops per step, max (32-bit only / all)", "",
+                  "%d / %d" % (max(mids), max(longs)),
+                  "bound solve.SLICE_OPS = %d" % _slice_ops(),
+                  verdict(max(longs) <= _slice_ops())))
     cp = _get(res, "appbench", "cpython") or {}
     mp = _get(res, "appbench", "micropython") or {}
     R.append(("3 app: worst loop stall while solving [us]", _f(cp.get("worst_stall_us"), "%.0f"),
@@ -524,6 +538,11 @@ def rows(res, derived):
     return R
 
 
+def _slice_ops():
+    from firmware import solve
+    return solve.SLICE_OPS
+
+
 def table_text(R, m):
     head = ("item", "CPython", "MicroPython unix", "ratio / goal", "verdict")
     w = [max(len(str(r[i])) for r in R + [head]) for i in range(5)]
@@ -552,20 +571,40 @@ def summary(res, derived):
     steps = _get(res, "solver", "micropython", "sliced_10", "per_step_us") or []
     if rp.get("per_sample_fast_us") is not None and rp.get("worst_step_fast_us") is not None:
         k = steps.index(max(steps)) + 1 if steps else 0
-        out.append(
-            "200 Hz (5 ms per sample): the per-sample loop keeps up on both boards "
-            "(estimated RP2040 %.1f ms with firmware.fast, %.1f ms as bytecode; ESP32 at "
-            "240 MHz %.1f / %.1f ms, I2C and Calibrator.add included), but not while a "
-            "solve runs: %d of its %d slices overrun the period on an RP2040 (%d on the "
-            "ESP32), the longest (step %d) making one step last about %.0f ms (%.0f ms), so "
-            "about %d (%d) samples are lost per solve." % (
-                rp["per_sample_fast_us"] / 1000, rp["per_sample_plain_us"] / 1000,
-                e2.get("per_sample_fast_us", 0) / 1000, e2.get("per_sample_plain_us", 0) / 1000,
-                rp.get("slices_over_period_fast", 0), len(steps),
-                e2.get("slices_over_period_fast", 0), k, rp["worst_step_fast_us"] / 1000,
-                e2.get("worst_step_fast_us", 0) / 1000,
-                rp.get("samples_lost_per_solve_fast", 0),
-                e2.get("samples_lost_per_solve_fast", 0)))
+        head = ("200 Hz (5 ms per sample): the per-sample loop keeps up on both boards "
+                "(estimated RP2040 %.1f ms with firmware.fast, %.1f ms as bytecode; ESP32 at "
+                "240 MHz %.1f / %.1f ms, I2C and Calibrator.add included)" % (
+                    rp["per_sample_fast_us"] / 1000, rp["per_sample_plain_us"] / 1000,
+                    e2.get("per_sample_fast_us", 0) / 1000,
+                    e2.get("per_sample_plain_us", 0) / 1000))
+        lost = rp.get("samples_lost_per_solve_fast", 0) + e2.get("samples_lost_per_solve_fast", 0)
+        if lost:
+            out.append(
+                head + ", but not while a solve runs: %d of its %d slices overrun the period "
+                "on an RP2040 (%d on the ESP32), the longest (step %d) making one step last "
+                "about %.0f ms (%.0f ms), so about %d (%d) samples are lost per solve." % (
+                    rp.get("slices_over_period_fast", 0), len(steps),
+                    e2.get("slices_over_period_fast", 0), k, rp["worst_step_fast_us"] / 1000,
+                    e2.get("worst_step_fast_us", 0) / 1000,
+                    rp.get("samples_lost_per_solve_fast", 0),
+                    e2.get("samples_lost_per_solve_fast", 0)))
+        else:
+            out.append(
+                head + ", also while a solve runs: its %d slices (at most solve.SLICE_OPS = %d "
+                "long-int operations each) make the longest step (step %d) about %.1f ms on "
+                "an RP2040 (%.1f ms on the ESP32 at 240 MHz) with firmware.fast, %.1f ms as "
+                "bytecode: no sample lost (estimated) when the loop runs one slice per "
+                "sample (solve_steps(group=1)). A solve then spans %d steps, %.1f s at "
+                "200 Hz. The app runs as many slices per step as fit in a quarter of the "
+                "sample period (1 at 200 Hz, 5 at 50 Hz; firmware/app.py); one slice is at "
+                "most %s us on the unix port, ~%.0f ms on an RP2040." % (
+                    len(steps), _slice_ops(), k, rp["worst_step_fast_us"] / 1000,
+                    e2.get("worst_step_fast_us", 0) / 1000,
+                    rp.get("worst_step_plain_us", 0) / 1000, len(steps),
+                    len(steps) / QMC_ODR_HZ,
+                    _get(res, "solver", "micropython", "sliced_10_app", "longest_us"),
+                    (_get(res, "solver", "micropython", "sliced_10_app", "longest_us") or 0)
+                    * rp.get("scale_int", 0) / 1000))
     fb = _get(res, "memory", "py", "firmware_bytes") or {}
     if fb:
         out.append(

@@ -128,7 +128,7 @@ def main():
         res["solve"][str(m)] = delta(a)
         res["solve_fit_error_x100_" + str(m)] = c.fit_error
     steps = []
-    job = cal.solve_steps(model=10, accept=False)
+    job = cal.solve_steps(model=10, accept=False, group=1)  # as solver.py's sliced_10
     while True:
         a = snapshot()
         try:

@@ -4,8 +4,10 @@ The buffer: Calibrator(model=10, capacity=300, separation=900) filled by a simul
 figure-8 (as collector.py), so it holds its capacity. Each model is solved with
 accept=False RUNS times (gc.collect() first, the collector ON: the exact solve allocates
 long ints and a board collects as it goes); the median is reported. The sliced solve
-(solve_steps, one next() per app step) is timed step by step; the per-step medians over
-RUNS repetitions and their maximum (the longest stall it adds to one step) are reported.
+(solve_steps) is timed step by step, with its finest slices (group=1: at most
+solve.SLICE_OPS long-int operations each) and with the Calibrator's default group (what the
+app's one next() per step runs); the per-step medians over RUNS repetitions and their
+maximum (the longest stall it adds to one step) are reported.
 """
 import gc
 
@@ -41,12 +43,12 @@ def time_solve(cal, model):
     return common.median(per), c
 
 
-def sliced(cal, model):
+def sliced(cal, model, group=1):
     runs = []
     for _ in range(RUNS):
         steps = []
         gc.collect()
-        job = cal.solve_steps(model=model, accept=False)
+        job = cal.solve_steps(model=model, accept=False, group=group)
         while True:
             t0 = common.clock()
             try:
@@ -70,7 +72,11 @@ def main():
         res["fit_error_x100"][str(m)] = c.fit_error
     steps = sliced(cal, 10)
     res["sliced_10"] = {"steps": len(steps), "longest_us": max(steps), "total_us": sum(steps),
-                        "per_step_us": steps}
+                        "per_step_us": steps, "group": 1}
+    g = cal.slice_group
+    steps = sliced(cal, 10, g)
+    res["sliced_10_app"] = {"steps": len(steps), "longest_us": max(steps),
+                            "total_us": sum(steps), "group": g}
     common.emit(res)
 
 
