@@ -15,7 +15,7 @@ from host_sim.cli import demo
 from tests import mp
 
 GOAL_DEG = 0.5  # issue 5: calibrated max error on the tilted grid, every chip
-# Seeds 1-12 measured 0.17-0.48 deg (HMC5883L boards) and 0.21-0.37 deg (QMC5883L). The
+# Seeds 1-12 measured 0.14-0.35 deg (HMC5883L boards) and 0.16-0.29 deg (QMC5883L). The
 # HMC5883L's floor is the calibration's integer-count offset V: at the gain strong hard iron
 # forces (820 counts/G) half a count is 0.06 uT, up to 0.2 deg of a 25 uT horizontal field.
 
