@@ -421,25 +421,34 @@ class SampleBuffer:
         counts = self.region_counts
         for i in range(N_REGIONS):
             counts[i] = 0
+        self._tally(0, 3 * self.count, cx, cy, cz)
+        self.gaps_x100 = 0
+        return self._score(0, N_REGIONS) * 100 // N_REGIONS
+
+    def _tally(self, j0, j1, cx, cy, cz):
+        # classify the held samples data[j0:j1] (j in steps of 3) into region_counts
+        counts = self.region_counts
         data = self.data
-        for j in range(0, 3 * self.count, 3):
+        for j in range(j0, j1, 3):
             r = region(data[j] - cx, data[j + 1] - cy, data[j + 2] - cz)
             if r >= 0 and counts[r] < 255:
                 counts[r] += 1
+
+    def _score(self, i0, i1):
+        # regions i0..i1-1: add MotionCal's gap weights to gaps_x100, return how many are held
+        counts = self.region_counts
         occupied = 0
-        gaps = 0
-        for i in range(N_REGIONS):
+        for i in range(i0, i1):
             c = counts[i]
             if c == 0:
-                gaps += _GAP_EMPTY
+                self.gaps_x100 += _GAP_EMPTY
             else:
                 occupied += 1
                 if c == 1:
-                    gaps += _GAP_ONE
+                    self.gaps_x100 += _GAP_ONE
                 elif c == 2:
-                    gaps += _GAP_TWO
-        self.gaps_x100 = gaps
-        return occupied * 100 // N_REGIONS
+                    self.gaps_x100 += _GAP_TWO
+        return occupied
 
     def coverage_steps(self, cx, cy, cz, out, chunk=COVERAGE_CHUNK):
         """coverage() as a generator for a time-sliced solve: each next() clears or tallies
@@ -456,32 +465,18 @@ class SampleBuffer:
             for i in range(i0, i0 + step if i0 + step < N_REGIONS else N_REGIONS):
                 counts[i] = 0
             yield
-        data = self.data
         j = 0
         while j < 3 * self.count:
             end = j + 3 * chunk
             if end > 3 * self.count:
                 end = 3 * self.count
-            while j < end:
-                r = region(data[j] - cx, data[j + 1] - cy, data[j + 2] - cz)
-                if r >= 0 and counts[r] < 255:
-                    counts[r] += 1
-                j += 3
+            self._tally(j, end, cx, cy, cz)
+            j = end
             yield
+        self.gaps_x100 = 0
         occupied = 0
-        gaps = 0
         for i0 in range(0, N_REGIONS, step):
-            for i in range(i0, i0 + step if i0 + step < N_REGIONS else N_REGIONS):
-                c = counts[i]
-                if c == 0:
-                    gaps += _GAP_EMPTY
-                else:
-                    occupied += 1
-                    if c == 1:
-                        gaps += _GAP_ONE
-                    elif c == 2:
-                        gaps += _GAP_TWO
+            occupied += self._score(i0, i0 + step if i0 + step < N_REGIONS else N_REGIONS)
             if i0 + step < N_REGIONS:
                 yield
-        self.gaps_x100 = gaps
         out[0] = occupied * 100 // N_REGIONS
