@@ -8,7 +8,7 @@ import time
 
 import board
 from firmware.app import CompassApp, status_line
-from firmware.calstore import CalStore
+from firmware.store import CalStore
 
 i2c = board.make_i2c()
 while True:

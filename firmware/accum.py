@@ -20,11 +20,7 @@ add() runs only for a KEPT sample (rare once the buffer is spread over the spher
 path of SampleBuffer.offer allocates nothing. Every fit is invariant under translation (see
 firmware/solve.py), so the choice of c changes the size of the numbers, never the result.
 """
-try:
-    from micropython import const
-except ImportError:  # CPython
-    def const(x):
-        return x
+from firmware.compat import const
 
 NUM_MOMENTS = const(35)  # monomials of degree 0..4 in three variables
 _MAX_DEGREE = const(4)
@@ -205,12 +201,3 @@ def shifted_steps(c, s, new_c, out, ops=40):
         yield
     for n in range(NUM_MOMENTS):
         out[n] = cur[n]
-
-
-def batch(samples, c):
-    """The 35 sums over `samples` about centre `c` computed from scratch (tests, rebuild)."""
-    m = Moments()
-    m.c = (c[0], c[1], c[2])
-    for p in samples:
-        m.add(p[0], p[1], p[2])
-    return m.s

@@ -1,102 +1,81 @@
-"""The compass app: detect, load the stored calibration, then read -> correct -> heading, while
-the calibration improves in the background.
+"""The compass app: detect, load the stored calibration, then read -> correct -> heading; when
+there is no good calibration yet, collect and solve one in the background.
 
     from firmware.app import CompassApp, status_line
+    from firmware.store import CalStore
     app = CompassApp(i2c, store=CalStore("/"), declination_cdeg=150)
     app.run(None, report=lambda a: print(status_line(a)), every_us=500000)
 
 CompassApp(i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z", model=10,
            declination_cdeg=0, store=None, delay_us=None, ticks_us=None, capacity=None,
-           solve_every=25, fallback=True, reinit_after=5, mag_options=None)
-  mag      a magnetometer driver; None: firmware.sensors.detect(i2c, **mag_options)
-  accel    an MPU6050 driver; None: sensors.detect_accel(i2c); False: none (level board)
-  store    a firmware.calstore.CalStore (bound to the magnetometer's kind and range), or None
-  delay_us the drivers' delay (the simulator's bus.sleep_us); None: time.sleep_us
-  ticks_us the clock of the app's time (aging, timers): time.ticks_us on a board (wrapping,
-           compared with ticks_diff), the simulator's clock on the host (plain ints)
-  mag_options  driver options for detect() and for re-initialisation, e.g. {"range": 8}
-  fallback     try 4 elements when the model lacks samples (see Solve policy)
-  reinit_after failed reads in a row before the drivers are re-created
+           solve_every=25, fallback=True, reinit_after=5, mag_options=None, learn=None,
+           fast=None)
+  mag      a magnetometer driver; None: firmware.detect.detect(i2c, **mag_options)
+  accel    an MPU6050 driver; None: detect.detect_accel(i2c); False: none (level board)
+  store    a firmware.store.CalStore (bound to the magnetometer's kind and range), or None
+  delay_us the drivers' delay (the simulator's bus.sleep_us); None: the port's sleep_us
+  ticks_us the clock of the app's time (aging, timers): the port's ticks_us on a board (wrapping,
+           compared with ticks_diff; firmware.compat), the simulator's clock on the host (plain
+           ints)
+  mag_options  driver options for detect(), e.g. {"range": 8}
+  fallback     try 4 elements when the model lacks samples (firmware.calibrator.Collector)
+  reinit_after failed reads in a row before the drivers are re-initialised
+  learn    None: collect unless the stored calibration is of the configured model with a fit
+           error <= 5 % (and whenever the one in force goes stale); True: always collect;
+           False: only after calibrate() or when the calibration goes stale
+  fast     None: firmware/fast.py's kernels where the port has the native emitter, False:
+           the plain functions (same bits; .fast says which is in use; the compass's kernel
+           set is module-wide, firmware.compass.use_kernels)
 step() reads one sample and does a bounded amount of other work; True when it produced a
-heading. run(n, report, every, every_us) calls step() n times (None: forever).
+heading; it never raises. run(n, report, every, every_us) calls step() n times (None: forever).
+calibrate() starts collecting now (e.g. after a new mounting).
 
-One step (AN4246 / AN4248 pipeline):
-  read      mag.read_into(raw) (+ accel): a bus error, a data-ready timeout, an overflow
-            set .status and keep the last good heading (STYLE: "try to continue returning
-            last good data"); REINIT_AFTER failures in a row re-initialise the drivers.
-  correct   calibration.correct(raw) (Q15), AxisMap to the body frame, Compass.update: the
-            heading (KANG) and its flags. Allocation-free (tests/scenarios/app_alloc.py).
-  feed      calibrator.add(raw) unless the field magnitude says interference: a magnet near
-            the board would poison the fit (seed 004).
-  solve     when a solve is running, a few slices of Calibrator.solve_steps(group=1) (NXP
-            time-slices its solver the same way): each slice is at most solve.SLICE_OPS (40)
-            long-int operations (make bench estimates 1-2 ms on an RP2040), and a step runs
-            period / 4 ms of them (at least one): 1 at 200 Hz, 5 at 50 Hz, 16 at 15 Hz - a
-            quarter to half of the sample period on an RP2040 - so a solve (~400 slices)
-            takes ~2 s at any rate. Counted in slices, not measured time, so runs are
-            repeatable on every interpreter.
-            .worst_stall_us is the longest such step's solver work: the time the
-            sample loop was held up by the solve, on the wall clock (time.ticks_us; CPython:
-            perf_counter), never the simulated one, on which a solve takes no time. The
-            data-ready wait is not a stall and not counted; a save is (.worst_save_us).
-  accept    a calibration the Calibrator accepts (sour grapes: it must beat the current one,
-            whose fit error ages with .age()) is put in force and saved to the store.
+Memory: a board that boots from a stored calibration imports only the driver, the
+calibration record, the compass, the store and this module; firmware.calibrator (with the
+sample buffer, the moment sums and the solver) is imported when collecting starts
+(tests/test_layout.py checks which modules are loaded).
 
-Solve policy. A solve starts when solve_every samples have been KEPT since the last one
-started (the buffer keeps a sample only when it is new information, so this counts new
-information, not time); or when samples were kept since then but none for _QUIET_US (the
-user stopped moving: say now why it is not enough, e.g. "planar" after half a turn, rather
-than wait for solve_every more); or when none ran for _SOLVE_IDLE_US and samples are held
-(once the sphere is covered almost nothing is kept, yet aging can make a fit on the same
-samples acceptable). solve_every = 25: a covered sphere holds ~225 samples, so about nine
-solves while the user fills it, each ~2 s - the fit follows the
-user without solving all the time. The configured model is tried; while no calibration of
-4 elements or more is in force (or while relearning), a refusal for too_few_samples is
-followed by a 4-element attempt: hard iron is the largest error (seed 004) and a 4-element
-fit needs 40 samples where 10 elements need 100, so the user gets a usable heading early;
-the Calibrator's own rule then lets the 10-element fit replace it (lower fit error, or
-<= 3.5 % for a higher model, NXP). Once a 4-element fit is in force the fallback stops, so
-.last_reason keeps saying what the configured model still lacks.
+One step, as named steps (AN4246 / AN4248 pipeline):
+  _clock    the app's time since the last step: aging and the timers below.
+  _read     mag.read_into(raw) (+ accel): a bus error, a data-ready timeout, an overflow
+            set .status and keep the last good heading (Hinch's fusion: "try to continue
+            returning last good data"); reinit_after failures in a row re-initialise the
+            drivers.
+  _heading  correct (Calibration.k with InvW in Q15), map to the body frame, Compass.update:
+            the heading (KANG) and its flags. Allocation-free (tests/scenarios/app_alloc.py).
+  _check    the field magnitude against the calibration's: interference (a magnet, a
+            motor, a steel table near the board) flags the heading and keeps the sample out
+            of the fit; a spell longer than _STALE_US means the board's iron changed.
+  _select   offer the raw sample to the collector (its SampleBuffer keeps new information).
+  _solve    when a solve is running or due, a few slices of it: each slice is at most
+            solve.SLICE_OPS (40) long-int operations (make bench estimates 1-2 ms on an
+            RP2040), and a step runs period / 4 ms of them (at least one): 1 at 200 Hz, 5 at
+            50 Hz - a quarter to half of the sample period on an RP2040 - so a solve (~400
+            slices) takes ~2 s at any rate. Counted in slices, not time, so runs are
+            repeatable on every interpreter. .worst_stall_us is the longest such step's
+            solver work on the wall clock (never the simulated one).
+  _accept   a calibration the Calibrator accepts (sour grapes: it must beat the current one,
+            whose fit error ages) is put in force and saved to the store (.worst_save_us).
 
 Interference. The field magnitude is compared with the calibration's field_out within
 max(10 %, 3 x its fit error) - the fit's own RMS radial error is no evidence of a magnet. If
 the flag stays up for _STALE_US (with no _CLEAN_US clean spell) the calibration no longer
-describes the board (its hard iron changed): the samples are cleared, the current
-calibration is aged out so that a new fit can replace it, and samples are fed until one is
-accepted (.relearning).
+describes the board (its hard iron changed): collection restarts (.relearning) and any new
+accepted fit replaces the stale one.
 
 Storage: load at start (StoreError or a payload Calibration.from_bytes refuses -> identity,
 reason in .load_reason); save on every accept; a failed save (OSError, StoreError) is
 counted in .save_errors, never stops the loop, and is retried every _SAVE_RETRY_US.
 """
-import time
 from array import array
 
-from firmware import sensors
 from firmware.axes import AxisMap
-from firmware.fixedpoint import micropython
-from firmware.errors import (CalibrationRejected, DataReadyTimeout, SensorNotFound,
-                             SensorOverflow, StoreError)
-from firmware.heading import FLAG_NO_GRAVITY, Compass, cdeg_to_kang, kang_to_str
-from firmware.magcal import (DEFAULT_CAPACITY, REASON_TOO_FEW_SAMPLES, UNCALIBRATED,
-                             Calibration, Calibrator)
-
-try:
-    from micropython import const
-except ImportError:  # CPython
-    def const(x):
-        return x
-
-try:
-    _ticks_us = time.ticks_us
-    _ticks_diff = time.ticks_diff
-except AttributeError:  # CPython: only the wall clock for stall figures
-    _ticks_us = None
-    _ticks_diff = None
-try:
-    _sleep_us = time.sleep_us
-except AttributeError:
-    _sleep_us = None
+from firmware.calibration import UNCALIBRATED, Calibration
+from firmware import compass
+from firmware.compass import FLAG_NO_GRAVITY, Compass
+from firmware.compat import const, kernels, ticks_diff, ticks_us, sleep_us, wall_clock
+from firmware.errors import SensorNotFound, SensorOverflow, StoreError, DataReadyTimeout
+from firmware.trig import cdeg_to_kang, kang_to_str
 
 STATUS_OK = "ok"
 STATUS_INTERFERENCE = "interference"  # a heading, but |field| is off: a magnet or steel near
@@ -114,143 +93,173 @@ REASON_NO_MEMORY = "no_memory"        # .last_reason: MemoryError during a solve
 
 SOLVE_EVERY = const(25)       # kept samples between solves: ~1/9 of a full sphere (225 held)
 REINIT_AFTER = const(5)       # failed reads in a row before the drivers are re-initialised
+DEFAULT_CAPACITY = const(300)  # samples held while collecting (firmware.calibrator's default)
 _REINIT_MAX_SHIFT = const(4)  # failed re-inits back off to every 2**4 x REINIT_AFTER reads
-_SOLVE_IDLE_US = const(60000000)   # 60 s without a solve: solve again on what is held
-_QUIET_US = const(3000000)    # 3 s without a kept sample after some were kept: solve now
 _STALE_US = const(30000000)   # 30 s of interference: the calibration no longer fits the board
 _CLEAN_US = const(2000000)    # 2 s without interference ends an interference spell
 _STALE_AGE_S = const(1200000)  # age that makes any fit error "worse" (> 16 doublings)
 _SAVE_RETRY_US = const(60000000)  # a failed save is retried after 60 s
 _ERROR_BACKOFF_US = const(20000)  # after a bus error: do not hammer a dead bus
-_FIELD_TOL_PCT = const(10)    # interference window floor, % (heading.Compass's default)
+_GOOD_FIT_ERROR = const(500)  # 5 %: a stored fit this good needs no collecting (MotionCal
+#                               enables Send Cal below 5 %)
+_FIELD_TOL_PCT = const(10)    # interference window floor, % (firmware.compass's default)
 _FIELD_TOL_MAX_PCT = const(50)
 _FIT_SIGMAS = const(3)        # window >= 3 x the fit's RMS radial error
 _US_PER_S = const(1000000)
+_DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
 REPORT_EVERY = const(25)      # run(): steps between reports (0.5 s at 50 Hz)
 
-# Range option of each magnetometer by range code, to re-create a driver after a reset
-# (the drivers' own tables: qmc5883l.py, qmc5883p.py; hmc5883l's gain IS its code).
-_RANGE_OPTION = {"qmc5883l": ("range", (2, 8)), "qmc5883p": ("range", (30, 12, 8, 2)),
-                 "hmc5883l": ("gain", (0, 1, 2, 3, 4, 5, 6, 7))}
-_ACCEL_RANGE = {16384: 2, 8192: 4, 4096: 8, 2048: 16}  # MPU6050 counts/g -> accel_range
+
+_READ_ERRORS = (OSError, SensorOverflow)  # a module constant: a literal tuple is built per call
 
 
-_SLICE_US = const(1000)        # budget per solver slice (make bench: ~1-2 ms on an RP2040)
-_SOLVE_SHARE = const(4)        # slices per step = period / (4 x _SLICE_US), at least one
-_DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
+class _ReadGuard:
+    """`with` block around the sensor reads: keeps the exception of a failed read (bus error,
+    data-ready timeout, overflow) and lets the step go on. A `with` frame stays within the
+    11 words MicroPython keeps on the C stack, where `except ... as e` would not."""
+
+    def __init__(self):
+        self.error = None
+
+    def __enter__(self):
+        self.error = None
+
+    def __exit__(self, kind, value, tb):
+        if value is None:
+            return False
+        if isinstance(value, _READ_ERRORS):
+            self.error = value
+            return True
+        return False
 
 
-def _sub(a, b):
-    return a - b
-
-
-def _wall_clock():
-    if _ticks_us is not None:
-        return _ticks_us, _ticks_diff
-    return (lambda: time.perf_counter_ns() // 1000), _sub  # CPython: stalls only
-
-
-def _no_delay(us):
-    pass
+def _status_of(e):
+    if isinstance(e, DataReadyTimeout):
+        return STATUS_TIMEOUT
+    if isinstance(e, SensorOverflow):
+        return STATUS_OVERFLOW
+    return STATUS_BUS_ERROR
 
 
 class CompassApp:
     """See the module docstring. Attributes after each step(): heading_kang, compass, raw,
-    body, gravity, status, calibration, calibrator, last_reason, last_detail, accepted,
-    refused, worst_stall_us, errors, stored, save_errors, load_reason, reinits, relearning."""
+    body, gravity, status, calibration, calibrator (None until collecting), collector,
+    last_reason, last_detail, accepted, refused, worst_stall_us, errors, stored,
+    save_errors, load_reason, reinits, relearning, fast."""
 
     def __init__(self, i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z",
                  model=10, declination_cdeg=0, store=None, delay_us=None, ticks_us=None,
                  capacity=None, solve_every=SOLVE_EVERY, fallback=True,
-                 reinit_after=REINIT_AFTER, mag_options=None):
+                 reinit_after=REINIT_AFTER, mag_options=None, learn=None, fast=None):
         self.i2c = i2c
         self._mag_map = AxisMap(mag_axes)
         self._acc_map = AxisMap(accel_axes)
-        if self._mag_map.det != 1:
-            raise ValueError("mag_axes %r is a mirror image: a magnetometer's map is a rotation "
-                             "(chip and body frames are both right-handed)" % (mag_axes,))
-        if self._acc_map.det != -1:
-            raise ValueError("accel_axes %r is a rotation: an accelerometer's map to AN4248's "
-                             "gravity sign is a mirror (see firmware/axes.py)" % (accel_axes,))
-        if solve_every < 1 or reinit_after < 1:
-            raise ValueError("solve_every and reinit_after must be >= 1")
-        self._delay_opt = delay_us
-        self._delay = delay_us if delay_us is not None else (_sleep_us or _no_delay)
-        if ticks_us is None:
-            if _ticks_us is None:
-                raise ValueError("ticks_us is needed off MicroPython (the simulator's clock)")
-            ticks_us = _ticks_us
-        self._ticks = ticks_us
-        self._wrap = ticks_us is _ticks_us  # time.ticks_us wraps: compare with ticks_diff
-        self._wall, self._wall_diff = _wall_clock()
-        self._mag_options = dict(mag_options or {})
-        if mag is None:
-            opts = dict(self._mag_options)
-            if delay_us is not None:
-                opts["delay_us"] = delay_us
-            mag = sensors.detect(i2c, **opts)
-        if accel is None:
-            accel = sensors.detect_accel(i2c)
-        self.mag = mag
-        self.accel = accel if accel else None
+        self._check_options(model, declination_cdeg, solve_every, reinit_after)
+        self._delay = delay_us if delay_us is not None else sleep_us
+        self._ticks, self._wrap = self._app_clock(ticks_us)
+        self._wall, self._wall_diff = wall_clock()
+        self.mag, self.accel = self._sensors(i2c, mag, accel, mag_options, delay_us)
         self.model = model
+        self.capacity = capacity if capacity else DEFAULT_CAPACITY
         self.solve_every = solve_every
         self.fallback = fallback
         self.reinit_after = reinit_after
+        self.learn = learn
+
+        kn = kernels() if fast is None or fast is True else None
+        self.fast = kn is not None
+        if kn is None:
+            from firmware import axes, calibration, trig
+            self._correct = calibration.correct
+            self._apply = axes.apply
+            compass.use_kernels(trig)
+        else:
+            self._correct = kn.correct
+            self._apply = kn.apply
+            compass.use_kernels(kn)
 
         self.raw = array("h", (0, 0, 0))       # the last sample, chip axes, counts
         self._cor = array("h", (0, 0, 0))      # corrected, sensor axes
         self.body = array("h", (0, 0, 0))      # corrected, body frame (AN4248)
         self._acc = array("h", (0, 0, 0))
         self.gravity = array("h", (0, 0, 0))   # body frame, AN4248 sign (+1 g down, level)
+        self._guard = _ReadGuard()
         self.heading_kang = -1
         self.status = STATUS_STARTING
         self.errors = {}
         self.last_error = None      # the exception behind the last failed read
-        self.accepted = 0
-        self.refused = 0
-        self.last_reason = None
-        self.last_detail = None
-        self.last_model = None      # the model of the last solve attempt
         self.worst_stall_us = 0
         self.slices = 0             # solver slices run
-        self.solves = 0             # solves started
         self.stored = 0
         self.save_errors = 0
         self.save_reason = None
         self.worst_save_us = 0
         self.reinits = 0
         self.reinit_failures = 0
-        self.relearning = False
         self.steps = 0
 
         self.store = store
-        cal = self._load()
-        self.calibration = cal
-        self.calibrator = Calibrator(model=model,
-                                     capacity=capacity if capacity else DEFAULT_CAPACITY,
-                                     counts_per_gauss=mag.counts_per_gauss, current=cal)
         self.compass = Compass(declination_kang=cdeg_to_kang(declination_cdeg))
-        self._use(cal)
+        self.collector = None
+        self._use(self._load())
 
-        self._job = None
-        self._job_model = None
         self._slices_per_step = 1
-        self._next_model = None     # a fallback model to try at the next slice
-        self._kept = 0              # samples kept since the last solve started
         self._fails = 0             # failed reads in a row
         self._reinit_level = 0
-        self._t_last = ticks_us()
+        self._t_last = self._ticks()
         self._dt = 0                # us since the previous step
         self._age_us = 0
-        self._idle_us = 0
-        self._quiet_us = 0          # us since the last kept sample (while _kept > 0)
         self._interf_us = 0
         self._clean_us = 0
         self._unsaved = False
         self._save_wait_us = 0
-        self._cov = 0
-        self._cov_dirty = True
+        if learn or learn is None and not self._good_enough(self.calibration):
+            self.calibrate()
+
+    @staticmethod
+    def _check_options(model, declination_cdeg, solve_every, reinit_after):
+        if model not in ("minmax", 4, 7, 10, "auto"):
+            raise ValueError("model=%r: expected 'minmax', 4, 7, 10 or 'auto'" % (model,))
+        if type(declination_cdeg) is not int:
+            raise TypeError("declination_cdeg=%r: expected an int in hundredths of a degree "
+                            "(e.g. 150 for 1.5 deg east)" % (declination_cdeg,))
+        if not -18000 <= declination_cdeg <= 18000:
+            raise ValueError("declination_cdeg=%d: expected -18000..18000 hundredths of a "
+                             "degree" % declination_cdeg)
+        if type(solve_every) is not int or solve_every < 1:
+            raise ValueError("solve_every=%r: expected an int >= 1 (kept samples)"
+                             % (solve_every,))
+        if type(reinit_after) is not int or reinit_after < 1:
+            raise ValueError("reinit_after=%r: expected an int >= 1 (failed reads)"
+                             % (reinit_after,))
+
+    def _app_clock(self, clock):
+        if self._mag_map.det != 1:
+            raise ValueError("mag_axes %r is a mirror image: a magnetometer's map is a rotation "
+                             "(chip and body frames are both right-handed)"
+                             % (self._mag_map.spec,))
+        if self._acc_map.det != -1:
+            raise ValueError("accel_axes %r is a rotation: an accelerometer's map to AN4248's "
+                             "gravity sign is a mirror (see firmware/axes.py)"
+                             % (self._acc_map.spec,))
+        if clock is None:
+            if ticks_us is None:
+                raise ValueError("ticks_us is needed off MicroPython (the simulator's clock)")
+            return ticks_us, True  # the port's ticks_us wraps: compare with ticks_diff
+        return clock, False
+
+    @staticmethod
+    def _sensors(i2c, mag, accel, mag_options, delay_us):
+        if mag is None or accel is None:
+            from firmware import detect
+            if mag is None:
+                opts = dict(mag_options or {})
+                if delay_us is not None:
+                    opts["delay_us"] = delay_us
+                mag = detect.detect(i2c, **opts)
+            if accel is None:
+                accel = detect.detect_accel(i2c)
+        return mag, (accel if accel else None)
 
     # --- storage ----------------------------------------------------------------------
     def _load(self):
@@ -296,6 +305,13 @@ class CompassApp:
         self._save_wait_us = 0
 
     # --- calibration in force ---------------------------------------------------------
+    def _good_enough(self, cal):
+        """A loaded calibration that makes collecting unnecessary: the configured model, fit
+        within _GOOD_FIT_ERROR."""
+        m = self.model
+        return (cal.model is not None and cal.fit_error <= _GOOD_FIT_ERROR
+                and (cal.model == m or m == "auto" and cal.model != "minmax"))
+
     def _use(self, cal):
         self.calibration = cal
         tol = _FIT_SIGMAS * cal.fit_error // 100
@@ -305,20 +321,43 @@ class CompassApp:
             tol = _FIELD_TOL_MAX_PCT
         self.compass.set_field(cal.field_out if cal.model is not None else 0, tol)
 
+    def calibrate(self):
+        """Start collecting samples for a new calibration (imports the calibration machinery);
+        the calibration in force stays until a better one is accepted."""
+        if self.collector is None:
+            from firmware.calibrator import Collector
+            self.collector = Collector(model=self.model, capacity=self.capacity,
+                                       counts_per_gauss=self.mag.counts_per_gauss,
+                                       current=self.calibration, solve_every=self.solve_every,
+                                       fallback=self.fallback)
+        return self.collector
+
     # --- the loop ---------------------------------------------------------------------
     def step(self):
         """One sample and a bounded slice of background work; True if a heading came out."""
         self.steps = (self.steps + 1) & 0x3FFFFFFF  # a small int for years at 200 Hz
         self._clock()
-        ok = self._sample()
-        if self._job is not None or self._due():
-            self._slice()
+        st = self._read()
+        if st == STATUS_OK:
+            st = self._heading()
+        if st != STATUS_OK:
+            self._failed(st)
+            ok = False
+        else:
+            ok = True
+            self._fails = 0
+            self._reinit_level = 0
+            if self._check():
+                self._select()
+        c = self.collector
+        if c is not None and (c.job is not None or c.due()):
+            self._solve()
         return ok
 
     def _clock(self):
         now = self._ticks()
         if self._wrap:
-            dt = _ticks_diff(now, self._t_last)
+            dt = ticks_diff(now, self._t_last)
         else:
             dt = now - self._t_last
         self._t_last = now
@@ -330,73 +369,66 @@ class CompassApp:
             self._age(a)
         else:
             self._age_us = a
-        if self._idle_us < _SOLVE_IDLE_US:
-            self._idle_us += dt
-        if self._kept and self._quiet_us < _QUIET_US:
-            self._quiet_us += dt
+        if self.collector is not None:
+            self.collector.tick(dt)
         if self._unsaved:
-            self._save_wait_us += dt
-            if self._save_wait_us >= _SAVE_RETRY_US:
-                self._save()
-                self._save_wait_us = 0
+            self._retry_save(dt)
 
     def _age(self, a):
         s = a // _US_PER_S
-        self.calibrator.age(s)  # NXP: the current fit error ages, so it can be replaced
+        if self.collector is not None:
+            self.collector.calibrator.age(s)  # NXP: the fit error ages, so it can be replaced
         self._age_us = a - s * _US_PER_S
 
-    def _sample(self):
-        st = self._read()
-        if st != STATUS_OK:
-            self._failed(st)
-            return False
-        self.calibration.correct(self.raw, self._cor)
-        self._mag_map.apply(self._cor, self.body)
-        if self.accel is None:
-            h = self.compass.update(self.body)
-        else:
-            self._acc_map.apply(self._acc, self.gravity)
-            h = self.compass.update(self.body, self.gravity)
-        if h < 0:
-            self._failed(STATUS_NO_GRAVITY if self.compass.flags & FLAG_NO_GRAVITY
-                         else STATUS_NO_FIELD)
-            return False
-        self.heading_kang = h
-        self._fails = 0
-        self._reinit_level = 0
-        if self.compass.interference:
-            self._interfered()
-        else:
-            self.status = STATUS_OK
-            self._clean()
-            self._feed()
-        return True
+    def _retry_save(self, dt):
+        self._save_wait_us += dt
+        if self._save_wait_us >= _SAVE_RETRY_US:
+            self._save()
+            self._save_wait_us = 0
 
-    @micropython.native
     def _read(self):
-        # Native: a bytecode frame with try/except would exceed the 11 words MicroPython keeps
-        # on the C stack and come from the heap on every sample (tests/scenarios/app_alloc.py).
-        try:
+        g = self._guard
+        with g:
             self.mag.read_into(self.raw)
             if self.accel is not None:
                 self.accel.read_accel_into(self._acc)
-        except DataReadyTimeout as e:
-            self.last_error = e
-            return STATUS_TIMEOUT
-        except SensorOverflow as e:
-            self.last_error = e
-            return STATUS_OVERFLOW
-        except OSError as e:
-            self.last_error = e
-            return STATUS_BUS_ERROR
+        if g.error is None:
+            return STATUS_OK
+        self.last_error = g.error
+        return _status_of(g.error)
+
+    def _heading(self):
+        self._correct(self.calibration.k, self.raw, self._cor)
+        self._apply(self._mag_map.m, self._cor, self.body)
+        if self.accel is None:
+            h = self.compass.update(self.body)
+        else:
+            self._apply(self._acc_map.m, self._acc, self.gravity)
+            h = self.compass.update(self.body, self.gravity)
+        if h < 0:
+            return STATUS_NO_GRAVITY if self.compass.flags & FLAG_NO_GRAVITY else STATUS_NO_FIELD
+        self.heading_kang = h
         return STATUS_OK
 
-    def _feed(self):
-        r = self.raw
-        if self.calibrator.add(r[0], r[1], r[2]):
-            self._kept += 1
-            self._quiet_us = 0
-            self._cov_dirty = True
+    def _check(self):
+        """Interference bookkeeping; True when the sample may go to the collector."""
+        if not self.compass.interference:
+            self.status = STATUS_OK
+            self._clean()
+            return True
+        self.status = STATUS_INTERFERENCE
+        self.errors[STATUS_INTERFERENCE] = self.errors.get(STATUS_INTERFERENCE, 0) + 1
+        self._clean_us = 0
+        if self.relearning:
+            return True  # the calibration in force is the one that does not fit
+        self._interf_us += self._dt
+        if self._interf_us >= _STALE_US:
+            self._stale()
+        return False
+
+    def _select(self):
+        if self.collector is not None:
+            self.collector.feed(self.raw)
 
     def _failed(self, st):
         self.status = st
@@ -413,17 +445,6 @@ class CompassApp:
                 self._reinit_level = lvl + 1
             self.reinit()
 
-    def _interfered(self):
-        self.status = STATUS_INTERFERENCE
-        self.errors[STATUS_INTERFERENCE] = self.errors.get(STATUS_INTERFERENCE, 0) + 1
-        self._clean_us = 0
-        if self.relearning:
-            self._feed()  # the calibration in force is the one that does not fit
-            return
-        self._interf_us += self._dt
-        if self._interf_us >= _STALE_US:
-            self._stale()
-
     def _clean(self):
         if self._interf_us:
             self._clean_us += self._dt
@@ -434,39 +455,29 @@ class CompassApp:
     def _stale(self):
         # The flag has been up for _STALE_US: not a passing magnet but a board whose iron
         # changed. Collect afresh and let any new fit replace the stale one.
-        self.relearning = True
         self._interf_us = 0
-        self._job = None
-        self.calibrator.clear()
-        self.calibrator.age(_STALE_AGE_S)
-        self._cov_dirty = True
+        self.calibrate().relearn(_STALE_AGE_S)
 
     def reinit(self):
-        """Re-create the drivers (a sensor reset by a brown-out powers up in standby).
-        Returns True when both answered; the app keeps whatever did."""
+        """Re-initialise the drivers (a sensor reset by a brown-out powers up in standby):
+        each driver re-applies its own configuration. Returns True when both answered; the
+        app keeps whatever did."""
         ok = True
         acc = self.accel
         if acc is not None:
             try:
-                from firmware.mpu6050 import MPU6050
-                acc = MPU6050(self.i2c, address=acc.address,
-                              accel_range=_ACCEL_RANGE.get(acc.counts_per_g, 2))
-                self.accel = acc
+                acc.configure()
             except OSError as e:  # the magnetometer may still be reachable: go on
                 ok = False
                 self.last_error = e
         try:
             try:
-                mag = self._new_mag()
-            except SensorNotFound:
+                self.mag.configure()
+            except OSError:
                 if acc is None:
                     raise
                 acc.enable_bypass()  # GY-87: a reset MPU6050 hides the magnetometer again
-                mag = self._new_mag()
-            if mag.range_code != self.mag.range_code:  # the calibration would not apply
-                raise SensorNotFound("0x%02X came back at range code %d, not %d"
-                                     % (mag.address, mag.range_code, self.mag.range_code))
-            self.mag = mag
+                self.mag.configure()
         except OSError as e:  # SensorNotFound, BusError, DataReadyTimeout: still not back
             ok = False
             self.last_error = e
@@ -476,114 +487,87 @@ class CompassApp:
             self.reinit_failures += 1
         return ok
 
-    def _new_mag(self):
-        old = self.mag
-        opts = dict(self._mag_options)
-        ro = _RANGE_OPTION.get(old.KIND)
-        if ro is not None and ro[0] not in opts and old.range_code < len(ro[1]):
-            opts[ro[0]] = ro[1][old.range_code]
-        if self._delay_opt is not None:
-            opts["delay_us"] = self._delay_opt
-        opts["timeout_us"] = old.timeout_us
-        return type(old)(self.i2c, address=old.address, **opts)
-
     # --- background solve -------------------------------------------------------------
-    def _due(self):
-        if self._kept >= self.solve_every or self._next_model is not None:
-            return True
-        if self._quiet_us >= _QUIET_US:
-            return True
-        return self._idle_us >= _SOLVE_IDLE_US and self.calibrator.count > 0
-
-    def _slice(self):
+    def _solve(self):
         t = self._wall()
-        if self._job is None:
-            self._start()
+        c = self.collector
+        if c.job is None:
+            self._slices_per_step = c.start(getattr(self.mag, "period_us", _DEFAULT_PERIOD_US))
         n = self._slices_per_step
-        while n and self._job is not None:
-            self._advance()
+        while n and c.job is not None:
+            cal = c.slice()
+            if cal is not None:
+                self._accept(cal)
             n -= 1
         d = self._wall_diff(self._wall(), t)
         self.slices = (self.slices + 1) & 0x3FFFFFFF
         if d > self.worst_stall_us:
             self.worst_stall_us = d
 
-    def _start(self):
-        m = self._next_model
-        self._next_model = None
-        if m is None:
-            m = self.model
-        self._kept = 0
-        self._quiet_us = 0
-        self._idle_us = 0
-        self.solves += 1
-        self._job_model = m
-        self.last_model = m
-        self._job = self.calibrator.solve_steps(m, group=1)
-        period = getattr(self.mag, "period_us", _DEFAULT_PERIOD_US)
-        n = period // (_SOLVE_SHARE * _SLICE_US)
-        self._slices_per_step = n if n > 0 else 1
-
-    def _advance(self):
-        try:
-            next(self._job)
-            return
-        except StopIteration as e:
-            cal = e.value
-        except CalibrationRejected as e:
-            self._job = None
-            self._refused(e.reason, e.detail)
-            return
-        except MemoryError:
-            self._job = None
-            self._refused(REASON_NO_MEMORY, "heap exhausted during the solve")
-            return
-        except Exception as e:  # noqa: BLE001 - the sample loop must outlive a solver bug
-            self._job = None
-            self._refused(REASON_SOLVER_ERROR, repr(e))
-            return
-        self._job = None
-        self._idle_us = 0
-        self.accepted += 1
-        self.relearning = False
-        self.last_reason = None  # refusals before an acceptance are no longer news
-        self.last_detail = None
+    def _accept(self, cal):
         self._use(cal)
         self._save()
 
-    def _refused(self, reason, detail):
-        self.refused += 1
-        self._idle_us = 0
-        m = self._job_model
-        cur = self.calibration.model
-        if reason == REASON_TOO_FEW_SAMPLES:
-            if (m in (7, 10) and self.fallback
-                    and (cur is None or cur == "minmax" or self.relearning)):
-                self._next_model = 4
-            elif m == 4 and self.last_reason == REASON_TOO_FEW_SAMPLES:
-                return  # keep the configured model's message: it says what is needed
-        self.last_reason = reason
-        self.last_detail = detail
-
     # --- reporting --------------------------------------------------------------------
+    @property
+    def calibrator(self):
+        return self.collector.calibrator if self.collector is not None else None
+
+    def _counter(self, name, default):
+        c = self.collector
+        return getattr(c, name) if c is not None else default
+
+    @property
+    def accepted(self):
+        return self._counter("accepted", 0)
+
+    @property
+    def refused(self):
+        return self._counter("refused", 0)
+
+    @property
+    def solves(self):
+        return self._counter("solves", 0)
+
+    @property
+    def last_reason(self):
+        return self._counter("last_reason", None)
+
+    @property
+    def last_detail(self):
+        return self._counter("last_detail", None)
+
+    @property
+    def last_model(self):
+        return self._counter("last_model", None)
+
+    @property
+    def relearning(self):
+        return self._counter("relearning", False)
+
+    @property
+    def solving(self):
+        c = self.collector
+        return c is not None and c.job is not None
+
     def coverage(self):
-        """Percent of the sphere covered by the held samples (cached until one is kept)."""
-        if self._cov_dirty:
-            self._cov = self.calibrator.coverage()
-            self._cov_dirty = False
-        return self._cov
+        """Percent of the sphere covered by the held samples (0 when not collecting)."""
+        return self.collector.coverage() if self.collector is not None else 0
 
     def progress(self):
         c = self.calibration
-        return {"coverage": self.coverage(), "samples": self.calibrator.count,
+        col = self.collector
+        return {"coverage": self.coverage(),
+                "samples": col.calibrator.count if col is not None else 0,
                 "model": c.model, "fit_error": c.fit_error if c.model is not None else None,
                 "last_reason": self.last_reason, "last_detail": self.last_detail,
                 "accepted": self.accepted, "refused": self.refused,
-                "solving": self._job is not None, "solve_model": self._job_model
-                if self._job is not None else None, "status": self.status,
-                "interference": self.compass.interference, "relearning": self.relearning,
-                "stored": self.stored, "save_errors": self.save_errors,
-                "load_reason": self.load_reason, "worst_stall_us": self.worst_stall_us}
+                "collecting": col is not None, "solving": self.solving,
+                "solve_model": col.job_model if self.solving else None,
+                "status": self.status, "interference": self.compass.interference,
+                "relearning": self.relearning, "stored": self.stored,
+                "save_errors": self.save_errors, "load_reason": self.load_reason,
+                "worst_stall_us": self.worst_stall_us}
 
     def run(self, n=None, report=None, every=REPORT_EVERY, every_us=None):
         """step() n times (None: forever); report(app) every `every` steps, or every
@@ -599,7 +583,7 @@ class CompassApp:
                 continue
             if every_us:
                 now = self._ticks()
-                if (_ticks_diff(now, last) if self._wrap else now - last) >= every_us:
+                if (ticks_diff(now, last) if self._wrap else now - last) >= every_us:
                     last = now
                     report(self)
             elif i % every == 0:
@@ -625,7 +609,8 @@ def status_line(app):
         parts.append("uncalibrated")
     else:
         parts.append("model %s fit %s" % (p["model"], _pct(p["fit_error"])))
-    parts.append("coverage %d %% samples %d" % (p["coverage"], p["samples"]))
+    if p["collecting"]:
+        parts.append("coverage %d %% samples %d" % (p["coverage"], p["samples"]))
     if p["solving"]:
         parts.append("solving %s" % (p["solve_model"],))
     if app.relearning:

@@ -3,6 +3,7 @@
     from firmware.axes import AxisMap
     mag_map = AxisMap("x,-y,-z")      # body x = sensor x, body y = -sensor y, body z = -sensor z
     mag_map.apply(corrected, b)        # allocation-free; src and dst may be the same buffer
+    apply(mag_map.m, corrected, b)     # the same, as a function (firmware.fast has its mirror)
 
 A spec names, for body x, y and z in turn, the sensor axis (and sign) that points that way:
 "x,-y,-z", "-y, x, z", or a tuple ("x", "-y", "-z"). Parsing raises ValueError naming the
@@ -14,7 +15,28 @@ the chip reads +1 g on an axis pointing up (specific force), AN4248 wants +1 g o
 the rotation is followed by a negation.
 """
 
+from array import array
+
 _AXES = "xyz"
+
+
+def apply(m, src, dst):
+    """dst (body) <- src (sensor) for the map m = AxisMap.m: the source axes of body x, y, z,
+    then 1 where that axis is negated. A negated -32768 saturates to 32767 so an int16 buffer
+    can hold it (the reading was at the rail already). src and dst may be the same buffer.
+    Allocates nothing; firmware.fast.apply is its viper mirror."""
+    x = src[m[0]]
+    y = src[m[1]]
+    z = src[m[2]]
+    if m[3]:
+        x = 32767 if x == -32768 else -x
+    if m[4]:
+        y = 32767 if y == -32768 else -y
+    if m[5]:
+        z = 32767 if z == -32768 else -z
+    dst[0] = x
+    dst[1] = y
+    dst[2] = z
 
 
 class AxisMap:
@@ -49,27 +71,15 @@ class AxisMap:
         self.axis = tuple(axis)
         self.sign = tuple(-1 if n else 1 for n in neg)
         self.spec = ",".join(("-" if n else "") + _AXES[a] for a, n in zip(axis, neg))
-        self._ix, self._iy, self._iz = axis
-        self._nx, self._ny, self._nz = neg
+        self.m = array("b", (axis[0], axis[1], axis[2], 1 if neg[0] else 0, 1 if neg[1] else 0,
+                             1 if neg[2] else 0))  # apply()'s argument
         # determinant of a signed permutation: product of signs times the permutation's parity
         inversions = (axis[0] > axis[1]) + (axis[0] > axis[2]) + (axis[1] > axis[2])
         self.det = self.sign[0] * self.sign[1] * self.sign[2] * (-1 if inversions & 1 else 1)
 
     def apply(self, src, dst):
-        """dst (body) <- src (sensor). A negated -32768 saturates to 32767 so an int16 buffer
-        can hold it (the reading was at the rail already). Allocates nothing."""
-        x = src[self._ix]
-        y = src[self._iy]
-        z = src[self._iz]
-        if self._nx:
-            x = 32767 if x == -32768 else -x
-        if self._ny:
-            y = 32767 if y == -32768 else -y
-        if self._nz:
-            z = 32767 if z == -32768 else -z
-        dst[0] = x
-        dst[1] = y
-        dst[2] = z
+        """dst (body) <- src (sensor); see apply()."""
+        apply(self.m, src, dst)
 
     def matrix(self):
         """3x3 ints, rows body axes, columns sensor axes: body = matrix * sensor."""

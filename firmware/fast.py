@@ -1,109 +1,198 @@
-"""The per-sample path with viper kernels: the same bits as the plain firmware, faster.
+"""The fast path: viper mirrors of the per-sample steps, with the plain functions' signatures.
 
-    from firmware.fast import Pipeline
-    pipe = Pipeline(cal, "x,-y,-z", "-x,y,z", field=cal.field_out)
-    h = pipe.update(raw, araw, b, g)    # raw mag, raw accel -> body b, g; heading KANG or -1
-    pipe.compass.flags, pipe.compass.pitch_kang ...   # a heading.Compass, updated in place
+Imported only through firmware.compat.kernels(), inside try/except: a port without the native
+emitter (the WebAssembly port, CircuitPython) raises SyntaxError at compile time on
+@micropython.viper, and then everything runs the plain functions. Where it imports, the app
+and the Compass use these automatically; the results are the same bits.
 
-Pipeline(cal, mag_axes, accel_axes=None, compass=None, **compass_options) does, in one call,
-    cal.correct(raw, b); AxisMap(mag_axes).apply(b, b); AxisMap(accel_axes).apply(araw, g)
-    return compass.update(b, g)          # accel_axes None: compass.update(b), araw/g unused
-set_calibration(cal) swaps the calibration (e.g. one the Calibrator just accepted), and its
-pieces exist alone: Corrector(cal).correct(raw, out), FastAxisMap(spec).apply(src,
-dst) (an AxisMap), FastCompass(...).update(b, g=None) (a Compass).
+    plain (its home)                          mirror here
+    calibration.correct(k, raw, out)          correct(k, raw, out)
+    axes.apply(m, src, dst)                   apply(m, src, dst)
+    trig.norm14(src, dst, o)                  norm14(src, dst, o)
+    trig.atan2(y, x), trig.sin(a)             atan2(y, x), sin(a)
+    fixedpoint.isqrt(n)                       isqrt(n), for n < 2**30 (the compass's range)
 
-On MicroPython with the native emitter (the unix port, RP2040, ESP32) these run as
-@micropython.viper kernels (firmware/_fastv.py); elsewhere (CPython, a port built without the
-emitter) they ARE the plain methods. Either way the outputs, the return value and the public
-attributes are those of the plain firmware for int16 inputs (tests/test_fast.py compares them
-on MicroPython). FastCompass keeps only the public attributes current, not Compass's private
-scratch. VIPER says which implementation is in use. Nothing allocates per sample.
-Why: on the MicroPython unix port correct + axes + heading cost ~4x seed 004's float
-offset/scale + atan2 heading as bytecode, ~0.7x as these kernels (make bench, README
-"Benchmarks").
+Each computes, operation for operation, what its plain original computes; the orchestration
+(Compass.update, the app's step) is the plain code in both paths. Viper ints are machine words
+(32 bits on the boards, 64 on the unix port): every intermediate here is below 2**30 for int16
+inputs, the bound tests/test_heading.py proves for the plain code, so the words never wrap.
+`//` and `>>` have Python's floor semantics in viper; ptr16 loads are unsigned and are
+sign-extended by hand. tests/test_fast.py compares every function with its original on the
+interpreters that have the emitter, over the real logs and the int16 extremes.
+
+Tables: firmware/kang_tables.py's atan and sine tables copied into array('i') for ptr32 loads (every entry is
+non-negative, so the unsigned load of the unix port changes nothing).
 """
+import micropython
 from array import array
 
-from firmware.axes import AxisMap
-from firmware.heading import Compass
+from firmware.kang_tables import ATAN_T, SIN_T
 
-try:
-    from firmware import _fastv
-    VIPER = True
-except (ImportError, SyntaxError, ValueError):  # CPython; no emitter; .mpy of another arch
-    _fastv = None
-    VIPER = False
+_AT = array("i", ATAN_T)
+_ST = array("i", SIN_T)
 
 
-def _map_bytes(m):
-    return [m.axis[0], m.axis[1], m.axis[2],
-            1 if m.sign[0] < 0 else 0, 1 if m.sign[1] < 0 else 0, 1 if m.sign[2] < 0 else 0]
+@micropython.viper
+def atan2(y: int, x: int) -> int:
+    """trig.atan2."""
+    at = ptr32(_AT)
+    n = y if y >= 0 else 0 - y
+    d = x if x >= 0 else 0 - x
+    sw = 0
+    if n > d:  # second octant: atan(n/d) = 90 deg - atan(d/n)
+        e = n
+        n = d
+        d = e
+        sw = 1
+    elif d == 0:
+        return 0
+    if n == d:
+        a = 8192
+    else:
+        r = ((n << 15) + (d >> 1)) // d
+        i = r >> 7
+        e = at[i]
+        a = ((e << 7) + (at[i + 1] - e) * (r & 127) + 0x4000) >> 15
+    if sw:
+        a = 16384 - a
+    if x < 0:
+        a = 32768 - a
+    if y < 0:
+        return 0 - a
+    if a >= 32768:
+        return -32768
+    return a
 
 
-def _invw_v(cal):
-    return array("h", tuple(cal.invw) + tuple(cal.offset))  # InvW 0..8, then V 9..11
+@micropython.viper
+def sin(angle: int) -> int:
+    """trig.sin."""
+    st = ptr32(_ST)
+    a = angle & 0xFFFF
+    r = a & 0x3FFF
+    if a & 0x4000:
+        r = 0x4000 - r
+    i = r >> 6
+    s = st[i]
+    r = ((s << 6) + (st[i + 1] - s) * (r & 63) + 0x200) >> 10
+    if r > 32767:
+        r = 32767
+    if a & 0x8000:
+        return 0 - r
+    return r
 
 
-class Corrector:
-    """Calibration.correct(raw, out) of `cal` (make a new one when the calibration changes)."""
-
-    def __init__(self, cal):
-        self.cal = cal
-        self._k = _invw_v(cal)
-        if not VIPER:
-            self.correct = cal.correct
-
-    def correct(self, raw, out):
-        _fastv.correct(self._k, raw, out)
+@micropython.viper
+def cos(angle: int) -> int:
+    """trig.cos."""
+    return int(sin(angle + 16384))
 
 
-class FastAxisMap(AxisMap):
-    """An AxisMap whose apply() is the viper kernel."""
-
-    def __init__(self, spec):
-        super().__init__(spec)
-        self._m = array("b", _map_bytes(self))
-
-    if VIPER:
-        def apply(self, src, dst):
-            _fastv.apply(self._m, src, dst)
-
-
-class FastCompass(Compass):
-    """A Compass whose update() is the viper kernel."""
-
-    if VIPER:
-        def update(self, b, g=None):
-            if g is None:
-                return _fastv.heading(self, b, b, 1)
-            return _fastv.heading(self, b, g, 0)
+@micropython.viper
+def isqrt(n: int) -> int:
+    """fixedpoint.isqrt for 0 <= n < 2**30 (digit by digit, as its small-int branch)."""
+    r = 0
+    b = 0x10000000
+    while b > n:
+        b >>= 2
+    while b:
+        if n >= r + b:
+            n -= r + b
+            r = (r >> 1) + b
+        else:
+            r >>= 1
+        b >>= 2
+    return r
 
 
-class Pipeline(_fastv.PipelineKernel if VIPER else object):
-    """correct -> axes -> heading for one sample in one call (see the module docstring)."""
+@micropython.viper
+def _rshift(v: int, n: int) -> int:
+    # trig.rshift: v / 2**n rounded half away from zero
+    if v < 0:
+        return 0 - ((0 - v + (1 << (n - 1))) >> n)
+    return (v + (1 << (n - 1))) >> n
 
-    def __init__(self, cal, mag_axes, accel_axes=None, compass=None, **compass_options):
-        self.cal = cal
-        self.mag_map = AxisMap(mag_axes)
-        self.accel_map = AxisMap(accel_axes) if accel_axes is not None else None
-        self.compass = compass if compass is not None else FastCompass(**compass_options)
-        self._k = _invw_v(cal)
-        self._mm = array("b", _map_bytes(self.mag_map))
-        self._am = array("b", _map_bytes(self.accel_map or self.mag_map))
-        self._level = 1 if self.accel_map is None else 0
 
-    def set_calibration(self, cal):
-        """Use another Calibration from the next update() on (e.g. one just accepted)."""
-        self.cal = cal
-        self._k = _invw_v(cal)
+@micropython.viper
+def norm14(src, dst, o: int) -> int:
+    """trig.norm14."""
+    x = int(src[0])
+    y = int(src[1])
+    z = int(src[2])
+    m = x if x >= 0 else 0 - x
+    k = y if y >= 0 else 0 - y
+    if k > m:
+        m = k
+    k = z if z >= 0 else 0 - z
+    if k > m:
+        m = k
+    if m == 0:
+        return -128  # trig.ZERO_VECTOR
+    k = 0
+    while m < 0x2000:
+        m <<= 1
+        k += 1
+    while m >= 0x4000:
+        m >>= 1
+        k -= 1
+    if k >= 0:
+        dst[o] = x << k
+        dst[o + 1] = y << k
+        dst[o + 2] = z << k
+    else:
+        dst[o] = _rshift(x, 0 - k)
+        dst[o + 1] = _rshift(y, 0 - k)
+        dst[o + 2] = _rshift(z, 0 - k)
+    return k
 
-    if not VIPER:
-        def update(self, raw, araw, b, g):
-            """Heading in KANG (or -1, see Compass.update); b and g receive the body-frame
-            field and gravity (g untouched without an accelerometer)."""
-            self.cal.correct(raw, b)
-            self.mag_map.apply(b, b)
-            if self._level:
-                return self.compass.update(b)
-            self.accel_map.apply(araw, g)
-            return self.compass.update(b, g)
+
+@micropython.viper
+def correct(k, raw, out):
+    """calibration.correct; k = array('h') of InvW (0..8) then V (9..11)."""
+    p = ptr16(k)
+    # int16 from the unsigned 16-bit load: (u ^ 0x8000) - 0x8000
+    x = int(raw[0]) - ((p[9] ^ 0x8000) - 0x8000)
+    y = int(raw[1]) - ((p[10] ^ 0x8000) - 0x8000)
+    z = int(raw[2]) - ((p[11] ^ 0x8000) - 0x8000)
+    if x > 32767:
+        x = 32767
+    elif x < -32768:
+        x = -32768
+    if y > 32767:
+        y = 32767
+    elif y < -32768:
+        y = -32768
+    if z > 32767:
+        z = 32767
+    elif z < -32768:
+        z = -32768
+    a = (p[0] ^ 0x8000) - 0x8000
+    b = (p[1] ^ 0x8000) - 0x8000
+    c = (p[2] ^ 0x8000) - 0x8000
+    out[0] = (a * x + b * y + c * z + 16384) >> 15
+    a = (p[3] ^ 0x8000) - 0x8000
+    b = (p[4] ^ 0x8000) - 0x8000
+    c = (p[5] ^ 0x8000) - 0x8000
+    out[1] = (a * x + b * y + c * z + 16384) >> 15
+    a = (p[6] ^ 0x8000) - 0x8000
+    b = (p[7] ^ 0x8000) - 0x8000
+    c = (p[8] ^ 0x8000) - 0x8000
+    out[2] = (a * x + b * y + c * z + 16384) >> 15
+
+
+@micropython.viper
+def apply(m, src, dst):
+    """axes.apply; m = AxisMap.m, array('b'): source axes of body x, y, z, then negations."""
+    p = ptr8(m)
+    x = int(src[p[0]])
+    y = int(src[p[1]])
+    z = int(src[p[2]])
+    if p[3]:
+        x = 32767 if x == -32768 else 0 - x
+    if p[4]:
+        y = 32767 if y == -32768 else 0 - y
+    if p[5]:
+        z = 32767 if z == -32768 else 0 - z
+    dst[0] = x
+    dst[1] = y
+    dst[2] = z

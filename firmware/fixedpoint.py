@@ -9,22 +9,7 @@ icbrt(n)      floor cube root of any int (exact; rounds toward minus infinity; f
 For n < 2**30 isqrt allocates nothing and every intermediate stays a small int, so the
 per-sample path may call it; larger n (the solvers) take the Newton branch on long ints.
 """
-try:
-    from micropython import const
-except ImportError:  # CPython
-    def const(x):
-        return x
-
-try:
-    import micropython  # re-exported: `from firmware.fixedpoint import micropython`
-except ImportError:  # CPython: the code emitters are MicroPython's; run as plain bytecode
-    class micropython:
-        """@micropython.native on CPython: the function unchanged. On MicroPython the native
-        emitter is used where a bytecode frame would be too big for the C stack: a frame over
-        11 words (any try/except is) is taken from the heap on every call."""
-        @staticmethod
-        def native(f):
-            return f
+from firmware.compat import const
 
 INT16_MIN = const(-32768)
 INT16_MAX = const(32767)

@@ -21,15 +21,10 @@ returns was measured with the old gain.
 Errors: SensorNotFound (ID is not 'H43'), BusError, DataReadyTimeout, SensorOverflow (an axis
 reads -4096, the ADC overflow marker, or anything outside the output range -2048..2047).
 """
-try:
-    from micropython import const
-except ImportError:  # CPython
-    def const(x):
-        return x
+from firmware.compat import const
 
 from firmware.errors import BusError, SensorNotFound, SensorOverflow
-from firmware.fixedpoint import micropython
-from firmware.sensors import Device, option_code
+from firmware.i2cdevice import Device, option_code
 
 # Registers (datasheet register list)
 _CRA = const(0x00)
@@ -74,15 +69,23 @@ class HMC5883L(Device):
         super().__init__(i2c, address, _PERIODS_US[ri], delay_us, timeout_us)
         self._probe_id()
         self._cra = ma << 5 | _RATE_DO[ri] << 2 | _MS_NORMAL
-        self._write_u8(_CRA, self._cra)
-        self._set_gain_code(gn)
-        self._write_u8(_MODE, _MODE_CONTINUOUS)
-        self._settle(self._period_us)
+        self.range_code = gn
+        self.configure()
+
+    def configure(self):
+        """This driver's configuration (rate, averaging, gain, continuous mode), written again
+        after a chip reset; returns once samples carry it."""
+        with self.guard:
+            self._write_u8(_CRA, self._cra)
+            self._set_gain_code(self.range_code)
+            self._write_u8(_MODE, _MODE_CONTINUOUS)
+            self._settle(self.period_us)
 
     def _probe_id(self):
         b = self._buf
         try:
-            self._read_into(_ID_A, memoryview(b)[0:3])
+            with self.guard:
+                self._read_into(_ID_A, memoryview(b)[0:3])
         except BusError as e:
             raise SensorNotFound("no HMC5883L at 0x%02X: reading ID registers 0x0A-0x0C failed "
                                  "(errno %s)" % (self.address, e.errno), address=self.address)
@@ -100,18 +103,23 @@ class HMC5883L(Device):
         # The first measurement after a configuration change keeps the old gain: let two
         # measurements complete, then read (all six bytes: clears LOCK) and drop one sample.
         self._delay(2 * period_us + _SETTLE_MARGIN_US)
-        self.wait_ready(_STATUS, _RDY)
+        self.wait(_STATUS, _RDY)
         self._read_into(_DATA, self._buf)
 
     def set_gain(self, gain):
         """Change the GN code (0..7); returns once samples carry the new gain."""
-        self._set_gain_code(option_code("HMC5883L", "gain", gain, _GAINS))
-        self._settle(self._period_us)
+        gn = option_code("HMC5883L", "gain", gain, _GAINS)
+        with self.guard:
+            self._set_gain_code(gn)
+            self._settle(self.period_us)
 
-    @micropython.native  # per-sample path: C-stack frame, fewer VM dispatches
     def read_into(self, buf):
         """Wait for RDY, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
-        self.wait_ready(_STATUS, _RDY)
+        with self.guard:
+            self._sample_into(buf)
+
+    def _sample_into(self, buf):
+        self.wait(_STATUS, _RDY)
         d = self._buf
         self._read_into(_DATA, d)  # all six bytes in one transaction (a partial read sets LOCK)
         x = d[0] << 8 | d[1]       # int16 MSB first, in the order X, Z, Y
@@ -146,10 +154,11 @@ class HMC5883L(Device):
     def self_test(self):
         """Positive-bias self test; returns (passed, (x, y, z) counts at gain 5)."""
         gn = self.range_code
-        self._write_u8(_CRA, _ST_CRA)
-        self._write_u8(_CRB, _ST_GAIN << 5)
-        self._write_u8(_MODE, _MODE_CONTINUOUS)
-        self._settle(_ST_PERIOD_US)
+        with self.guard:
+            self._write_u8(_CRA, _ST_CRA)
+            self._write_u8(_CRB, _ST_GAIN << 5)
+            self._write_u8(_MODE, _MODE_CONTINUOUS)
+            self._settle(_ST_PERIOD_US)
         v = [0, 0, 0]
         try:
             self.read_into(v)
@@ -161,7 +170,6 @@ class HMC5883L(Device):
             v = list(e.raw)
             passed = False
         finally:
-            self._write_u8(_CRA, self._cra)
-            self._set_gain_code(gn)
-            self._settle(self._period_us)
+            self.range_code = gn
+            self.configure()
         return passed, (v[0], v[1], v[2])

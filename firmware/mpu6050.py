@@ -15,15 +15,10 @@ enable_bypass() connects the auxiliary I2C bus to the main one (GY-87/GY-86: the
 sits there). The constructor wakes the chip and sets the range; it leaves the bypass alone.
 Errors: SensorNotFound (WHO_AM_I is not 0x68), BusError.
 """
-try:
-    from micropython import const
-except ImportError:  # CPython
-    def const(x):
-        return x
+from firmware.compat import const
 
 from firmware.errors import SensorNotFound
-from firmware.fixedpoint import micropython
-from firmware.sensors import Device, option_code
+from firmware.i2cdevice import Device, be16x3_into, option_code
 
 # Registers (register map rev 4.2)
 _CONFIG = const(0x1A)         # DLPF_CFG[2:0]
@@ -57,28 +52,31 @@ class MPU6050(Device):
         if who != _ID_VALUE:
             raise SensorNotFound("no MPU6050 at 0x%02X: WHO_AM_I (0x75) reads 0x%02X, expected "
                                  "0x68" % (address, who), address=address)
-        self._write_u8(_PWR_MGMT_1, _WAKE_PLL_X)
-        self._write_u8(_ACCEL_CONFIG, afs << 3)
-        self._write_u8(_CONFIG, cfg)
+        self._afs = afs
+        self._dlpf_cfg = cfg
         self.dlpf = dlpf
+        self.accel_range = accel_range
         self.counts_per_g = 16384 >> afs
+        self.configure()
+
+    def configure(self):
+        """Wake the chip and write this driver's range and filter (also after a chip reset)."""
+        with self.guard:
+            self._write_u8(_PWR_MGMT_1, _WAKE_PLL_X)
+            self._write_u8(_ACCEL_CONFIG, self._afs << 3)
+            self._write_u8(_CONFIG, self._dlpf_cfg)
 
     def enable_bypass(self):
         """Clear I2C_MST_EN, set I2C_BYPASS_EN: the aux-bus chips appear on the main bus."""
-        self._write_u8(_USER_CTRL, self._read_u8(_USER_CTRL) & ~_I2C_MST_EN)
-        self._write_u8(_INT_PIN_CFG, self._read_u8(_INT_PIN_CFG) | _I2C_BYPASS_EN)
+        with self.guard:
+            self._write_u8(_USER_CTRL, self._read_u8(_USER_CTRL) & ~_I2C_MST_EN)
+            self._write_u8(_INT_PIN_CFG, self._read_u8(_INT_PIN_CFG) | _I2C_BYPASS_EN)
 
-    @micropython.native  # per-sample path: C-stack frame, fewer VM dispatches
     def read_accel_into(self, buf):
         """Read the accelerometer (counts) into buf[0..2]. Allocates nothing."""
-        d = self._buf
-        self._read_into(_ACCEL_XOUT_H, d)
-        v = d[0] << 8 | d[1]     # int16 MSB first, sign-extended by hand (no struct tuple)
-        buf[0] = v - 0x10000 if v & 0x8000 else v
-        v = d[2] << 8 | d[3]
-        buf[1] = v - 0x10000 if v & 0x8000 else v
-        v = d[4] << 8 | d[5]
-        buf[2] = v - 0x10000 if v & 0x8000 else v
+        with self.guard:
+            self._read_into(_ACCEL_XOUT_H, self._buf)
+        be16x3_into(self._buf, buf)
 
     def read_accel(self):
         """(x, y, z) raw counts, the chip's axes."""

@@ -7,7 +7,7 @@
 QMC5883L(i2c, address=0x0D, *, range=2, odr=50, osr=512, delay_us=None, timeout_us=None)
   range  full scale in gauss: 2 (12000 counts/G) or 8 (3000 counts/G)
   odr    output data rate in Hz: 10, 50, 100, 200;  osr  oversampling 512, 256, 128, 64
-  delay_us, timeout_us: the bounded data-ready wait (see firmware.sensors)
+  delay_us, timeout_us: the bounded data-ready wait (see firmware.i2cdevice)
 read() -> (x, y, z) raw counts in the chip's axes; read_into(buf) fills buf[0..2] without
 allocating (a list or array('h'/'i')). .KIND 'qmc5883l', .range_code (RNG field, 0/1),
 .counts_per_gauss, .skipped (reads that found DOR set: at least one sample set was lost each).
@@ -20,15 +20,10 @@ configuration written to CTRL1 to read back unchanged.
 Errors: SensorNotFound (probe), BusError (any transfer), DataReadyTimeout (DRDY never set),
 SensorOverflow (OVL: the six data bytes are still read first, to release the data lock).
 """
-try:
-    from micropython import const
-except ImportError:  # CPython
-    def const(x):
-        return x
+from firmware.compat import const
 
 from firmware.errors import SensorNotFound, SensorOverflow
-from firmware.fixedpoint import micropython
-from firmware.sensors import Device, le16x3_into, option_code
+from firmware.i2cdevice import Device, le16x3_into, option_code
 
 # Registers (datasheet register map)
 _XOUT_L = const(0x00)      # X, Y, Z int16 LSB first in 0x00..0x05
@@ -77,6 +72,16 @@ class QMC5883L(Device):
         if chip_id != _ID_VALUE:
             raise SensorNotFound("no QMC5883L at 0x%02X: chip ID register 0x0D reads 0x%02X, "
                                  "expected 0xFF" % (address, chip_id), address=address)
+        self._ctrl1 = over << 6 | rng << 4 | rate << 2 | _MODE_CONTINUOUS
+        self.configure()
+
+    def configure(self):
+        """Soft reset, then this driver's configuration, read back (also after a chip reset)."""
+        with self.guard:
+            self._configure()
+
+    def _configure(self):
+        address = self.address
         self._write_u8(_CTRL2, _SOFT_RST)
         self._delay(_POR_US)
         ctrl1 = self._read_u8(_CTRL1)
@@ -86,17 +91,20 @@ class QMC5883L(Device):
                                  % (address, ctrl1), address=address)
         self._write_u8(_SET_RESET, _SET_RESET_PERIOD)
         self._write_u8(_CTRL2, _CTRL2_RUN)
-        cfg = over << 6 | rng << 4 | rate << 2 | _MODE_CONTINUOUS
+        cfg = self._ctrl1
         self._write_u8(_CTRL1, cfg)
         back = self._read_u8(_CTRL1)
         if back != cfg:
             raise SensorNotFound("no QMC5883L at 0x%02X: CTRL1 written 0x%02X reads back 0x%02X"
                                  % (address, cfg, back), address=address)
 
-    @micropython.native  # per-sample path: C-stack frame, fewer VM dispatches
     def read_into(self, buf):
         """Wait for DRDY, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
-        status = self.wait_ready(_STATUS, _DRDY)
+        with self.guard:
+            self._sample_into(buf)
+
+    def _sample_into(self, buf):
+        status = self.wait(_STATUS, _DRDY)
         d = self._buf
         self._read_into(_XOUT_L, d)  # all six bytes in one transaction: releases the data lock
         if status & _DOR:

@@ -16,15 +16,10 @@ Register layout from hardware.md (sources disagree on some details of this clone
 The ID register 0x00 reads 0x80; the configuration must also read back.
 Errors: SensorNotFound, BusError, DataReadyTimeout, SensorOverflow (status OVFL).
 """
-try:
-    from micropython import const
-except ImportError:  # CPython
-    def const(x):
-        return x
+from firmware.compat import const
 
 from firmware.errors import SensorNotFound, SensorOverflow
-from firmware.fixedpoint import micropython
-from firmware.sensors import Device, le16x3_into, option_code
+from firmware.i2cdevice import Device, le16x3_into, option_code
 
 # Registers (hardware.md)
 _CHIP_ID = const(0x00)
@@ -71,10 +66,21 @@ class QMC5883P(Device):
         if chip_id != _ID_VALUE:
             raise SensorNotFound("no QMC5883P at 0x%02X: chip ID register 0x00 reads 0x%02X, "
                                  "expected 0x80" % (address, chip_id), address=address)
+        self._ctrl1 = down << 6 | over << 4 | rate << 2 | _MODE_NORMAL
+        self._ctrl2 = rng << 2 | _SET_RESET_ON
+        self.configure()
+
+    def configure(self):
+        """Soft reset, then this driver's configuration, read back (also after a chip reset)."""
+        with self.guard:
+            self._configure()
+
+    def _configure(self):
+        address = self.address
         self._write_u8(_CTRL2, _SOFT_RST)
         self._delay(_RESET_US)
-        ctrl2 = rng << 2 | _SET_RESET_ON
-        ctrl1 = down << 6 | over << 4 | rate << 2 | _MODE_NORMAL
+        ctrl2 = self._ctrl2
+        ctrl1 = self._ctrl1
         self._write_u8(_CTRL2, ctrl2)
         self._write_u8(_CTRL1, ctrl1)
         for reg, want in ((_CTRL1, ctrl1), (_CTRL2, ctrl2)):
@@ -84,10 +90,13 @@ class QMC5883P(Device):
                                      "reads back 0x%02X" % (address, reg, want, got),
                                      address=address)
 
-    @micropython.native  # per-sample path: C-stack frame, fewer VM dispatches
     def read_into(self, buf):
         """Wait for DRDY, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
-        status = self.wait_ready(_STATUS, _DRDY)
+        with self.guard:
+            self._sample_into(buf)
+
+    def _sample_into(self, buf):
+        status = self.wait(_STATUS, _DRDY)
         d = self._buf
         self._read_into(_XOUT_L, d)  # the whole block in one transaction
         if status & _OVFL:

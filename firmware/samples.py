@@ -32,13 +32,9 @@ on MicroPython and every intermediate stays below 2**30 for int16 input and sepa
 """
 from array import array
 
-from firmware.fixedpoint import isqrt, micropython
+from firmware.fixedpoint import isqrt
 
-try:
-    from micropython import const
-except ImportError:  # CPython
-    def const(x):
-        return x
+from firmware.compat import const
 
 REJECTED = const(0)  # offer(): too close to a held sample, or its cell is taken
 KEPT = const(1)      # offer(): stored in a free slot
@@ -95,8 +91,9 @@ _NORM_LO = const(0x2000)
 _FILL_Q8 = const(2100)
 
 
-def _hash(cx, cy, cz):
-    h = (cx * _HX) ^ (cy * _HY) ^ (cz * _HZ)
+def _hash(c, j):
+    # the cell c[j], c[j + 1], c[j + 2]
+    h = (c[j] * _HX) ^ (c[j + 1] * _HY) ^ (c[j + 2] * _HZ)
     h = (h ^ (h >> 13)) & 0x7FFF
     h *= _HMIX  # < 2**15 * 2**15: still a small int
     return h ^ (h >> 15)
@@ -198,6 +195,10 @@ class SampleBuffer:
         self.gaps_x100 = N_REGIONS * _GAP_EMPTY
         self.last_cells = 0
         self.last_probes = 0
+        # offer()'s scratch: the candidate x, y, z, its cell, the cell being probed; and the
+        # squared gaps to the neighbour cells on each side of each axis (low x, high x, ...)
+        self._q = array("i", (0, 0, 0, 0, 0, 0, 0, 0, 0))
+        self._gap = array("i", (0, 0, 0, 0, 0, 0))
         self._check_separation(separation)
         self.separation = separation
         self._s2 = separation * separation
@@ -236,131 +237,155 @@ class SampleBuffer:
         k += self.next_slot
         return k - self.capacity if k >= self.capacity else k
 
-    @micropython.native  # a frame over 11 words would come from the heap per call
     def offer(self, x, y, z):
-        """Offer one raw sample (int16 counts); returns REJECTED, KEPT or REPLACED."""
+        """Offer one raw sample (int16 counts); returns REJECTED, KEPT or REPLACED.
+
+        As named steps, each small enough that its frame stays on the C stack (11 words,
+        MicroPython's py/objfun.c): nothing is allocated for a rejected sample."""
         if not (-32768 <= x <= 32767 and -32768 <= y <= 32767 and -32768 <= z <= 32767):
             raise ValueError("sample (%d, %d, %d) is not int16" % (x, y, z))
         self.last_cells = 0
         self.last_probes = 0
-        s = self.separation
-        data = self.data
+        q = self._q
+        q[0] = x
+        q[1] = y
+        q[2] = z
         # The newest sample is the usual reason to reject at 50 Hz: test it before hashing.
-        j = 3 * self._last
-        if j >= 0:
-            d = data[j] - x
-            if -s < d < s:
-                e = data[j + 1] - y
-                if -s < e < s:
-                    f = data[j + 2] - z
-                    if -s < f < s and d * d + e * e + f * f < self._s2:
-                        return REJECTED
-        cx = x // s
-        cy = y // s
-        cz = z // s
-        if self._probe(cx, cy, cz, x, y, z) != _FAR:
+        if self._last >= 0 and self._near(3 * self._last):
+            return REJECTED
+        if self._own_cell() != _FAR:
             return REJECTED  # own cell taken (or a close sample met on its chain)
-        # Neighbour cells, skipping those whose nearest integer point is already >= s away:
-        # per axis the gap to cell c-1 is (offset in cell + 1), to cell c+1 it is (s - offset).
-        s2 = self._s2
-        u = x - cx * s + 1
-        lx = u * u
-        u = s + 1 - u
-        hx = u * u
-        u = y - cy * s + 1
-        ly = u * u
-        u = s + 1 - u
-        hy = u * u
-        u = z - cz * s + 1
-        lz = u * u
-        u = s + 1 - u
-        hz = u * u
+        if self._neighbours():
+            return REJECTED
+        return self._keep()
+
+    def _near(self, j):
+        # True when the held sample data[j..j+2] is closer than s to the candidate
+        q = self._q
+        s = self.separation
+        a = self.data[j] - q[0]
+        if -s < a < s:
+            b = self.data[j + 1] - q[1]
+            if -s < b < s:
+                j = self.data[j + 2] - q[2]
+                return -s < j < s and a * a + b * b + j * j < self._s2
+        return False
+
+    def _own_cell(self):
+        q = self._q
+        s = self.separation
+        q[3] = q[6] = q[0] // s
+        q[4] = q[7] = q[1] // s
+        q[5] = q[8] = q[2] // s
+        return self._probe()
+
+    def _probe(self):
+        # Walk the chain of cell q[6..8] until its occupant or an empty entry. Any entry met
+        # that is within s of the candidate decides at once: such a sample forbids keeping.
+        t = self._table
+        i = _hash(self._q, 6) & self._mask
+        self.last_cells += 1
+        while True:
+            self.last_probes += 1
+            e = t[i]
+            if e == 0:
+                return _FAR
+            e = 3 * (e - 1)
+            if self._near(e):
+                return _NEAR
+            if self._in_probed_cell(e):
+                return _TAKEN
+            i = (i + 1) & self._mask
+
+    def _in_probed_cell(self, j):
+        c = self._cells
+        q = self._q
+        return c[j] == q[6] and c[j + 1] == q[7] and c[j + 2] == q[8]
+
+    def _neighbours(self):
+        # Neighbour cells, skipping those whose nearest integer point is already >= s away
+        # (at most 26 look-ups; 19.6 on average). True when a close sample is met.
+        self._gaps()
+        g = self._gap
         for a in range(-1, 2):
-            ga = lx if a < 0 else hx if a > 0 else 0
-            if ga >= s2:
-                continue
-            for b in range(-1, 2):
-                gb = ga + (ly if b < 0 else hy if b > 0 else 0)
-                if gb >= s2:
-                    continue
-                for c in range(-1, 2):
-                    gc = gb + (lz if c < 0 else hz if c > 0 else 0)
-                    if (gc >= s2) or not (a or b or c):
-                        continue
-                    if self._probe(cx + a, cy + b, cz + c, x, y, z) == _NEAR:
-                        return REJECTED
+            ga = g[0] if a < 0 else g[1] if a > 0 else 0
+            if ga < self._s2:
+                self._q[6] = self._q[3] + a
+                if self._plane(ga):
+                    return True
+        return False
+
+    def _gaps(self):
+        # per axis the gap to cell c-1 is (offset in cell + 1), to cell c+1 it is (s - offset)
+        q = self._q
+        g = self._gap
+        s = self.separation
+        for k in range(3):
+            u = q[k] - q[3 + k] * s + 1
+            g[2 * k] = u * u
+            u = s + 1 - u
+            g[2 * k + 1] = u * u
+
+    def _plane(self, ga):
+        g = self._gap
+        for b in range(-1, 2):
+            gb = ga + (g[2] if b < 0 else g[3] if b > 0 else 0)
+            if gb < self._s2:
+                self._q[7] = self._q[4] + b
+                if self._row(gb):
+                    return True
+        return False
+
+    def _row(self, gb):
+        g = self._gap
+        for c in range(-1, 2):
+            gc = gb + (g[4] if c < 0 else g[5] if c > 0 else 0)
+            # every gap is >= 1, so gc == 0 is the candidate's own cell, probed already
+            if gc < self._s2 and gc != 0:
+                self._q[8] = self._q[5] + c
+                if self._probe() == _NEAR:
+                    return True
+        return False
+
+    def _keep(self):
         slot = self.next_slot
         if self.count < self.capacity:
             self.count += 1
             result = KEPT
         else:
-            self._unlink(slot)
-            j = 3 * slot
-            ev = self.evicted
-            ev[0] = data[j]
-            ev[1] = data[j + 1]
-            ev[2] = data[j + 2]
+            self._evict(slot)
             result = REPLACED
-        self._store(slot, x, y, z, cx, cy, cz)
+        self._store(slot)
         self.next_slot = slot + 1 if slot + 1 < self.capacity else 0
         self._last = slot
         return result
 
-    @micropython.native
-    def _probe(self, cx, cy, cz, x, y, z):
-        # Walk the chain of cell (cx, cy, cz) until its occupant or an empty entry. Any entry
-        # met that is within s of (x, y, z) decides at once: such a sample forbids keeping.
-        table = self._table
-        cells = self._cells
-        data = self.data
-        s = self.separation
-        mask = self._mask
-        i = _hash(cx, cy, cz) & mask
-        n = 0
-        result = _FAR
-        while True:
-            n += 1
-            e = table[i]
-            if e == 0:
-                break
-            j = 3 * (e - 1)
-            d = data[j] - x
-            if -s < d < s:
-                f = data[j + 1] - y
-                if -s < f < s:
-                    g = data[j + 2] - z
-                    if -s < g < s and d * d + f * f + g * g < self._s2:
-                        result = _NEAR
-                        break
-            if cells[j] == cx and cells[j + 1] == cy and cells[j + 2] == cz:
-                result = _TAKEN
-                break
-            i = (i + 1) & mask
-        self.last_cells += 1
-        self.last_probes += n
-        return result
-
-    def _store(self, slot, x, y, z, cx, cy, cz):
+    def _evict(self, slot):
+        self._unlink(slot)
         j = 3 * slot
+        ev = self.evicted
         data = self.data
-        data[j] = x
-        data[j + 1] = y
-        data[j + 2] = z
+        ev[0] = data[j]
+        ev[1] = data[j + 1]
+        ev[2] = data[j + 2]
+
+    def _store(self, slot):
+        # the candidate q[0..2] and its cell q[3..5] into `slot`, and the slot into the hash
+        j = 3 * slot
+        q = self._q
+        data = self.data
         cells = self._cells
-        cells[j] = cx
-        cells[j + 1] = cy
-        cells[j + 2] = cz
+        for k in range(3):
+            data[j + k] = q[k]
+            cells[j + k] = q[3 + k]
         table = self._table
-        mask = self._mask
-        i = _hash(cx, cy, cz) & mask
+        i = _hash(q, 3) & self._mask
         while table[i]:
-            i = (i + 1) & mask
+            i = (i + 1) & self._mask
         table[i] = slot + 1
 
     def _home(self, e):
-        j = 3 * (e - 1)
-        c = self._cells
-        return _hash(c[j], c[j + 1], c[j + 2]) & self._mask
+        return _hash(self._cells, 3 * (e - 1)) & self._mask
 
     def _unlink(self, slot):
         # Linear-probing deletion by backward shift (Knuth 6.4 Algorithm R): no tombstones,

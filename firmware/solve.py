@@ -62,11 +62,7 @@ for the thresholds.
 from firmware.accum import EXPONENTS, INDEX_TABLE, NUM_MOMENTS, index, shifted_steps
 from firmware.fixedpoint import bit_length, isqrt, rdiv
 
-try:
-    from micropython import const
-except ImportError:  # CPython
-    def const(x):
-        return x
+from firmware.compat import const
 
 _Q15_ROW_MAX = const(32767)     # largest row absolute sum of InvW (see module doc)
 SQRT_FRAC_BITS = const(40)      # W^-1 iteration in Q40: 2**-40 << one Q15 step
@@ -152,21 +148,6 @@ def bareiss_step(a, k, prev, m):
     return p
 
 
-def back_substitute(a, col, stop=0):
-    """Solve the eliminated system for right-hand side column `col`: returns x_i * det for
-    i >= stop (integers by Cramer's rule; each division is exact), zeros below `stop`."""
-    n = len(a)
-    det = a[n - 1][n - 1]
-    x = [0] * n
-    for i in range(n - 1, stop - 1, -1):
-        ai = a[i]
-        acc = det * ai[col]
-        for j in range(i + 1, n):
-            acc -= ai[j] * x[j]
-        x[i] = acc // ai[i]
-    return x
-
-
 def det3(m):
     return (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
             - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
@@ -187,12 +168,6 @@ def mat_vec3(m, v):
     return [m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2],
             m[1][0] * v[0] + m[1][1] * v[1] + m[1][2] * v[2],
             m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2]]
-
-
-def round_sqrt(num, den):
-    """sqrt(num / den) rounded to the nearest int (num >= 0, den > 0)."""
-    m = isqrt(4 * num // den)  # floor(2 sqrt(x)): nested floors of monotone roots are exact
-    return (m + 1) >> 1
 
 
 # ---- fits ---------------------------------------------------------------------------------
@@ -272,11 +247,6 @@ def icbrt_steps(n, out):
             out[0] = x
             return
         x = y
-
-
-def _run(gen):
-    for _ in gen:
-        pass
 
 
 def _normal_steps(s, model, m, r, yy):
@@ -487,14 +457,6 @@ def fit_steps(c, s, model, out, check=None):
     yield
 
 
-def fit(c, s, model, check=None):
-    """fit_steps run to completion; returns the Fit."""
-    out = Fit(model)
-    for _ in fit_steps(c, s, model, out, check):
-        pass
-    return out
-
-
 class SolveError(Exception):
     """A fit could not be computed: .reason ('planar' or 'singular'), .detail."""
 
@@ -523,13 +485,6 @@ def _inv_q_steps(m, one, out):
         ai = adj[i]
         inv[i] = [rdiv(ai[0] * k, dt), rdiv(ai[1] * k, dt), rdiv(ai[2] * k, dt)]
     out[0] = inv
-
-
-def _inv_q(m, one):
-    # inverse of a symmetric fixed-point 3x3 (scale `one`), rounded; None if singular
-    out = [None]
-    _run(_inv_q_steps(m, one, out))
-    return out[0]
 
 
 def sqrtm_steps(a, one, out):
@@ -572,13 +527,6 @@ def sqrtm_steps(a, one, out):
         yield
 
 
-def sqrtm_sym3(a, one):
-    """sqrtm_steps run to completion: (root or None, iterations)."""
-    out = [None, 0]
-    _run(sqrtm_steps(a, one, out))
-    return out[0], out[1]
-
-
 def invw_steps(a2, det_a2, out):
     """Generator: W^-1 = (A2 / det(A2)^(1/3))^(1/2) in Q40 (det W^-1 = 1) into out[0]
     (None if the iteration did not converge), at most SLICE_OPS operations per step."""
@@ -595,13 +543,6 @@ def invw_steps(a2, det_a2, out):
     yield from sqrtm_steps(an, one, out)
 
 
-def invw_from_a2(a2, det_a2):
-    """invw_steps run to completion: W^-1 in Q40, or None."""
-    out = [None, 0]
-    _run(invw_steps(a2, det_a2, out))
-    return out[0]
-
-
 def q15_steps(w, frac_bits, out):
     """Generator: out[0] = q15_from_invw(w, frac_bits), two steps."""
     rowmax = 0
@@ -616,14 +557,6 @@ def q15_steps(w, frac_bits, out):
             v = w[i][j] * _Q15_ROW_MAX
             q.append(v // rowmax if v >= 0 else -((-v) // rowmax))
     out[0] = tuple(q)
-
-
-def q15_from_invw(w, frac_bits):
-    """InvW in Q15, row-major 9-tuple: W^-1 (fixed point, `frac_bits`) scaled so the largest
-    row absolute sum is 32767, each entry rounded toward zero so no row sum can exceed it."""
-    out = [None]
-    _run(q15_steps(w, frac_bits, out))
-    return out[0]
 
 
 def mul_steps(a, b, out):
@@ -667,13 +600,6 @@ def field_q16_steps(k2_num, k2_den, det_a2, out):
     out[0] = r[0]
 
 
-def field_q16(k2_num, k2_den, det_a2):
-    """B in Q16 counts: B^6 = K2^3 / det(A2), floor of the exact sixth root."""
-    out = [0]
-    _run(field_q16_steps(k2_num, k2_den, det_a2, out))
-    return out[0]
-
-
 def field_out_steps(invw_q15, b_q16, out):
     """Generator: out[0] = field_out_counts(invw_q15, b_q16)."""
     dq = det3([invw_q15[0:3], invw_q15[3:6], invw_q15[6:9]])
@@ -686,13 +612,6 @@ def field_out_steps(invw_q15, b_q16, out):
     r = [0]
     yield from icbrt_steps(x, r)
     out[0] = (r[0] + (1 << (15 + B_FRAC_BITS))) >> (16 + B_FRAC_BITS)
-
-
-def field_out_counts(invw_q15, b_q16):
-    """|InvW (Bp - V)| >> 15 on the fitted ellipsoid: B det(InvW / 2**15)^(1/3), rounded."""
-    out = [0]
-    _run(field_out_steps(invw_q15, b_q16, out))
-    return out[0]
 
 
 def round_sqrt_steps(num, den, out):
@@ -720,14 +639,6 @@ def fit_error_steps(fitr, out):
     yield from round_sqrt_steps(num, den, out)
 
 
-def fit_error_x100(fitr):
-    """Fit error in hundredths of a percent: 10000 D sqrt(P / N) / K2 (see module doc)."""
-    # fe^2 = 1e8 D (P D) K2d^2 / (N K2n^2)
-    out = [0]
-    _run(fit_error_steps(fitr, out))
-    return out[0]
-
-
 def _sum_sq_steps(s, w, out):
     # sum_sq_quadric into out[0], one row of the 10 x 10 double sum per step (<= 30 ops)
     acc = 0
@@ -742,14 +653,6 @@ def _sum_sq_steps(s, w, out):
             eb = EXPONENTS[b]
             acc += w[a] * w[b] * s[index(ea[0] + eb[0], ea[1] + eb[1], ea[2] + eb[2])]
     out[0] = acc
-
-
-def sum_sq_quadric(s, w):
-    """Sum over the samples of q(d)^2 for q(d) = sum_k w[k] * monomial_k(d) over the 10
-    monomials of degree <= 2 in accum.EXPONENTS order (1, x, y, z, xx, xy, xz, yy, yz, zz)."""
-    out = [0]
-    _run(_sum_sq_steps(s, w, out))
-    return out[0]
 
 
 def minmax_steps(lo, hi, c, s, out):
@@ -795,17 +698,48 @@ def minmax_steps(lo, hi, c, s, out):
     out[0] = (v2, h2, b_q16, fe, wq, one)
 
 
-def minmax_fit(lo, hi, c, s):
-    """Min/max calibration (seed 002) of the samples whose per-axis extremes are lo, hi and
-    whose moment sums about `c` are `s`.
+POWER_ITER = const(24)  # power-iteration steps of cond_steps (see its docstring)
 
-    V = (max + min) / 2 per axis; half-ranges h; W^-1 = diag(g / h) with g the geometric
-    mean of h (det W^-1 = 1, like the other models; seed 002 uses the arithmetic mean, which
-    differs only by a common factor: headings are identical). B = g. The fit error uses the
-    same definition as the fits: P' / B^4 = sum (sum_i ((d_i - v_i) / h_i)^2 - 1)^2.
-    Returns (v_num (3, over 2), h2 (3: max - min), b_q16, fit_error_x100, w_q40) or raises
-    SolveError if an axis has no range.
-    """
-    out = [None]
-    _run(minmax_steps(lo, hi, c, s, out))
-    return out[0]
+
+def cond_steps(q, out):
+    """Generator: out[0] = the eigenvalue ratio of InvW (9 Q15 ints, symmetric positive
+    definite), in hundredths; None if it is not positive definite. Power iteration on InvW
+    and on its adjugate (whose largest eigenvalue is det / the smallest of InvW); each
+    Rayleigh quotient is a lower bound whose error shrinks as (l2 / l1)**(2 * POWER_ITER)
+    of the eigenvalue gap. One power step (~25 operations, long ints on a 32-bit board)
+    per next()."""
+    out[0] = None
+    m = [[q[0], q[1], q[2]], [q[3], q[4], q[5]], [q[6], q[7], q[8]]]
+    dt = det3(m)
+    if dt <= 0 or m[0][0] <= 0 or m[0][0] * m[1][1] - m[0][1] * m[1][0] <= 0:
+        return
+    r = [0]
+    yield from power_steps(m, r)
+    big = r[0]
+    yield
+    adj = adj3(m)
+    yield from power_steps(adj, r)
+    big_adj = r[0]
+    if big <= 0 or big_adj <= 0:
+        return
+    # cond = big / (dt / big_adj); Rayleigh quotients in Q16
+    out[0] = big * big_adj * 100 // (dt << 32)
+
+
+def power_steps(m, out):
+    # out[0] = Rayleigh quotient (Q16) after POWER_ITER power steps; vectors rescaled by
+    # shifts; one power step per next()
+    out[0] = 0
+    v = [1 << 14, 1 << 13, 1 << 12]
+    for _ in range(POWER_ITER):
+        yield
+        u = mat_vec3(m, v)
+        a = max(abs(u[0]), abs(u[1]), abs(u[2]))
+        if a == 0:
+            return
+        sh = bit_length(a) - 15
+        v = [u[0] >> sh, u[1] >> sh, u[2] >> sh] if sh > 0 else u
+    yield
+    u = mat_vec3(m, v)
+    out[0] = ((u[0] * v[0] + u[1] * v[1] + u[2] * v[2]) << 16) // (
+        v[0] * v[0] + v[1] * v[1] + v[2] * v[2])

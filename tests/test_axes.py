@@ -13,7 +13,7 @@ from hypothesis import given, strategies as st
 
 from boards.breakouts import BREAKOUTS, GY87, GY271, GY273, breakout
 from firmware.axes import AxisMap
-from firmware.heading import Compass, heading
+from firmware.compass import Compass, heading
 
 int16 = st.integers(min_value=-32768, max_value=32767)
 vec16 = st.lists(int16, min_size=3, max_size=3)

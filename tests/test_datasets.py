@@ -4,8 +4,8 @@ fit of the same model does, and the planar log is refused.
 Sphericity = std(|corrected|) / mean(|corrected|) over every row of the file (the QMC5883L
 logs without their first 3000 still samples). Ours: the Calibrator fed with every row, as the
 offline tool does (desktop capacity, separation from the data's range), then Q15 correct().
-Reference: the same model fitted in float64 to every evaluated row (test_solve.numpy_fit;
-min/max over the rows), applied in float64.
+Reference: the same model fitted in float64 to every evaluated row
+(host_sim/cli/benchmarks/reference.py numpy_fit; min/max over the rows), applied in float64.
 """
 import os
 
@@ -13,63 +13,14 @@ import numpy as np
 import pytest
 
 from firmware.errors import CalibrationRejected
-from firmware.magcal import Calibrator
-from host_sim.cli.calibrate import DESKTOP_CAPACITY, choose_scale, scaled_rows
-from tests.test_solve import numpy_fit
+from firmware.calibrator import Calibrator
+from host_sim.cli.benchmarks.reference import (DATASETS, HAVE, LOGS, PLANAR, STILL_ROWS,
+                                               load, ours, reference)
+from host_sim.cli.calibrate import DESKTOP_CAPACITY
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-DATASETS = os.path.normpath(os.path.join(ROOT, "..", "shared", "datasets"))
-HAVE = os.path.isdir(DATASETS)
-LOGS = sorted(f[:-4] for f in os.listdir(DATASETS) if f.endswith(".csv")) if HAVE else []
-PLANAR = "hmc5883l_nliaudat_windvane_planar"
-STILL_ROWS = {"qmc5883l_tomisuarez_filtered": 3000, "qmc5883l_tomisuarez_noisy": 3000}
 MODELS = ("minmax", 4, 7, 10)
 TOLERANCE = 1.10   # ours may be at most 10 % less spherical than the reference
 pytestmark = pytest.mark.skipif(not HAVE, reason="no datasets directory at %s" % DATASETS)
-
-_cache = {}
-
-
-def sphericity(m):
-    r = np.sqrt((m.astype(float) ** 2).sum(axis=1))
-    return r.std() / r.mean()
-
-
-def load(name):
-    """(calibrator filled with every row, int rows, evaluated float rows, scale power)."""
-    if name not in _cache:
-        path = os.path.join(DATASETS, name + ".csv")
-        p, _ = choose_scale(path)
-        rows = np.array(list(scaled_rows(path, p)), dtype=np.int64)
-        cal = Calibrator(model=10, capacity=DESKTOP_CAPACITY, max_fit_error=10000)
-        for x, y, z in rows.tolist():
-            cal.add(x, y, z)
-        data = np.genfromtxt(path, delimiter=",", names=True)
-        floats = np.c_[data["mx"], data["my"], data["mz"]]
-        skip = STILL_ROWS.get(name, 0)
-        _cache[name] = (cal, rows[skip:], floats[skip:], p)
-    return _cache[name]
-
-
-def ours(name, model):
-    cal, rows, _, _ = load(name)
-    c = cal.solve(model=model, accept=False)
-    out = np.zeros_like(rows)
-    buf = [0, 0, 0]
-    for i, r in enumerate(rows.tolist()):
-        c.correct(r, buf)
-        out[i] = buf
-    return sphericity(out), c
-
-
-def reference(name, model):
-    _, _, f, _ = load(name)
-    if model == "minmax":
-        lo, hi = f.min(axis=0), f.max(axis=0)
-        h = (hi - lo) / 2
-        return sphericity((f - (hi + lo) / 2) * (h.mean() / h))    # seed 002
-    v, invw, _ = numpy_fit(f, model)
-    return sphericity((f - v) @ invw.T)
 
 
 @pytest.mark.parametrize("model", MODELS)

@@ -1,5 +1,5 @@
 """`python -m host_sim demo` / `run` (make run): the world it builds, the heading-accuracy
-machinery, the goal of issue 5 (calibrated heading within 0.5 deg on the tilted grid, for
+machinery (calibrated heading within 0.5 deg on the tilted grid, for
 each chip), MicroPython parity of the calibration, the human-readable run and the plot."""
 import contextlib
 import io
@@ -14,7 +14,7 @@ from hypothesis import given, strategies as st
 from host_sim.cli import demo
 from tests import mp
 
-GOAL_DEG = 0.5  # issue 5: calibrated max error on the tilted grid, every chip
+GOAL_DEG = 0.5  # calibrated max error on the tilted grid, every chip
 # Seeds 1-12 measured 0.14-0.35 deg (HMC5883L boards) and 0.16-0.29 deg (QMC5883L). The
 # HMC5883L's floor is the calibration's integer-count offset V: at the gain strong hard iron
 # forces (820 counts/G) half a count is 0.06 uT, up to 0.2 deg of a 25 uT horizontal field.
@@ -111,7 +111,7 @@ def test_wrap180_is_in_range_and_congruent(d):
 # --- the heading machinery, independent of any fit --------------------------------------
 def perfect_calibration(setup):
     """The world's own V and W^-1 as a Calibration (rounded to the format's integers)."""
-    from firmware.magcal import Calibration
+    from firmware.calibration import Calibration
     v, b_eff, wi = setup.true_effective()
     k = 32700 / max(sum(abs(x) for x in row) for row in wi)  # rounding stays <= 32767
     q = [int(np.rint(wi[i][j] * k)) for i in range(3) for j in range(3)]
@@ -124,8 +124,8 @@ def test_grid_heading_with_the_true_iron_and_no_noise_matches_the_true_heading()
     # Checks frames, axis maps, declination and the true heading without the calibrator:
     # on a noise-free QMC5883L (1 count = 0.0083 uT at +-2 G) the only errors left are
     # integer rounding, far below 0.05 deg.
-    from firmware.heading import cdeg_to_kang
-    from firmware.magcal import UNCALIBRATED
+    from firmware.trig import cdeg_to_kang
+    from firmware.calibration import UNCALIBRATED
     s = demo.Setup("qmc5883l", 1, 30, noise=False)
     rows = demo.measure_grid(s, [perfect_calibration(s), UNCALIBRATED],
                              cdeg_to_kang(demo.DECLINATION_CDEG), n=2)
@@ -137,11 +137,11 @@ def test_grid_heading_with_the_true_iron_and_no_noise_matches_the_true_heading()
     assert demo.error_stats(rows, 1)["max"] > 30
 
 
-# --- the demo: issue 5's goal, on CPython -----------------------------------------------
+# --- the demo: the accuracy goal, on CPython -----------------------------------------------
 @pytest.mark.parametrize("seed", (1, 2, 3))
 @pytest.mark.parametrize("chip", demo.CHIP_CHOICES)
 def test_calibrated_heading_meets_the_goal_and_beats_minmax_and_none(chip, seed):
-    # issue 5's goal on the demo's world (seed 1) and two more seeds, for every chip
+    # the accuracy goal on the demo's world (seed 1) and two more seeds, for every chip
     bound = GOAL_DEG
     r = demo_json(chip, seed)
     e = r["heading_error_deg"]

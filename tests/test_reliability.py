@@ -1,4 +1,4 @@
-"""Reliability of CompassApp through the simulator (issue 5): in each scenario the app keeps
+"""Reliability of CompassApp through the simulator: in each scenario the app keeps
 running, says why (status, errors, last_reason, load_reason, save_errors), and keeps the last
 good calibration and heading.
 
@@ -13,9 +13,9 @@ import sys
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from firmware.calstore import CalStore, encode_record
+from firmware.store import CalStore, encode_record
 from firmware.errors import BusError, DataReadyTimeout, SensorOverflow
-from firmware.magcal import Calibration
+from firmware.calibration import Calibration
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "scenarios"))
 import app_world as W  # noqa: E402
@@ -50,7 +50,9 @@ class Good:
         return fs, CalStore("/", fs=fs)
 
     def app(self, m=None, cal=None, seed=7, world=None, **kw):
-        """A board with the good calibration stored, and the app started on it."""
+        """A board with the good calibration stored, and the app started on it, collecting
+        (learn=True: these scenarios check what reaches the calibrator)."""
+        kw.setdefault("learn", True)
         b = W.make_sim(self.setup, m=m if m is not None else motion.still(*POSE), seed=seed,
                        world=world)
         fs, st = self.store(cal)
@@ -278,7 +280,7 @@ def test_a_magnet_near_the_board_raises_interference_and_is_not_fed(good):
 
     W.run_until(app, b, 14, each)
     # A 67 uT magnet: where it opposes Earth's field |b| can land inside the +-10 % window
-    # (one sample cannot tell, seed 004), so most, not all, samples are flagged
+    # (one sample cannot tell, the heading guide), so most, not all, samples are flagged
     assert len(plateau) > 40 and plateau.count("interference") >= 0.8 * len(plateau)
     assert seen[-1] > seen[0]  # it was fed before and after
     assert not app.relearning

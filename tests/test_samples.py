@@ -57,7 +57,7 @@ def rebuilt_table(buf):
     for k in range(buf.count):
         slot = buf.slot_by_age(k)
         c = buf._cells[3 * slot:3 * slot + 3]
-        i = samples._hash(c[0], c[1], c[2]) & (size - 1)
+        i = samples._hash(c, 0) & (size - 1)
         while t[i]:
             i = (i + 1) & (size - 1)
         t[i] = slot + 1

@@ -14,9 +14,10 @@ import sys
 import pytest
 from hypothesis import given, strategies as st
 
-from firmware import accum, fixedpoint, magcal, samples, solve
+from tests import solve_ref
+from firmware import accum, calibrator, fixedpoint, samples, solve
 from firmware.errors import CalibrationRejected
-from firmware.magcal import Calibrator
+from firmware.calibrator import Calibrator
 from host_sim.cli.benchmarks import intcount
 
 MODELS = ("minmax", 4, 7, 10)
@@ -122,26 +123,26 @@ def test_sliced_solve_refuses_and_accepts_like_the_solve_in_one_go(case):
 @given(st.lists(st.tuples(*[st.integers(-32768, 32767)] * 3), min_size=1, max_size=30),
        st.tuples(*[st.integers(-40000, 40000)] * 3), st.tuples(*[st.integers(-40000, 40000)] * 3))
 def test_shifted_steps_equals_shifted_and_the_batch_sums(pts, c, new_c):
-    s = accum.batch(pts, c)
+    s = solve_ref.batch(pts, c)
     out = [0] * accum.NUM_MOMENTS
     for _ in accum.shifted_steps(c, s, new_c, out):
         pass
-    assert out == accum.shifted(c, s, new_c) == accum.batch(pts, new_c)
+    assert out == accum.shifted(c, s, new_c) == solve_ref.batch(pts, new_c)
 
 
 @given(st.integers(0, 1 << 3000))
 def test_isqrt_and_icbrt_steps_equal_fixedpoint(n):
     r = [None]
-    solve._run(solve.isqrt_steps(n, r))
+    solve_ref._run(solve.isqrt_steps(n, r))
     assert r[0] == fixedpoint.isqrt(n)
-    solve._run(solve.icbrt_steps(n, r))
+    solve_ref._run(solve.icbrt_steps(n, r))
     assert r[0] == fixedpoint.icbrt(n)
 
 
 @given(st.integers(-(1 << 3000), 1 << 3000), st.integers(-(1 << 3000), 1 << 3000))
 def test_mul_steps_is_the_exact_product(a, b):
     r = [None]
-    solve._run(solve.mul_steps(a, b, r))
+    solve_ref._run(solve.mul_steps(a, b, r))
     assert r[0] == a * b
 
 
@@ -150,7 +151,7 @@ def test_sliced_fit_equals_one_bareiss_elimination_of_the_normal_equations(model
     pts = ellipsoid_points(400, seed=11)
     cal = filled(pts)
     c, s = cal.moments.snapshot()
-    f = solve.fit(c, s, model)
+    f = solve_ref.fit(c, s, model)
     # the unsliced reference: shifted, normal_equations, bareiss_step, back_substitute
     n = s[0]
     cm = (c[0] + fixedpoint.rdiv(s[1], n), c[1] + fixedpoint.rdiv(s[2], n),
@@ -161,7 +162,7 @@ def test_sliced_fit_equals_one_bareiss_elimination_of_the_normal_equations(model
     prev = 1
     for k in range(nc - 1):
         prev = solve.bareiss_step(a, k, prev, nc + 1)
-    beta = solve.back_substitute(a, nc)
+    beta = solve_ref.back_substitute(a, nc)
     d = a[nc - 1][nc - 1]
     assert f.c == cm and f.D == d and f.beta_num == beta
     assert f.p_num == yy * d - sum(beta[i] * r[i] for i in range(nc))
@@ -212,7 +213,7 @@ def test_no_slice_does_more_than_slice_ops_long_int_operations(model):
         assert sum(per) > 2 * solve.SLICE_OPS  # the count sees the solve's long ints
 
 
-@pytest.mark.parametrize("group", [3, magcal.DEFAULT_SLICE_GROUP])
+@pytest.mark.parametrize("group", [3, calibrator.DEFAULT_SLICE_GROUP])
 def test_a_group_of_slices_per_next_does_at_most_group_times_the_work_and_the_same_fit(group):
     pts = ellipsoid_points(3000, seed=7)
     fine = _long_ops_per_slice(filled(pts), 10)

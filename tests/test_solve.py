@@ -2,9 +2,12 @@
 from fractions import Fraction as Fr
 
 import numpy as np
+
+from host_sim.cli.benchmarks.reference import numpy_fit
 import pytest
 from hypothesis import given, strategies as st
 
+from tests import solve_ref
 from firmware import accum, solve
 
 # AN4246 Rev 4, worked example 1 (section 6), in 0.1 uT counts
@@ -79,7 +82,7 @@ def test_an4246_worked_example_exactly():
     v_ref = [b / 2 for b in beta[:3]]                              # eq. 37
     b2_ref = beta[3] + sum(v * v for v in v_ref)                   # eq. 37: B^2
     m = moments(AN4246_SAMPLES)
-    f = solve.fit(m.c, m.s, 4)
+    f = solve_ref.fit(m.c, m.s, 4)
     assert [Fr(v, f.v_den) for v in f.v_num] == v_ref
     assert Fr(f.k2_num, f.k2_den) / (2 * f.D) == b2_ref
     # the printed values (uT, one decimal): beta (eq. 41), V (eq. 42)
@@ -87,7 +90,7 @@ def test_an4246_worked_example_exactly():
     assert abs(float(beta[3]) / 100 - -81303.5) < 0.5   # exact: -81303.23; the paper rounds
     assert [round(float(v) / 10, 1) for v in v_ref] == [155.7, -239.1, 45.8]
     # B = 47.2 uT from the exact V; the paper's 47.0 comes from squaring the rounded V
-    b_q16 = solve.field_q16(f.k2_num, f.k2_den, f.det_a2)
+    b_q16 = solve_ref.field_q16(f.k2_num, f.k2_den, f.det_a2)
     assert round(b_q16 / 65536 / 10, 1) == 47.2
     assert (Fr(b_q16, 65536)) ** 2 <= b2_ref < (Fr(b_q16 + 1, 65536)) ** 2
     paper = -81303.5 + 155.7 ** 2 + 239.1 ** 2 + 45.8 ** 2
@@ -102,10 +105,10 @@ def test_an4246_worked_example_fit_error_is_the_app_notes_epsilon():
     b2 = beta[3] + sum((b / 2) ** 2 for b in beta[:3])
     eps = (float(p) / 6) ** 0.5 / (2 * float(b2))      # AN4246: eps = sqrt(P/M) / (2 B^2)
     m = moments(AN4246_SAMPLES)
-    f = solve.fit(m.c, m.s, 4)
+    f = solve_ref.fit(m.c, m.s, 4)
     assert Fr(f.p_num, f.D) == p
-    assert solve.fit_error_x100(f) == round(eps * 10000)   # percent, in hundredths
-    assert solve.fit_error_x100(f) == 30                    # 0.30 %
+    assert solve_ref.fit_error_x100(f) == round(eps * 10000)   # percent, in hundredths
+    assert solve_ref.fit_error_x100(f) == 30                    # 0.30 %
 
 
 # ---- exact linear algebra ----------------------------------------------------------------
@@ -135,7 +138,7 @@ def test_bareiss_gives_the_exact_rational_solution_times_the_determinant(sys_):
             prev = solve.bareiss_step(aug, k, prev, n + 1)
     det = aug[n - 1][n - 1]
     assert det == frac_det(a)
-    x = solve.back_substitute(aug, n)
+    x = solve_ref.back_substitute(aug, n)
     assert [Fr(v, det) for v in x] == frac_solve(a, b)
 
 
@@ -186,7 +189,7 @@ def test_fit_is_the_exact_least_squares_solution(model):
     pts = sphere_points(60, 1, (900, -400, 250), 700, w=[[1.1, 0.1, 0], [0.1, 0.9, 0.05],
                                                          [0, 0.05, 1.0]], noise=4)
     m = moments(pts)
-    f = solve.fit(m.c, m.s, model)
+    f = solve_ref.fit(m.c, m.s, model)
     rows, ys = design([(x - f.c[0], y - f.c[1], z - f.c[2]) for x, y, z in pts], model)
     assert [Fr(b, f.D) for b in f.beta_num] == frac_solve(*normal(rows, ys))
     assert Fr(f.p_num, f.D) == exact_residual(pts, model, f)
@@ -198,9 +201,9 @@ def test_fit_does_not_depend_on_the_reference_centre(model):
     a = moments(pts)
     b = accum.Moments()
     b.rebuild(pts, centre=(12345, -23456, 111))
-    fa = solve.fit(a.c, a.s, model)
-    fb = solve.fit(b.c, accum.shifted(a.c, a.s, b.c), model)   # no re-centring differences
-    fc = solve.fit(b.c, b.s, model)
+    fa = solve_ref.fit(a.c, a.s, model)
+    fb = solve_ref.fit(b.c, accum.shifted(a.c, a.s, b.c), model)   # no re-centring differences
+    fc = solve_ref.fit(b.c, b.s, model)
     for g in (fb, fc):
         assert [Fr(v, g.v_den) for v in g.v_num] == [Fr(v, fa.v_den) for v in fa.v_num]
         assert Fr(g.k2_num, g.k2_den * g.D) == Fr(fa.k2_num, fa.k2_den * fa.D)
@@ -211,7 +214,7 @@ def test_nested_models_have_non_increasing_residuals():
     pts = sphere_points(80, 3, (100, 200, 300), 900, w=[[1.2, 0.1, 0.05], [0.1, 0.8, 0],
                                                         [0.05, 0, 1.0]], noise=5)
     m = moments(pts)
-    p = [Fr(f.p_num, f.D) for f in (solve.fit(m.c, m.s, k) for k in (4, 7, 10))]
+    p = [Fr(f.p_num, f.D) for f in (solve_ref.fit(m.c, m.s, k) for k in (4, 7, 10))]
     assert p[0] >= p[1] >= p[2] > 0
 
 
@@ -222,8 +225,8 @@ def test_ten_element_fit_commutes_with_an_axis_permutation():
     perm = [(z, x, y) for x, y, z in pts]
     a = moments(pts)
     b = moments(perm)
-    fa = solve.fit(a.c, a.s, 10)
-    fb = solve.fit(b.c, b.s, 10)
+    fa = solve_ref.fit(a.c, a.s, 10)
+    fb = solve_ref.fit(b.c, b.s, 10)
     va = [Fr(v, fa.v_den) for v in fa.v_num]
     vb = [Fr(v, fb.v_den) for v in fb.v_num]
     assert vb == [va[2], va[0], va[1]]
@@ -239,17 +242,17 @@ def test_samples_on_two_planes_leave_the_ten_element_fit_singular():
         pts.append((int(round(1000 * np.cos(a + 0.05))), 0, int(round(1000 * np.sin(a + 0.05)))))
     m = moments(pts)
     with pytest.raises(solve.SolveError) as e:
-        solve.fit(m.c, m.s, 10)
+        solve_ref.fit(m.c, m.s, 10)
     assert e.value.reason == "planar"
-    solve.fit(m.c, m.s, 4)   # the centre is still determined
+    solve_ref.fit(m.c, m.s, 4)   # the centre is still determined
 
 
 def test_degeneracy_ratio_matches_the_uniform_sphere_values():
     # rho = 1/3 (centre), 1/15 (dx dy), 1/5 (dx^2-dz^2) on a densely, evenly covered sphere
     pts = sphere_points(4000, 5, (0, 0, 0), 10000)
     m = moments(pts)
-    assert abs(solve.fit(m.c, m.s, 4).rho_min_ppm - 333333) < 20000
-    f10 = solve.fit(m.c, m.s, 10)
+    assert abs(solve_ref.fit(m.c, m.s, 4).rho_min_ppm - 333333) < 20000
+    f10 = solve_ref.fit(m.c, m.s, 10)
     assert abs(f10.rho_min_ppm - 66667) < 6000
     assert solve.column_name(10, f10.rho_col) in ("dxdy", "dxdz", "dydz")
 
@@ -262,7 +265,7 @@ def test_sqrtm_is_the_symmetric_root(vals, floor):
     a = g @ g.T + floor * np.eye(3)   # SPD, condition <= ~50
     one = 1 << 40
     aq = [[int(round(v * one)) for v in row] for row in (a + a.T) / 2]
-    root, it = solve.sqrtm_sym3(aq, one)
+    root, it = solve_ref.sqrtm_sym3(aq, one)
     assert root is not None and it < 20
     r = np.array(root, dtype=float) / one
     assert [[root[i][j] == root[j][i] for j in range(3)] for i in range(3)] == [[True] * 3] * 3
@@ -276,7 +279,7 @@ def test_q15_rows_never_exceed_32767_and_the_largest_is_full(vals):
     w = [vals[0:3], vals[3:6], vals[6:9]]
     if max(sum(abs(v) for v in row) for row in w) == 0:
         return
-    q = solve.q15_from_invw(w, 40)
+    q = solve_ref.q15_from_invw(w, 40)
     sums = [sum(abs(v) for v in q[3 * i:3 * i + 3]) for i in range(3)]
     assert max(sums) <= 32767
     assert max(sums) >= 32767 - 3   # truncation loses < 1 per entry
@@ -284,59 +287,22 @@ def test_q15_rows_never_exceed_32767_and_the_largest_is_full(vals):
 
 @given(st.integers(1, 10 ** 30), st.integers(1, 10 ** 20), st.integers(1, 10 ** 30))
 def test_field_is_the_floor_of_the_exact_sixth_root(kn, kd, det):
-    b = solve.field_q16(kn, kd, det)
+    b = solve_ref.field_q16(kn, kd, det)
     x = Fr(kn, kd) ** 3 / det * Fr(2) ** 96       # (B 2**16)^6
     assert b ** 6 <= x < (b + 1) ** 6
 
 
 # ---- recovery of known iron, against float64 numpy -------------------------------------------
 
-def numpy_fit(pts, model):
-    """Float64 reference of the same algebraic model on the same samples (lstsq on X,
-    not the normal equations), then V, W^-1 = (A / det^(1/3))^1/2 and B as in AN4246."""
-    p = np.array(pts, dtype=float)
-    c = p.mean(axis=0)
-    d = p - c
-    x, y, z = d.T
-    if model == 4:
-        X = np.c_[x, y, z, np.ones_like(x)]
-    elif model == 7:
-        X = np.c_[x * x - z * z, y * y - z * z, x, y, z, np.ones_like(x)]
-    else:
-        X = np.c_[x * x - z * z, y * y - z * z, x * y, x * z, y * z, x, y, z, np.ones_like(x)]
-    Y = x * x + y * y + z * z
-    b = np.linalg.lstsq(X, Y, rcond=None)[0]
-    if model == 4:
-        S = np.zeros((3, 3))
-        lin = b[0:3]
-        e = b[3]
-    elif model == 7:
-        S = np.diag([b[0], b[1], -b[0] - b[1]])
-        lin, e = b[2:5], b[5]
-    else:
-        S = np.array([[b[0], b[2] / 2, b[3] / 2], [b[2] / 2, b[1], b[4] / 2],
-                      [b[3] / 2, b[4] / 2, -b[0] - b[1]]])
-        lin, e = b[5:8], b[8]
-    A = np.eye(3) - S
-    d0 = np.linalg.solve(A, lin) / 2
-    K = d0 @ A @ d0 + e
-    det = np.linalg.det(A)
-    An = A / np.cbrt(det)
-    w, v = np.linalg.eigh(An)
-    invw = v @ np.diag(np.sqrt(w)) @ v.T
-    B = (K ** 3 / det) ** (1 / 6)
-    return c + d0, invw, B
-
-
 def our_fit(pts, model):
     m = moments(pts)
-    f = solve.fit(m.c, m.s, model)
+    f = solve_ref.fit(m.c, m.s, model)
     v = np.array([Fr(a, f.v_den) for a in f.v_num], dtype=float)
     if model == 4:
         invw = np.eye(3)
     else:
-        invw = np.array(solve.invw_from_a2(f.a2, f.det_a2), dtype=float) / (1 << 40)
-    b = solve.field_q16(f.k2_num, f.k2_den, f.det_a2) / 65536
+        invw = np.array(solve_ref.invw_from_a2(f.a2, f.det_a2), dtype=float) / (1 << 40)
+    b = solve_ref.field_q16(f.k2_num, f.k2_den, f.det_a2) / 65536
     return v, invw, b, f
 
 
@@ -388,7 +354,7 @@ def test_min_max_fit_error_uses_the_same_definition():
     m = moments(pts)
     p = np.array(pts)
     lo, hi = p.min(axis=0).tolist(), p.max(axis=0).tolist()
-    v2, h2, b_q16, fe, wq, one = solve.minmax_fit(lo, hi, m.c, m.s)
+    v2, h2, b_q16, fe, wq, one = solve_ref.minmax_fit(lo, hi, m.c, m.s)
     v = (np.array(hi) + np.array(lo)) / 2
     h = (np.array(hi) - np.array(lo)) / 2
     g = np.cbrt(h.prod())
@@ -402,5 +368,5 @@ def test_min_max_fit_error_uses_the_same_definition():
 def test_min_max_refuses_an_axis_without_range():
     m = moments([(1, 2, 3), (4, 5, 3)])
     with pytest.raises(solve.SolveError) as e:
-        solve.minmax_fit([1, 2, 3], [4, 5, 3], m.c, m.s)
+        solve_ref.minmax_fit([1, 2, 3], [4, 5, 3], m.c, m.s)
     assert e.value.reason == "planar"

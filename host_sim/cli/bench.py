@@ -1,15 +1,15 @@
-"""`python -m host_sim bench [--smoke]` (make bench / make bench-smoke): issue 6's figures.
+"""`python -m host_sim bench [--smoke]` (make bench / make bench-smoke): the benchmark figures.
 
 Runs the scripts of host_sim/cli/benchmarks/ on CPython and on the MicroPython unix port
 (one process per script and interpreter, one after the other: the machine is shared, so
 nothing runs beside a timed script), then prints a table, writes the JSON and, for a full
-run, the README section between the `<!-- bench:begin -->` / `<!-- bench:end -->` markers.
+run, docs/benchmarks.md (generated, dated; the README links to it).
 
 options:
   --smoke        the same code paths with tiny counts (seconds; the test suite runs it);
-                 writes build/bench-smoke.json and leaves the README alone
+                 writes build/bench-smoke.json and leaves docs/benchmarks.md alone
   --json PATH    where the JSON goes (default build/bench.json, smoke build/bench-smoke.json)
-  --readme / --no-readme   update README.md (default: yes for a full run, no for smoke)
+  --doc / --no-doc   write docs/benchmarks.md (default: yes for a full run, no for smoke)
   -h, --help     this text
 
 Ratios measured in the same run are the headline; absolute times belong to the machine
@@ -30,7 +30,7 @@ MICROPYTHON = os.path.join(BIN, "micropython")
 MPY_CROSS = os.path.join(BIN, "mpy-cross")
 BEGIN = "<!-- bench:begin -->"
 END = "<!-- bench:end -->"
-BUDGET_32BIT = 32 * 1024          # issue 6 item 4
+BUDGET_32BIT = 32 * 1024          # the board-memory goal
 PROCESSES = 5                     # timing scripts run this many times; medians reported
 QMC_ODR_HZ = 200                  # QMC5883L's fastest output data rate
 I2C_HZ = 400000                   # boards/*/board.py
@@ -280,7 +280,7 @@ def boards(res):
     out = {"source": SOURCE, "unix_ms_per_1e6": ys, "i2c_wire_us_per_sample": wire,
            "assumptions": [
                "board time = unix port time x (board / unix time of the same reference "
-               "loop); int loop for the firmware, float loop for seed 004's float math",
+               "loop); int loop for the firmware, float loop for the heading guide's float math",
                "plus, per int operation that is a long int only on a 32-bit port "
                "(intcount.py), the published cost of one long-int result: (int_mul - "
                "int_add) per iteration",
@@ -378,7 +378,7 @@ def rows(res, derived):
     if "error" in mp or "error" in cp:
         R.append(("1 hot path", cp.get("error", ""), mp.get("error", ""), "", "ERROR"))
     else:
-        R.append(("1 per sample, seed-004 float path [us]", _f(cp.get("float_cpu_us"), "%.2f"),
+        R.append(("1 per sample, float path of the heading guide [us]", _f(cp.get("float_cpu_us"), "%.2f"),
                   _f(mp.get("float_cpu_us"), "%.2f"), "reference", ""))
         r = mp.get("ratio_cpu")
         R.append(("1 per sample, firmware bytecode [us]", _f(cp.get("ours_cpu_us"), "%.2f"),
@@ -564,7 +564,7 @@ def table_md(R):
 
 
 def summary(res, derived):
-    """Plain-language answers to issue 6 items 4 and 6 from the figures."""
+    """Plain-language answers to the memory and stall questions from the figures."""
     out = []
     rp = derived.get("rp2040_125mhz") or {}
     e2 = derived.get("esp32_240mhz") or {}
@@ -628,8 +628,8 @@ def readme_section(R, m, derived, res=None):
         "",
         "How: per sample = the drivers' `read_into` over an allocation-free replay bus "
         "(its own cost, measured in the same run, subtracted), `correct`, `AxisMap`, "
-        "`Compass.update`; the seed-004 float path reads the same bytes. Bytecode = the "
-        "plain firmware; fast = `firmware.fast.Pipeline` (viper kernels, the same bits, "
+        "`Compass.update`; the float path of the heading guide reads the same bytes. Bytecode = the "
+        "plain firmware; fast = the same steps with `firmware/fast.py`'s viper mirrors (the same bits, "
         "tested in `tests/test_fast.py`). Board rows are **estimates**: unix times scaled "
         "by the published time of the same reference loop on each board (%s), plus the "
         "published cost of a long-int result for every operation that is a long int only "
@@ -644,25 +644,18 @@ def readme_section(R, m, derived, res=None):
     return "\n".join(lines)
 
 
-def update_readme(section, path=None):
-    """Replace the text between the markers (inclusive) with `section`; without markers,
-    append it under a '## Benchmarks' heading."""
+def write_doc(section, path=None):
+    """Write docs/benchmarks.md: a generated page holding `section`."""
     if path is None:
-        path = os.path.join(ROOT, "README.md")
-    with open(path) as f:
-        text = f.read()
-    if BEGIN in text and END in text:
-        a = text.index(BEGIN)
-        b = text.index(END) + len(END)
-        text = text[:a] + section + text[b:]
-    else:
-        text = text.rstrip("\n") + "\n\n## Benchmarks\n\n" + section + "\n"
+        path = os.path.join(ROOT, "docs", "benchmarks.md")
+    os.makedirs(os.path.dirname(path), exist_ok=True)
     with open(path, "w") as f:
-        f.write(text)
+        f.write("# Benchmarks\n\nGenerated by `make bench` (host_sim/cli/bench.py); do not edit "
+                "by hand.\n\n" + section + "\n")
 
 
 def parse(argv):
-    opts = {"smoke": False, "json": None, "readme": None}
+    opts = {"smoke": False, "json": None, "doc": None}
     i = 0
     while i < len(argv):
         a = argv[i]
@@ -670,10 +663,10 @@ def parse(argv):
             opts["help"] = True
         elif a == "--smoke":
             opts["smoke"] = True
-        elif a == "--readme":
-            opts["readme"] = True
-        elif a == "--no-readme":
-            opts["readme"] = False
+        elif a == "--doc":
+            opts["doc"] = True
+        elif a == "--no-doc":
+            opts["doc"] = False
         elif a == "--json":
             if i + 1 >= len(argv):
                 raise BenchError("--json needs a path")
@@ -685,8 +678,8 @@ def parse(argv):
     if opts["json"] is None:
         opts["json"] = os.path.join(ROOT, "build", "bench-smoke.json" if opts["smoke"]
                                     else "bench.json")
-    if opts["readme"] is None:
-        opts["readme"] = not opts["smoke"]
+    if opts["doc"] is None:
+        opts["doc"] = not opts["smoke"]
     return opts
 
 
@@ -721,9 +714,9 @@ def main(argv):
     print(table_text(R, m))
     print(summary(res, derived))
     print("JSON: %s (%.0f s)" % (os.path.relpath(opts["json"], ROOT), time.time() - t0))
-    if opts["readme"]:
-        update_readme(readme_section(R, m, derived, res))
-        print("README.md: benchmark section updated")
+    if opts["doc"]:
+        write_doc(readme_section(R, m, derived, res))
+        print("docs/benchmarks.md written")
     errors = [n for n, v in res.items() if isinstance(v, dict) and any(
         isinstance(x, dict) and "error" in x for x in v.values())]
     if errors:

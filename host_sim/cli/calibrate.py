@@ -182,7 +182,8 @@ def parse_args(argv):
 def run(opts):
     """Calibrate; returns (calibration or None, rejection or None, info dict)."""
     from firmware.errors import CalibrationRejected
-    from firmware.magcal import DEFAULT_MAX_FIT_ERROR, Calibrator
+    from firmware.acceptance import DEFAULT_MAX_FIT_ERROR
+    from firmware.calibrator import Calibrator
 
     p, nrows = choose_scale(opts["file"], opts["skip"])
     kw = {}
@@ -227,7 +228,8 @@ def main(argv):
     try:
         opts = parse_args(argv)
         if opts.get("help"):
-            from firmware.magcal import DEFAULT_CAPACITY, DEFAULT_MAX_FIT_ERROR
+            from firmware.acceptance import DEFAULT_MAX_FIT_ERROR
+            from firmware.calibrator import DEFAULT_CAPACITY
             print(USAGE % (DESKTOP_CAPACITY, DEFAULT_CAPACITY,
                            "%d.%02d" % (DEFAULT_MAX_FIT_ERROR // 100, DEFAULT_MAX_FIT_ERROR % 100)))
             return 0

@@ -61,7 +61,7 @@ _GY521_ACCEL_AXES = "-x,y,z"
 FIELD_UT = 50.0              # mid-latitude Earth field
 INCLINATION_DEG = 60.0       # dip; heading noise grows as 1/cos(dip)
 DECLINATION_CDEG = 400       # +4.00 deg east, applied by the app's Compass
-HARD_IRON_MIN = 1.0          # |V| in Earth fields: "strong" (issue 5)
+HARD_IRON_MIN = 1.0          # |V| in Earth fields: "strong"
 HARD_IRON_MAX = 3.0
 SOFT_IRON_EIGS = ((0.75, 0.90), (0.90, 1.10), (1.10, 1.30))  # W eigenvalue ranges
 RANGE_MARGIN = 1.10          # installer's margin over the largest expected reading
@@ -241,7 +241,7 @@ class Setup:
     """The simulated board, its world and the firmware drivers on it."""
 
     def __init__(self, chip, seed, seconds, noise=True):
-        from firmware import sensors
+        from firmware import detect
         from host_sim import motion
         from host_sim.boards import make_board
         from host_sim.world import World
@@ -265,8 +265,8 @@ class Setup:
         opts = {opt: val}
         if self.kind == "hmc5883l":
             opts["rate"] = HMC_RATE_HZ
-        self.mag = sensors.detect(b.bus, delay_us=b.sleep_us, **opts)
-        self.accel = sensors.detect_accel(b.bus)
+        self.mag = detect.detect(b.bus, delay_us=b.sleep_us, **opts)
+        self.accel = detect.detect_accel(b.bus)
         if self.accel is None:
             raise RuntimeError("demo: no MPU6050 on the simulated %s board" % chip)
         self.mag_axes = breakout(axes_name)["mag"]
@@ -355,7 +355,8 @@ def run_session(setup, seconds, quiet=False):
     as a flat array('h') x0 y0 z0 x1 ..., info). Feeds every raw sample the app read to a
     min/max Calibrator too."""
     from firmware.app import CompassApp
-    from firmware.magcal import MINMAX, Calibrator
+    from firmware.calibration import MINMAX
+    from firmware.calibrator import Calibrator
 
     b = setup.board
     app = CompassApp(b.bus, mag=setup.mag, accel=setup.accel, mag_axes=setup.mag_axes,
@@ -413,7 +414,7 @@ def wrap180(d):
 
 def _mean(s, n):
     """The mean of n vectors from their sum, with as many fractional bits as keep every
-    component within 14 bits (heading.Compass takes any scale). Rounding the mean to whole
+    component within 14 bits (Compass takes any scale). Rounding the mean to whole
     counts would throw away what averaging gained: an HMC5883L's corrected field is only
     ~300 counts, so half a count is 0.1-0.2 deg of heading."""
     from firmware.fixedpoint import bit_length, rdiv
@@ -427,11 +428,11 @@ def _mean(s, n):
 def measure_grid(setup, cals, declination_kang, n=AVERAGE_N):
     """Hold the board still at every grid orientation, read n samples through the drivers
     and compute the heading with each Calibration in `cals` from the same readings:
-    mean of the corrected body-frame fields and of the accelerometer, then heading.Compass.
+    mean of the corrected body-frame fields and of the accelerometer, then Compass.
     A None calibration is skipped (its headings are None).
     Returns rows (yaw, pitch, roll, true_deg, [heading_deg per calibration])."""
     from firmware.axes import AxisMap
-    from firmware.heading import Compass
+    from firmware.compass import Compass
     from host_sim import motion
 
     b = setup.board
@@ -579,8 +580,8 @@ def main(argv):
     if opts["help"]:
         print(USAGE % (SESSION_S, TIME_LIMIT_FACTOR, AVERAGE_N, DEFAULT_PLOT))
         return 0
-    from firmware.heading import cdeg_to_kang
-    from firmware.magcal import UNCALIBRATED
+    from firmware.trig import cdeg_to_kang
+    from firmware.calibration import UNCALIBRATED
     from firmware.errors import CalibrationRejected
 
     quiet = opts["json"]

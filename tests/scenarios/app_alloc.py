@@ -148,11 +148,11 @@ def window(measure):
     # N steps with no solve slice among them: start right after a solve has ended (the next
     # one, the 60 s idle solve, is 3000 steps away), and check that none ran
     s0 = app.slices
-    while app.slices == s0 or app._job is not None:
+    while app.slices == s0 or app.solving:
         app.step()
     s0 = app.slices
     d = measure()
-    return d if app.slices == s0 and app._job is None else None
+    return d if app.slices == s0 and not app.solving else None
 
 
 def by_mem_total():
@@ -213,7 +213,7 @@ res["errors"] = app.errors
 # with a 10-element solve running (one started by hand; the buffer holds the converged set)
 gc.collect()
 app.worst_stall_us = 0
-app._next_model = 10
+app.collector.next_model = 10
 steps = 0
 worst_bytes = 0
 total = 0
@@ -224,7 +224,7 @@ while True:
     steps += 1
     total += d
     worst_bytes = d if d > worst_bytes else worst_bytes
-    if app._job is None:
+    if not app.solving:
         break
 res["solve_steps"] = steps
 res["solve_bytes_total"] = total

@@ -6,9 +6,9 @@ from host_sim.boards import make_board
 from host_sim.world import World
 
 from firmware.app import CompassApp
-from firmware.calstore import CalStore
+from firmware.store import CalStore
 
-# Strong iron (issue 5): |V| = 64 uT, 1.3 Earth fields; W symmetric, eigenvalues ~0.83..1.22.
+# Strong iron: |V| = 64 uT, 1.3 Earth fields; W symmetric, eigenvalues ~0.83..1.22.
 HARD_IRON_UT = (45.0, -35.0, 30.0)
 SOFT_IRON = ((1.18, 0.09, -0.06), (0.09, 0.88, 0.07), (-0.06, 0.07, 1.04))
 FIELD_UT = 50.0

@@ -1,8 +1,8 @@
 # detect() + reads on every simulated board, and each error path once; run on CPython and
-# MicroPython by tests/test_sensors.py, which requires identical output. Prints JSON ints only.
+# MicroPython by tests/test_detect.py, which requires identical output. Prints JSON ints only.
 import json
 
-from firmware import sensors
+from firmware import detect
 from firmware.errors import BusError, DataReadyTimeout, SensorNotFound, SensorOverflow
 from host_sim import motion
 from host_sim.boards import make_board
@@ -31,8 +31,8 @@ STOP = {"qmc5883l": (0x09, b"\x00"), "hmc5883l": (0x02, b"\x02"), "qmc5883p": (0
 for i, chip in enumerate(("qmc5883l", "hmc5883l", "gy87", "gy87-qmc", "qmc5883p")):
     world = World(motion=motion.figure8(period_s=4), seed=11 + i)
     b = make_board(chip, world=world, seed=11 + i)
-    mag = sensors.detect(b.bus, delay_us=b.sleep_us)
-    acc = sensors.detect_accel(b.bus)
+    mag = detect.detect(b.bus, delay_us=b.sleep_us)
+    acc = detect.detect_accel(b.bus)
     emit(("kind", mag.KIND), ("address", mag.address), ("range_code", mag.range_code),
          ("counts_per_gauss", mag.counts_per_gauss), ("t_us", b.clock.now_us))
     buf = [0, 0, 0]
@@ -67,6 +67,6 @@ for i, chip in enumerate(("qmc5883l", "hmc5883l", "gy87", "gy87-qmc", "qmc5883p"
          ("skipped", getattr(mag, "skipped", -1)))
 
 try:
-    sensors.detect(SimI2C(SimClock()))
+    detect.detect(SimI2C(SimClock()))
 except SensorNotFound as e:
     err(e)

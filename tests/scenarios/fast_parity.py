@@ -1,204 +1,167 @@
-# firmware.fast against the plain firmware, case by case: Pipeline.update, FastCompass.update,
-# Corrector.correct and FastAxisMap.apply must give the same outputs, return values and public
-# Compass attributes as Calibration.correct, AxisMap.apply and Compass.update. On MicroPython
-# the fast classes are viper kernels (fast.VIPER); on CPython they fall back to the plain code.
-# Inputs: a fixed LCG (the same on both interpreters) over the whole int16 range at every
-# scale (so _norm14 shifts both ways), plus edge cases: zero vectors, -32768 and 32767 on each
-# axis, vertical gravity (gimbal), 45-degree ties, every signed permutation for the axis maps,
-# level use (g None), declination wrap-around, interference window edges.
-# Also, on MicroPython: bytes allocated per call (micropython.mem_total, so a heap call frame
-# counts) and a heap_lock()ed loop. Prints one JSON object.
+# firmware/fast.py against the plain functions it mirrors, function by function, and the
+# whole per-sample path (correct -> axes -> Compass.update) with either kernel set:
+#   correct  vs calibration.correct     apply vs axes.apply
+#   atan2, sin, cos, norm14 vs trig's    isqrt vs fixedpoint.isqrt (n < 2**30)
+# Inputs: the int16 extremes (+-32767, -32768, -4096, 0, +-1), a small-int generator (no long
+# ints on a 32-bit port), and the real logs in ../shared/datasets (integer-count logs, when the
+# folder is there) through a calibration with strong soft iron. Where the port has no native
+# emitter the kernels are absent and only the plain path runs ("fast": false).
+# Also the bytes each kernel allocates per call (micropython.mem_total: a heap frame counts).
+# Prints one JSON object.
 import json
 from array import array
 
-from firmware import fast
-from firmware.axes import AxisMap
-from firmware.heading import Compass
-from firmware.magcal import Calibration
+from firmware import axes, calibration, compass, fixedpoint, trig
+from firmware.calibration import Calibration
+from firmware.compat import kernels
 
 try:
     import micropython
 except ImportError:
     micropython = None
 
-N = 6000
-ATTRS = ("heading_kang", "pitch_kang", "roll_kang", "dip_kang", "magnitude", "flags",
-         "interference", "dip_high", "gimbal")
-seed = 12345
+FAST = kernels()
+EXTREMES = (32767, -32768, -32767, -4096, 4095, 0, 1, -1, 16384, -16385, 2047, -2048)
+LOGS = ("qmc5883l_tomisuarez_filtered", "lsm9ds1_jremington", "icm20948_ak09916_jremington",
+        "lsm303_altimu10v3_jremington", "mag3_jremington_large_offset",
+        "unknown_ellipsoid_fit_python_bazhin")
+_s = [12345]
 
 
 def rnd16():
-    global seed
-    seed = (seed * 1103515245 + 12345) & 0x7FFFFFFF
-    return ((seed >> 8) & 0xFFFF) - 32768
+    # Park-Miller on 16-bit halves would make long ints; this stays below 2**23
+    s = (_s[0] * 75 + 74) % 65537
+    _s[0] = s
+    return (s & 0xFFFF) - 32768
 
 
 def vec():
-    s = rnd16() & 15  # scale: from full int16 down to a few counts
-    return [rnd16() >> s, rnd16() >> s, rnd16() >> s]
+    k = rnd16() & 15  # scale: from full int16 down to a few counts
+    return [rnd16() >> k, rnd16() >> k, rnd16() >> k]
 
 
-EDGES = [[0, 0, 0], [-32768, -32768, -32768], [32767, 32767, 32767], [-32768, 0, 0],
-         [0, -32768, 0], [0, 0, -32768], [32767, -32768, 1], [1, 0, 0], [0, 0, 1],
-         [0, 0, -1], [5, 5, 0], [-7, 7, 7], [16384, 16384, 0], [8191, -8192, 8192],
-         [0, 16384, -16384], [3, -3, 0], [-1, -1, -1]]
-GRAV = [[0, 0, 16384], [16384, 0, 0], [-16384, 0, 0], [0, 16384, 0], [0, 0, -16384],
-        [11585, 0, 11585], [16384, 1, 0], [-16384, 0, 1], [0, 0, 0], [3, 3, 3]]
+def extreme_vectors():
+    for a in EXTREMES:
+        for b in EXTREMES:
+            yield [a, b, EXTREMES[(a + b) % len(EXTREMES)]]
+
+
+def log_samples(limit=2000):
+    for name in LOGS:
+        try:
+            f = open("../shared/datasets/%s.csv" % name)
+        except OSError:
+            continue
+        f.readline()
+        n = 0
+        for line in f:
+            p = line.split(",")
+            if len(p) < 3:
+                continue
+            yield [int(p[0]), int(p[1]), int(p[2])]
+            n += 1
+            if n >= limit:
+                break
+        f.close()
+
 
 bad = []
-cases = {"compass": 0, "pipeline": 0, "correct": 0, "axes": 0}
+cases = {}
 
 
-def note(kind, detail):
-    if len(bad) < 10:
-        bad.append([kind, detail])
+def check(kind, got, want, arg):
+    cases[kind] = cases.get(kind, 0) + 1
+    if got != want and len(bad) < 10:
+        bad.append([kind, arg, got, want])
 
 
-def same_compass(a, b):
-    for k in ATTRS:
-        if getattr(a, k) != getattr(b, k):
-            return k
-    return None
+CAL = Calibration(model=10, offset=(-420, 3100, 5150),
+                  invw=(29000, -2500, 1200, -2500, 26000, -900, 1200, -900, 30600),
+                  field=4000, field_out=3700, fit_error=150, samples=200, coverage=80)
+MAPS = [axes.AxisMap(s) for s in ("x,y,z", "x,-y,-z", "-y,x,z", "z,-x,-y", "-x,-y,z",
+                                  "-z,y,x")]
 
 
-def check_compass():
-    for field, decl in ((6000, 0), (0, 1000), (12000, -40000), (40, 65535)):
-        plain = Compass(field=field, declination_kang=decl)
-        quick = fast.FastCompass(field=field, declination_kang=decl)
-        inputs = [(b, g) for b in EDGES for g in GRAV + [None]]
-        inputs += [(vec(), vec() if i % 5 else None) for i in range(N)]
-        for b, g in inputs:
-            h1 = plain.update(b, g)
-            h2 = quick.update(array("h", b), None if g is None else array("h", g))
-            cases["compass"] += 1
-            k = same_compass(plain, quick)
-            if h1 != h2 or k:
-                note("compass", [b, g, field, decl, h1, h2, k])
+def kernels_agree(v):
+    a = array("h", (0, 0, 0))
+    b = array("h", (0, 0, 0))
+    calibration.correct(CAL.k, v, a)
+    FAST.correct(CAL.k, v, b)
+    check("correct", list(b), list(a), v)
+    for m in MAPS:
+        axes.apply(m.m, v, a)
+        FAST.apply(m.m, v, b)
+        check("apply", list(b), list(a), v)
+    check("atan2", FAST.atan2(v[0], v[1]), trig.atan2(v[0], v[1]), v)
+    check("sin", FAST.sin(v[2]), trig.sin(v[2]), v)
+    check("cos", FAST.cos(v[0]), trig.cos(v[0]), v)
+    d1 = [0, 0, 0, 0]
+    d2 = [0, 0, 0, 0]
+    check("norm14", [FAST.norm14(v, d2, 1)] + d2, [trig.norm14(v, d1, 1)] + d1, v)
+    n = (v[0] * v[0] + v[1] * v[1]) >> 2  # < 2**30, the mirror's domain
+    check("isqrt", FAST.isqrt(n), fixedpoint.isqrt(n), n)
 
 
-def calibrations():
-    out = [Calibration(model=10, offset=(1200, -800, 32767),
-                       invw=(30000, -1500, 700, -1500, 28000, 2000, 700, 2000, -30000),
-                       field=6000, field_out=5500),
-           Calibration(model=4, offset=(-32768, 0, 32767), field=100, field_out=100),
-           Calibration(model=7, offset=(5, -5, 0), invw=(32767, 0, 0, 0, 16000, 0, 0, 0, -32767),
-                       field=3000, field_out=2500)]
-    for _ in range(3):
-        row = []
-        for _ in range(9):
-            row.append(rnd16() // 3)
-        out.append(Calibration(model=10, offset=(rnd16(), rnd16(), rnd16()), invw=row,
-                               field=5000, field_out=4000))
+def pipeline(v, g, kern):
+    compass.use_kernels(kern)
+    c = compass.Compass(field=3700, declination_kang=-1234)
+    b = array("h", (0, 0, 0))
+    fast = kern is not trig
+    (FAST.correct if fast else calibration.correct)(CAL.k, v, b)
+    (FAST.apply if fast else axes.apply)(MAPS[1].m, b, b)
+    h = c.update(b, g)
+    return [h, c.pitch_kang, c.roll_kang, c.dip_kang, c.magnitude, c.flags, list(b)]
+
+
+def run():
+    out = {"fast": FAST is not None}
+    vs = list(extreme_vectors()) + [vec() for _ in range(3000)]
+    logs = list(log_samples())
+    out["log_samples"] = len(logs)
+    if FAST is None:
+        return out
+    for v in vs + logs:
+        kernels_agree(v)
+    gs = [[0, 0, 16384], [16384, 0, 0], [-11585, 300, 11585], [0, 0, 0], None, [3, -3, 3]]
+    i = 0
+    for v in vs + logs:
+        g = gs[i % len(gs)]
+        i += 1
+        check("pipeline", pipeline(v, g, FAST), pipeline(v, g, trig), v)
+    compass.use_kernels()
+    out["cases"] = cases
+    out["mismatches"] = bad
+    if micropython is not None and hasattr(micropython, "mem_total"):
+        out["allocation"] = allocation()
     return out
-
-
-def check_correct():
-    for cal in calibrations():
-        corr = fast.Corrector(cal)
-        o1 = [0, 0, 0]
-        o2 = array("h", [0, 0, 0])
-        for raw in EDGES + [vec() for _ in range(N // 4)]:
-            cal.correct(raw, o1)
-            corr.correct(raw, o2)
-            cases["correct"] += 1
-            if list(o2) != o1:
-                note("correct", [raw, o1, list(o2)])
-
-
-def specs():
-    out = []
-    for p in ("xyz", "xzy", "yxz", "yzx", "zxy", "zyx"):
-        for s in range(8):
-            out.append(",".join(("-" if s >> i & 1 else "") + p[i] for i in range(3)))
-    return out
-
-
-def check_axes():
-    for spec in specs():
-        m1 = AxisMap(spec)
-        m2 = fast.FastAxisMap(spec)
-        for src in EDGES + [vec() for _ in range(60)]:
-            d1 = [0, 0, 0]
-            d2 = array("h", [0, 0, 0])
-            m1.apply(src, d1)
-            m2.apply(array("h", src), d2)
-            cases["axes"] += 1
-            if list(d2) != d1:
-                note("axes", [spec, src, d1, list(d2)])
-
-
-def check_pipeline():
-    cals = calibrations()
-    for n, cal in enumerate(cals[:4]):
-        for mag_axes, acc_axes in (("x,-y,-z", "-x,y,z"), ("-y,x,z", "y,x,-z"),
-                                   ("x,y,z", None)):
-            # built on another calibration, then switched: set_calibration must take
-            pipe = fast.Pipeline(cals[n + 1], mag_axes, acc_axes, field=cal.field_out,
-                                 declination_kang=-300)
-            pipe.set_calibration(cal)
-            comp = Compass(field=cal.field_out, declination_kang=-300)
-            mm = AxisMap(mag_axes)
-            am = AxisMap(acc_axes) if acc_axes else None
-            b2 = array("h", [0, 0, 0])
-            g2 = array("h", [0, 0, 0])
-            for i in range(N // 6):
-                raw = vec() if i % 7 else list(cal.offset)  # V itself: zero field
-                araw = vec() if i % 11 else [0, 0, 0]
-                c = [0, 0, 0]
-                b1 = [0, 0, 0]
-                g1 = [0, 0, 0]
-                cal.correct(raw, c)
-                mm.apply(c, b1)
-                if am is None:
-                    h1 = comp.update(b1)
-                else:
-                    am.apply(araw, g1)
-                    h1 = comp.update(b1, g1)
-                h2 = pipe.update(raw, araw, b2, g2)
-                cases["pipeline"] += 1
-                k = same_compass(comp, pipe.compass)
-                if h1 != h2 or list(b2) != b1 or (am is not None and list(g2) != g1) or k:
-                    note("pipeline", [raw, araw, mag_axes, acc_axes, h1, h2, b1, list(b2), k])
 
 
 def allocation():
-    if micropython is None:
-        return None
-    cal = calibrations()[0]
-    pipe = fast.Pipeline(cal, "x,-y,-z", "-x,y,z", field=cal.field_out)
-    comp = fast.FastCompass(field=6000)
-    corr = fast.Corrector(cal)
-    amap = fast.FastAxisMap("-x,y,z")
-    raw = array("h", [2400, 1700, -4600])
-    araw = array("h", [-3100, 2200, 15800])
-    b = array("h", [0, 0, 0])
-    g = array("h", [0, 0, 0])
     mt = micropython.mem_total
+    v = array("h", (1234, -2345, 3456))
+    o = array("h", (0, 0, 0))
+    d = [0, 0, 0, 0]
     res = {}
-    for _ in range(2):  # the second round measures: dictionary slots exist
-        t = mt(); pipe.update(raw, araw, b, g); res["Pipeline.update"] = mt() - t
-        t = mt(); comp.update(b, g); res["FastCompass.update"] = mt() - t
-        t = mt(); comp.update(b); res["FastCompass.update_level"] = mt() - t
-        t = mt(); corr.correct(raw, b); res["Corrector.correct"] = mt() - t
-        t = mt(); amap.apply(araw, g); res["FastAxisMap.apply"] = mt() - t
-    micropython.heap_lock()
-    try:
-        for i in range(300):
-            raw[0] = 2400 + 7 * i
-            araw[1] = 2200 - 50 * i
-            pipe.update(raw, araw, b, g)
-            comp.update(b, g)
-        res["heap_locked"] = "ok"
-    except MemoryError:
-        res["heap_locked"] = "MemoryError"
-    finally:
-        micropython.heap_unlock()
+    k = CAL.k
+    m = MAPS[3].m
+    for name in ("correct", "apply", "atan2", "sin", "norm14", "isqrt"):
+        f = getattr(FAST, name)
+        t = mt()
+        for _ in range(200):
+            if name == "correct":
+                f(k, v, o)
+            elif name == "apply":
+                f(m, v, o)
+            elif name == "atan2":
+                f(-3000, 17000)
+            elif name == "sin":
+                f(12345)
+            elif name == "norm14":
+                f(v, d, 1)
+            else:
+                f(123456789)
+        res[name] = (mt() - t) // 200
     return res
 
 
-check_compass()
-check_correct()
-check_axes()
-check_pipeline()
-print(json.dumps({"viper": fast.VIPER, "cases": cases, "mismatches": bad,
-                  "allocation": allocation()}))
+print(json.dumps(run()))

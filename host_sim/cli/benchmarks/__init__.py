@@ -3,7 +3,7 @@
 Each module is a script: `python -m host_sim.cli.benchmarks.NAME [--smoke]` and
 `micropython -m host_sim.cli.benchmarks.NAME [--smoke]` print ONE JSON object on stdout.
   hot        item 1: the per-sample path (driver decode, correct, axes, heading) against the
-             seed-004 float path, time and bytes per sample
+             float path of the heading guide, time and bytes per sample
   collector  item 2: Calibrator.add per raw sample, empty and full buffer
   solver     item 3: solve time per model, the time-sliced solve's longest step
   memory     item 4: heap in use after importing the firmware and with a full buffer

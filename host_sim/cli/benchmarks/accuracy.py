@@ -1,20 +1,20 @@
-"""Issue 6 item 5: accuracy against a float64 fit of the same model (CPython: numpy).
+"""Accuracy against a float64 fit of the same model (CPython: numpy).
 
-The firmware's results are the same bits on MicroPython (tests/scenarios/magcal_parity.py,
-heading_parity.py), so CPython runs it here next to numpy.
+The firmware's results are the same bits on MicroPython (tests/scenarios/calibrator_parity.py,
+compass_parity.py), so CPython runs it here next to numpy.
 
 Logs (../shared/datasets): for each log and model, sphericity std(|out|) / mean(|out|) of our
 calibration against the float64 fit of the same model on the same rows - the reading,
-scaling and reference of tests/test_datasets.py (imported: one definition of each).
+scaling and reference of host_sim/cli/benchmarks/reference.py (shared with the tests).
 
 Simulated headings: a simulated GY-271 + GY-521 with known hard and soft iron does one
 noisy 30 s figure-8 at 200 Hz; our Calibrator (board defaults: 300 samples, QMC5883L
 counts/G) keeps its samples; on exactly those held samples the float64 fit of each model
-is computed (tests/test_solve.numpy_fit), and seed 004's min/max (float offset and scale)
+is computed (tests/test_solve.numpy_fit), and the heading guide's min/max (float offset and scale)
 on every raw sample of the session. Then the board is held still, noise off (only
 quantisation), on a grid of yaw x pitch x roll, and each calibration's heading error
 against the true yaw is measured: ours with the firmware's integer path (correct, AxisMap,
-Compass), the float64 fit and min/max with seed 004's float tilt heading.
+Compass), the float64 fit and min/max with the heading guide's float tilt heading.
 """
 import math
 import sys
@@ -30,7 +30,7 @@ SCENARIOS = {
 
 
 def logs(smoke):
-    import tests.test_datasets as td
+    from host_sim.cli.benchmarks import reference as td
     from firmware.errors import CalibrationRejected
     names = [n for n in td.LOGS]
     if smoke:
@@ -93,7 +93,7 @@ def _stats(errs):
 
 
 def float_heading(body_m, acc):
-    # seed 004's compute_heading on body-frame vectors (accel in g, AN4248 sign)
+    # the heading guide's compute_heading on body-frame vectors (accel in g, AN4248 sign)
     g = (-acc[0] / 16384.0, acc[1] / 16384.0, acc[2] / 16384.0)
     return floatpath.compute_heading(g[0], g[1], g[2], body_m[0], -body_m[1], -body_m[2],
                                      0.0)
@@ -101,11 +101,11 @@ def float_heading(body_m, acc):
 
 def headings(smoke):
     import numpy as np
-    from tests.test_solve import numpy_fit
+    from host_sim.cli.benchmarks.reference import numpy_fit
 
     from firmware.axes import AxisMap
-    from firmware.heading import Compass
-    from firmware.magcal import Calibrator
+    from firmware.compass import Compass
+    from firmware.calibrator import Calibrator
     mmap = AxisMap("x,-y,-z")
     amap = AxisMap("-x,y,z")
     res = {}
@@ -124,7 +124,7 @@ def headings(smoke):
         poses = grid(smoke)
         reads = still_readings(hard, soft, poses)
         row = {"held": cal.count, "poses": len(poses)}
-        # seed 004 min/max, float
+        # the heading guide min/max, float
         errs = []
         for (yaw, _, _), (m, a) in zip(poses, reads):
             f = [0.0, 0.0, 0.0]

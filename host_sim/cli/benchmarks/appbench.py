@@ -1,4 +1,4 @@
-"""Issue 6 item 3 (second half): the app's loop while solves run in the background.
+"""The app's loop while solves run in the background.
 
 firmware.app.CompassApp runs over ReplayBus (the drivers read a recorded 200 Hz figure-8
 session of a GY-271 + GY-521 with hard and rotated soft iron; the bus allocates nothing and

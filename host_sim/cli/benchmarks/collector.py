@@ -1,8 +1,8 @@
-"""Issue 6 item 2: Calibrator.add per raw sample, empty buffer against full buffer.
+"""Calibrator.add per raw sample, empty buffer against full buffer.
 
 One simulated 200 Hz figure-8 stream (QMC5883L, hard and rotated soft iron) goes through a
 Calibrator(model=10, capacity=300 (100 with --smoke), separation=900) - the separation of
-tests/scenarios/magcal_bench.py, small enough for the buffer to fill and start replacing.
+tests/scenarios/calibrator_bench.py, small enough for the buffer to fill and start replacing.
   empty   the first `capacity` raw samples of the session (the buffer fills from 0)
   full    every later raw sample offered while the buffer holds its capacity
 Times: chunks of CHUNK consecutive adds with the collector running as it would in the app
@@ -22,7 +22,7 @@ from array import array
 from host_sim.cli.benchmarks import common
 from host_sim.cli.benchmarks.common import IS_MP
 
-from firmware.magcal import Calibrator
+from firmware.calibrator import Calibrator
 
 SMOKE = common.smoke()
 N = 1500 if SMOKE else 6000

@@ -77,7 +77,7 @@ def interpreter():
 
 def timed_runs(fn, n, runs):
     """Median and minimum microseconds per call of fn(n) over `runs` runs; gc.collect()
-    before each run and the collector off during it (issue 6's conditions)."""
+    before each run and the collector off during it (the benchmark's conditions)."""
     per = []
     for _ in range(runs):
         gc.collect()
@@ -194,7 +194,7 @@ def replay_board(mag_bytes, acc_bytes):
 
 # ---- simulated sessions (host_sim) -----------------------------------------------------
 
-HARD_IRON_UT = (120.0, -80.0, 40.0)   # 2.4x a 50 uT field (as tests/scenarios/magcal_parity)
+HARD_IRON_UT = (120.0, -80.0, 40.0)   # 2.4x a 50 uT field (as tests/scenarios/calibrator_parity)
 SOFT_IRON = ((1.1, 0.05, -0.03), (0.05, 0.92, 0.04), (-0.03, 0.04, 1.0))
 
 

@@ -1,6 +1,6 @@
-"""The float approach of seed 004, in Python: the yardstick the integer firmware is timed against.
+"""The float approach of the heading guide, in Python: the yardstick the integer firmware is timed against.
 
-Seed 004 (hobbyist article, C): a min/max collector per axis, offset = (max + min) / 2 and
+The heading guide (a hobbyist article, C): a min/max collector per axis, offset = (max + min) / 2 and
 scale = mean half-range / half-range (mag_cal_compute), ((float)raw - offset) * scale
 (mag_apply_cal), and a tilt-compensated heading from roll = atan2f(ay, az),
 pitch = atan2f(-ax, sqrtf(ay^2 + az^2)), sinf/cosf of both, then atan2f(-my_h, mx_h) in
@@ -15,7 +15,7 @@ _G_PER_COUNT = 1.0 / 16384.0    # MPU6050 at +-2 g
 
 
 class MinMaxCollector:
-    """mag_cal_collector_t + mag_cal_compute of seed 004."""
+    """mag_cal_collector_t + mag_cal_compute of the heading guide."""
 
     def __init__(self):
         self.lo = [32767, 32767, 32767]

@@ -1,4 +1,4 @@
-"""Issue 6 item 6: how much of the solve (and of a kept sample) is long-int work on a 32-bit
+"""How much of the solve (and of a kept sample) is long-int work on a 32-bit
 board. CPython only: the arithmetic is counted, not timed, so any interpreter gives the same
 counts (the firmware's results are the same bits everywhere).
 
@@ -114,7 +114,7 @@ def instrument(cal):
 
 def main():
     from host_sim.cli.benchmarks import solver
-    from firmware.magcal import Calibrator
+    from firmware.calibrator import Calibrator
     smoke = common.smoke()
     res = {"interpreter": common.interpreter()}
     # the solve on the buffer solver.py times (same session, same Calibrator)

@@ -1,4 +1,4 @@
-"""Issue 6 item 4: heap in use by the firmware (MicroPython; CPython prints nothing useful).
+"""Heap in use by the firmware (MicroPython; CPython prints nothing useful).
 
     micropython -m host_sim.cli.benchmarks.memory SESSION.bin [--smoke]
 
@@ -58,7 +58,7 @@ def main():
     res = {"interpreter": common.interpreter(), "session_samples": steps}
     m = {"base": live()}
     import firmware.app  # noqa: F401
-    import firmware.calstore  # noqa: F401
+    import firmware.store  # noqa: F401
     import firmware.hmc5883l  # noqa: F401
     import firmware.mpu6050  # noqa: F401
     import firmware.qmc5883l  # noqa: F401

@@ -1,4 +1,4 @@
-"""Issue 6 item 3: solve time per model on a full buffer, and the time-sliced solve.
+"""Solve time per model on a full buffer, and the time-sliced solve.
 
 The buffer: Calibrator(model=10, capacity=300, separation=900) filled by a simulated 200 Hz
 figure-8 (as collector.py), so it holds its capacity. Each model is solved with
@@ -13,7 +13,7 @@ import gc
 
 from host_sim.cli.benchmarks import common
 
-from firmware.magcal import Calibrator
+from firmware.calibrator import Calibrator
 
 SMOKE = common.smoke()
 RUNS = 1 if SMOKE else 5

@@ -1,4 +1,4 @@
-"""Issue 6 item 6: reference loops whose times on the boards are published, run here.
+"""Reference loops whose times on the boards are published, run here.
 
 Source of the board figures: shaoziyang/micropython_benchmarks, README.md (github.com,
 commit 48360b7d6b7220a1bcbf252e1ce7b121e24f8902), MicroPython v1.23.0 on an RP2040 at

@@ -13,7 +13,8 @@ import micropython
 from array import array
 
 from firmware.axes import AxisMap
-from firmware.heading import Compass, atan2, cos, heading, sin
+from firmware.compass import Compass, heading
+from firmware.trig import atan2, cos, sin
 
 mt = micropython.mem_total
 

@@ -4,7 +4,7 @@
 import json
 import sys
 
-from firmware.calstore import CalStore
+from firmware.store import CalStore
 from firmware.errors import StoreError
 
 d = sys.argv[1]

@@ -1,11 +1,11 @@
 # Prints atan2/sin/cos/heading/Compass/AxisMap results over fixed integer grids as JSON lines
-# (ints and strings only); tests/test_heading.py runs it on CPython and MicroPython and
+# (ints and strings only); tests/test_compass.py runs it on CPython and MicroPython and
 # requires identical output.
 import json
 
 from firmware.axes import AxisMap
-from firmware.heading import (Compass, atan2, cdeg_to_kang, cos, heading, kang_to_cdeg,
-                              kang_to_str, sin)
+from firmware.compass import Compass, heading
+from firmware.trig import atan2, cdeg_to_kang, cos, kang_to_cdeg, kang_to_str, sin
 
 _seed = [12345]
 

@@ -10,9 +10,9 @@ import sys
 import time
 
 sys.path.append("tests/scenarios")
-from magcal_parity import CPG, sim_raw  # noqa: E402
+from calibrator_parity import CPG, sim_raw  # noqa: E402
 
-from firmware.magcal import Calibrator  # noqa: E402
+from firmware.calibrator import Calibrator  # noqa: E402
 
 try:
     ticks = time.ticks_us

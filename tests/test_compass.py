@@ -10,11 +10,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from firmware import fixedpoint, heading as H
+from firmware import fixedpoint, trig as H
 from firmware.axes import AxisMap
-from firmware.heading import (FLAG_DIP_HIGH, FLAG_GIMBAL, FLAG_INTERFERENCE, FLAG_NO_FIELD,
-                              FLAG_NO_GRAVITY, Compass, atan2, cdeg_to_kang, cos, heading,
-                              kang_to_cdeg, kang_to_str, sin)
+from firmware.compass import FLAG_DIP_HIGH, FLAG_GIMBAL, FLAG_INTERFERENCE, FLAG_NO_FIELD, FLAG_NO_GRAVITY, Compass, heading
+from firmware.trig import atan2, cdeg_to_kang, cos, kang_to_cdeg, kang_to_str, sin
 from tests import intcheck, mp
 
 KANG_PER_RAD = 65536 / (2 * math.pi)
@@ -411,8 +410,8 @@ def test_zero_field_or_zero_gravity_is_an_error_not_a_heading():
 
 # Two instrumented copies, so the heading path's headroom is not mixed with atan2's own
 # (atan2 of an int16 pair forms n << 15 up to 2**30 - 2**15 by design).
-CHECKED, STATS = intcheck.load("heading")
-CHECKED_TRIG, STATS_TRIG = intcheck.load("heading")
+CHECKED, STATS = intcheck.load("compass")
+CHECKED_TRIG, STATS_TRIG = intcheck.load("trig")
 CORNERS = (-32768, -32767, -16385, -1, 0, 1, 16384, 32767)
 GS = ([-32768, -32768, -32768], [32767, 1, -1], [0, 0, 1], [1, 0, 0], [32767, -32768, 32767],
       [-16385, 16384, -1], [-32767, -32767, -32767])
@@ -458,7 +457,7 @@ def test_atan2_sin_cos_never_leave_small_int_range(y, x, a):
 
 
 def test_heading_path_headroom_matches_the_design_bound():
-    mod, stats = intcheck.load("heading")
+    mod, stats = intcheck.load("compass")
     corner_sweep(mod)
     # the analysis is tight (the corners reach > 0.8 of it) and holds
     assert 0.8 * DESIGN_BOUND < stats.max_abs <= DESIGN_BOUND < 1 << 30
@@ -467,14 +466,14 @@ def test_heading_path_headroom_matches_the_design_bound():
 # ------------------------------------------------------------------ MicroPython
 
 def test_heading_bit_identical_on_micropython():
-    out = mp.json_lines(mp.parity(["tests/scenarios/heading_parity.py"]))
+    out = mp.json_lines(mp.parity(["tests/scenarios/compass_parity.py"]))
     names = [row["name"] for row in out]
     assert names == ["atan2", "sin", "cos", "heading_grid", "heading_random", "convert", "axes"]
     assert all(len(row["v"]) >= 15 for row in out)
 
 
 def test_heading_path_allocates_nothing_on_micropython():
-    out = mp.json_lines(mp.run(["tests/scenarios/heading_alloc.py"], micro=True))[0]
+    out = mp.json_lines(mp.run(["tests/scenarios/compass_alloc.py"], micro=True))[0]
     # the detector works: an oversized frame is seen by mem_total, and slips past heap_lock
     assert out["control_frame_bytes"] > 0 and out["control_under_lock"] == "ok"
     assert out["locked_loop"] == "ok"

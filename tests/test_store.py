@@ -12,9 +12,8 @@ import zlib
 import pytest
 from hypothesis import given, strategies as st
 
-from firmware import calstore
-from firmware.calstore import (CalStore, MAX_PAYLOAD, crc32, crc32_int, decode_record,
-                               encode_record)
+from firmware import store as calstore
+from firmware.store import CalStore, MAX_PAYLOAD, crc32, crc32_int, decode_record, encode_record
 from firmware.errors import StoreError
 from tests import mp
 
@@ -437,7 +436,7 @@ def test_real_filesystem_round_trip_on_cpython(tmp_path):
 # ---------------------------------------------------------------- MicroPython
 
 def test_records_and_crc_bit_identical_on_micropython():
-    lines = mp.json_lines(mp.parity(["tests/scenarios/calstore_parity.py"]))
+    lines = mp.json_lines(mp.parity(["tests/scenarios/store_parity.py"]))
     # an independent check of one line: the record the scenario prints first
     assert lines[0][1] == reference_record(bytes(range(40)), "qmc5883l", 0, 1).hex()
     assert any(line[0] == "crc" for line in lines)
@@ -448,7 +447,7 @@ def test_real_filesystem_round_trip_on_micropython(tmp_path):
     for micro in (False, True):
         d = tmp_path / ("mp" if micro else "cp")
         d.mkdir()
-        outs.append(mp.run(["tests/scenarios/calstore_fs.py", str(d)], micro=micro))
+        outs.append(mp.run(["tests/scenarios/store_fs.py", str(d)], micro=micro))
     assert outs[0] == outs[1]
     steps = dict((line[0], line[1:]) for line in mp.json_lines(outs[1]))
     assert steps["empty"] == ["missing"]

@@ -46,11 +46,7 @@ try:
 except ImportError:  # a port built without binascii, or without its crc32
     _crc32_builtin = None
 
-try:
-    from micropython import const
-except ImportError:  # CPython
-    def const(x):
-        return x
+from firmware.compat import const
 
 REASON_MISSING = "missing"                  # no file in the slot
 REASON_TRUNCATED = "truncated"              # shorter than its header says (a cut write)
@@ -69,7 +65,9 @@ HEADER_LEN = const(32)
 MAX_PAYLOAD = const(4096)      # bytes; a calibration is about a hundred
 _HEADER = "<4sBBH16sBBHI"      # magic, version, header len, payload len, sensor, range, 0, 0, seq
 _SENSOR_LEN = const(16)
-_ENOENT = const(2)
+# errno of a missing file: 2 (ENOENT) on CPython and most ports, 44 on the WebAssembly port
+# (Emscripten's numbering)
+_ENOENT = (2, 44)
 
 # Why load() failed when no slot is usable: the most telling reason of the two slots.
 _REASON_RANK = (REASON_OTHER_SENSOR, REASON_OTHER_RANGE, REASON_UNKNOWN_VERSION,
@@ -211,7 +209,7 @@ class CalStore:
         try:
             f = self.fs.open(path, "rb")
         except OSError as e:
-            if e.args and e.args[0] == _ENOENT:
+            if e.args and e.args[0] in _ENOENT:
                 return None
             raise
         try:
@@ -312,7 +310,7 @@ class CalStore:
             try:
                 self.fs.remove(self.paths[i])
             except OSError as e:
-                if not (e.args and e.args[0] == _ENOENT):
+                if not (e.args and e.args[0] in _ENOENT):
                     raise
         self.seq = None
         self.path = None

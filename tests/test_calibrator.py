@@ -10,13 +10,15 @@ import numpy as np
 import pytest
 from hypothesis import find, given, strategies as st
 
-from firmware import accum, magcal
+from tests import solve_ref
+from firmware import acceptance, accum, calibration, calibrator
 from firmware.errors import CalibrationRejected
-from firmware.magcal import UNCALIBRATED, Calibration, Calibrator
+from firmware.calibration import UNCALIBRATED, Calibration
+from firmware.calibrator import Calibrator
 from tests import intcheck, mp
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "scenarios"))
-from magcal_parity import CPG, V_UT, W, sim_raw  # noqa: E402
+from calibrator_parity import CPG, V_UT, W, sim_raw  # noqa: E402
 
 i16 = st.integers(min_value=-32768, max_value=32767)
 
@@ -41,7 +43,7 @@ def exact_q15(invw, raw, offset):
 
 # ---- Q15 correction -------------------------------------------------------------------------
 
-CHECKED, STATS = intcheck.load("magcal")
+CHECKED, STATS = intcheck.load("calibration")
 
 
 @given(invw_q15(), st.tuples(i16, i16, i16), st.tuples(i16, i16, i16))
@@ -72,7 +74,7 @@ def app_note_literal(invw, raw, offset):
 
 
 def test_app_note_literal_code_wraps_where_ours_saturates():
-    # a calibration our solver produced (tests/scenarios/magcal_parity.py, model 10)
+    # a calibration our solver produced (tests/scenarios/calibrator_parity.py, model 10)
     c = Calibration(model=10, offset=(14398, -9596, 4803),
                     invw=(25173, -1154, 768, -1154, 30077, -1237, 768, -1237, 27945),
                     field=6013, field_out=5110)
@@ -102,7 +104,7 @@ def test_our_q15_sums_cannot_overflow_int32_while_an_unnormalised_matrix_can(m, 
 
 
 def test_correct_allocates_nothing_on_micropython():
-    out = json.loads(mp.run(["tests/scenarios/magcal_alloc.py"], micro=True))
+    out = json.loads(mp.run(["tests/scenarios/calibrator_alloc.py"], micro=True))
     assert out["correct_calls"] == 280 and out["correct_allocated"] == 0
     assert out["buffer_full"] and out["add_calls"] == 40 and out["add_allocated"] == 0
     assert out["correct_mem_total_bytes_per_1000"] == 0
@@ -119,16 +121,38 @@ def test_uncalibrated_correction_is_the_identity_for_half_the_int16_range():
 # ---- payload --------------------------------------------------------------------------------
 
 @given(st.sampled_from([None, "minmax", 4, 7, 10]), st.tuples(i16, i16, i16), invw_q15(),
-       st.integers(0, 1 << 30), st.integers(0, 1 << 30), st.integers(0, 65535),
+       st.integers(1, (1 << 30) - 1), st.integers(1, (1 << 30) - 1), st.integers(0, 65535),
        st.integers(0, 65535), st.integers(0, 100))
 def test_payload_round_trips(model, off, m, field, field_out, fe, n, cov):
     c = Calibration(model=model, offset=off, invw=m, field=field, field_out=field_out,
                     fit_error=fe, samples=n, coverage=cov)
     b = c.to_bytes()
-    assert len(b) == magcal.PAYLOAD_SIZE
+    assert len(b) == calibration.PAYLOAD_SIZE
     d = Calibration.from_bytes(b)
     assert d == c and d.to_bytes() == b
     assert (d.model, d.offset, d.invw, d.field, d.fit_error) == (model, off, m, field, fe)
+
+
+@pytest.mark.parametrize("kw, word", [
+    (dict(field=-5), "field=-5"), (dict(field_out=-1), "field_out=-1"),
+    (dict(field=0), "never 0"), (dict(field_out=0), "never 0"), (dict(coverage=101), "coverage"),
+    (dict(fit_error=-1), "fit_error"), (dict(samples=-3), "samples"),
+    (dict(field=1.5), "field=1.5"), (dict(offset=(1, 2, 40000)), "int16"),
+    (dict(invw=(32767, 0, 0, 0, 32767.0, 0, 0, 0, 32767)), "int16")])
+def test_a_record_whose_meaning_is_impossible_is_refused_naming_the_field(kw, word):
+    args = dict(model=10, offset=(1, 2, 3), field=500, field_out=500, fit_error=120,
+                samples=200, coverage=80)
+    args.update(kw)
+    with pytest.raises(ValueError, match=word.replace("(", r"\(").replace(".", r"\.")):
+        Calibration(**args)
+
+
+def test_payload_with_a_negative_field_is_refused_by_from_bytes():
+    import struct
+    good = bytearray(Calibration(model=4, offset=(1, 2, 3), field=500, field_out=500).to_bytes())
+    struct.pack_into("<i", good, 38, -500)   # B, after version..samples (8), V (12), InvW (18)
+    with pytest.raises(ValueError, match="field=-500"):
+        Calibration.from_bytes(bytes(good))
 
 
 def test_payload_refuses_what_correct_could_not_use():
@@ -156,7 +180,7 @@ def test_calibrator_sums_equal_batch_sums_through_evictions_and_separation_chang
     kept = sum(1 for p in pts if cal.add(*p))
     held = [tuple(cal.buffer.data[3 * i:3 * i + 3]) for i in range(cal.count)]
     assert kept >= cal.count
-    assert cal.moments.s == accum.batch(held, cal.moments.c)
+    assert cal.moments.s == solve_ref.batch(held, cal.moments.c)
 
 
 # ---- synthetic calibration through the simulator ------------------------------------------
@@ -168,7 +192,7 @@ def sim():
 
 
 def ref_fit(pts, model):
-    from tests.test_solve import numpy_fit
+    from host_sim.cli.benchmarks.reference import numpy_fit
     return numpy_fit(pts, model)
 
 
@@ -243,7 +267,7 @@ def test_time_sliced_solve_gives_the_same_calibration_and_ignores_later_samples(
 
 
 def test_ten_element_solve_of_a_full_buffer_takes_under_100_ms_on_micropython():
-    out = json.loads(mp.run(["tests/scenarios/magcal_bench.py"], micro=True))
+    out = json.loads(mp.run(["tests/scenarios/calibrator_bench.py"], micro=True))
     assert out["held"] == 300
     assert out["solve_10_us"] < 100000
     assert out["sliced_10_steps"] > 20
@@ -256,10 +280,10 @@ def test_ten_element_solve_of_a_full_buffer_takes_under_100_ms_on_micropython():
                                                    "lsm9ds1_jremington.csv")),
                     reason="../shared/datasets is not beside the repository")
 def test_calibrator_results_are_bit_identical_on_micropython():
-    lines = mp.json_lines(mp.parity(["tests/scenarios/magcal_parity.py"]))
+    lines = mp.json_lines(mp.parity(["tests/scenarios/calibrator_parity.py"]))
     assert len(lines) == 7
     assert [r[0] for r in lines[1:5]] == ["minmax", "4", "7", "10"]
-    assert all(len(r[1]) == magcal.PAYLOAD_SIZE for r in lines[1:5])   # all accepted
+    assert all(len(r[1]) == calibration.PAYLOAD_SIZE for r in lines[1:5])   # all accepted
 
 
 # ---- acceptance: every reason reachable ----------------------------------------------------
@@ -295,7 +319,7 @@ def test_too_few_samples_for_the_model():
     cal = calibrator_with(sphere(60, (0, 0, 0), 6000), counts_per_gauss=CPG)
     assert 40 <= cal.count < 100
     e = rejected(cal, 10)
-    assert e.reason == magcal.REASON_TOO_FEW_SAMPLES and "needs 100" in e.detail
+    assert e.reason == acceptance.REASON_TOO_FEW_SAMPLES and "needs 100" in e.detail
     assert cal.solve(model=4).model == 4
 
 
@@ -312,32 +336,32 @@ def test_flat_spin_is_refused_as_planar_by_every_model():
         cal.add(*struct.unpack("<hhh", b.bus.readfrom_mem(0x0D, 0, 6)))
     for m in ("minmax", 4, 7, 10):
         e = rejected(cal, m)
-        assert e.reason == magcal.REASON_PLANAR, (m, e)
+        assert e.reason == acceptance.REASON_PLANAR, (m, e)
 
 
 def test_low_coverage_when_samples_cover_a_cap():
     cal = calibrator_with(sphere(2000, (500, -300, 200), 6000, zmin=0.65), separation=600)
     e = rejected(cal, 4)
-    assert e.reason == magcal.REASON_LOW_COVERAGE and "needs 30" in e.detail
+    assert e.reason == acceptance.REASON_LOW_COVERAGE and "needs 30" in e.detail
 
 
 def test_singular_when_the_quadric_is_not_an_ellipsoid():
     cal = calibrator_with(sphere(300, (0, 0, 0), 5000, hyper=True), separation=300)
     e = rejected(cal, 10)
-    assert e.reason == magcal.REASON_SINGULAR
+    assert e.reason == acceptance.REASON_SINGULAR
 
 
 def test_offset_out_of_range_when_the_centre_is_beyond_int16():
     pts = [p for p in sphere(3000, (45000, 0, 0), 20000, seed=4) if p[0] <= 32767]
     cal = calibrator_with(pts, separation=2000)
     e = rejected(cal, 4)
-    assert e.reason == magcal.REASON_OFFSET_OUT_OF_RANGE
+    assert e.reason == acceptance.REASON_OFFSET_OUT_OF_RANGE
 
 
 def test_soft_iron_out_of_range_beyond_five_to_one():
     pts = sphere(3000, (100, 100, 100), 6000, axes=(2.0, 1.0, 2.0 / 5.6), seed=5, noise=2)
     e = rejected(calibrator_with(pts, separation=500), 10)
-    assert e.reason == magcal.REASON_SOFT_IRON_OUT_OF_RANGE
+    assert e.reason == acceptance.REASON_SOFT_IRON_OUT_OF_RANGE
     ok = sphere(3000, (100, 100, 100), 6000, axes=(2.0, 1.0, 2.0 / 4.5), seed=5, noise=2)
     assert calibrator_with(ok, separation=500).solve(model=10).model == 10
 
@@ -345,20 +369,20 @@ def test_soft_iron_out_of_range_beyond_five_to_one():
 def test_field_out_of_range_with_and_without_the_sensitivity():
     weak = sphere(2000, (100, 200, 300), 600)         # 5 uT at 12000 counts/G
     e = rejected(calibrator_with(weak, counts_per_gauss=CPG, separation=60), 10)
-    assert e.reason == magcal.REASON_FIELD_OUT_OF_RANGE and "5 uT" in e.detail
+    assert e.reason == acceptance.REASON_FIELD_OUT_OF_RANGE and "5 uT" in e.detail
     strong = sphere(2000, (100, 200, 300), 12000)     # 100 uT
     e = rejected(calibrator_with(strong, counts_per_gauss=CPG), 10)
-    assert e.reason == magcal.REASON_FIELD_OUT_OF_RANGE
+    assert e.reason == acceptance.REASON_FIELD_OUT_OF_RANGE
     tiny = sphere(3000, (0, 0, 0), 12)                # unknown sensitivity: 12 counts
     e = rejected(calibrator_with(tiny, separation=1), 4)
-    assert e.reason == magcal.REASON_FIELD_OUT_OF_RANGE and "< 16" in e.detail
+    assert e.reason == acceptance.REASON_FIELD_OUT_OF_RANGE and "< 16" in e.detail
 
 
 def test_fit_error_high_for_a_sphere_fit_to_a_two_to_one_ellipsoid():
     pts = sphere(3000, (0, 0, 0), 6000, axes=(1.3, 1.0, 0.65), seed=6)
     cal = calibrator_with(pts, counts_per_gauss=CPG)
     e = rejected(cal, 4)
-    assert e.reason == magcal.REASON_FIT_ERROR_HIGH and "> 15.00 %" in e.detail
+    assert e.reason == acceptance.REASON_FIT_ERROR_HIGH and "> 15.00 %" in e.detail
     assert cal.solve(model=10).fit_error < 20
 
 
@@ -368,8 +392,8 @@ def test_not_better_until_the_current_fit_error_has_aged():
     first = cal.solve()
     assert cal.current is first and first.fit_error > 0
     e = rejected(cal)
-    assert e.reason == magcal.REASON_NOT_BETTER
-    cal.age(magcal._FIT_ERROR_DOUBLING_S // 2)
+    assert e.reason == acceptance.REASON_NOT_BETTER
+    cal.age(calibrator._FIT_ERROR_DOUBLING_S // 2)
     assert cal.aged_fit_error() == first.fit_error + first.fit_error // 2
     second = cal.solve()             # same fit error, now below the aged one
     assert second.fit_error == first.fit_error and cal.current is second
@@ -383,17 +407,17 @@ def test_a_higher_order_model_gets_through_at_three_and_a_half_percent():
     c = cal.solve(model=10)
     assert 1 < c.fit_error <= 350
     cal.current = Calibration(model=10, fit_error=1, field=6000, field_out=6000)
-    assert rejected(cal, 10).reason == magcal.REASON_NOT_BETTER
+    assert rejected(cal, 10).reason == acceptance.REASON_NOT_BETTER
 
 
 def test_aging_doubles_per_period_and_saturates():
     cal = Calibrator(current=Calibration(model=10, fit_error=100, field=1, field_out=1))
     assert cal.aged_fit_error() == 100
-    cal.age(magcal._FIT_ERROR_DOUBLING_S)
+    cal.age(calibrator._FIT_ERROR_DOUBLING_S)
     assert cal.aged_fit_error() == 200
-    cal.age(magcal._FIT_ERROR_DOUBLING_S)
+    cal.age(calibrator._FIT_ERROR_DOUBLING_S)
     assert cal.aged_fit_error() == 400
-    cal.age(100 * magcal._FIT_ERROR_DOUBLING_S)
+    cal.age(100 * calibrator._FIT_ERROR_DOUBLING_S)
     assert cal.aged_fit_error() >= 1 << 30
 
 
@@ -412,7 +436,7 @@ def test_min_max_is_seed_002_with_a_diagonal_q15_matrix():
     pts = sphere(3000, (1000, -2000, 500), 5000, axes=(1.2, 1.0, 0.8), seed=10)
     cal = calibrator_with(pts, model="minmax", counts_per_gauss=CPG)
     c = cal.solve()
-    allp = np.array(pts, dtype=float)      # seed 002: extremes of every reading
+    allp = np.array(pts, dtype=float)      # the min/max article: extremes of every reading
     lo, hi = allp.min(axis=0), allp.max(axis=0)
     assert np.abs(np.array(c.offset) - (lo + hi) / 2).max() <= 0.5
     assert [c.invw[1], c.invw[2], c.invw[3], c.invw[5], c.invw[6], c.invw[7]] == [0] * 6
@@ -443,7 +467,7 @@ def test_any_samples_give_a_usable_calibration_or_a_named_refusal(pts, model, se
     usable_or_refused(pts, model, sep)
 
 
-REASONS = {v for k, v in vars(magcal).items() if k.startswith("REASON_")}
+REASONS = {v for k, v in vars(acceptance).items() if k.startswith("REASON_")}
 
 
 @given(st.integers(0, 2 ** 32 - 1), st.integers(20, 1500), st.sampled_from(["minmax", 4, 7, 10]),
@@ -486,4 +510,4 @@ def test_a_fit_over_more_of_the_sphere_replaces_a_partial_one_with_a_lower_fit_e
                        fit_error=40, coverage=c.coverage)
     cal.current = same
     e = rejected(cal, 10)
-    assert e.reason == magcal.REASON_NOT_BETTER and "coverage" in e.detail
+    assert e.reason == acceptance.REASON_NOT_BETTER and "coverage" in e.detail

@@ -2,7 +2,7 @@
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from firmware import sensors
+from firmware import detect, i2cdevice
 from firmware.errors import BusError, DataReadyTimeout, SensorNotFound, SensorOverflow
 from firmware.hmc5883l import HMC5883L
 from firmware.mpu6050 import MPU6050
@@ -18,7 +18,7 @@ from tests.test_qmc5883l import Spy
 
 
 def _detect(b, **kw):
-    return sensors.detect(b.bus, delay_us=b.sleep_us, **kw)
+    return detect.detect(b.bus, delay_us=b.sleep_us, **kw)
 
 
 @pytest.mark.parametrize("chip,cls,addr", [
@@ -50,13 +50,13 @@ def test_detect_passes_each_driver_only_its_own_options():
 
 def test_detect_rejects_an_unknown_option():
     with pytest.raises(TypeError) as e:
-        sensors.detect(make_board("qmc5883l").bus, rnage=8)
+        detect.detect(make_board("qmc5883l").bus, rnage=8)
     assert "rnage" in str(e.value)
 
 
 def test_empty_bus_names_every_address_tried_and_that_nothing_answered():
     with pytest.raises(SensorNotFound) as e:
-        sensors.detect(SimI2C(SimClock()))
+        detect.detect(SimI2C(SimClock()))
     msg = str(e.value)
     for a in ("0x0D", "0x1E", "0x2C", "0x68", "0x69"):
         assert a in msg
@@ -71,12 +71,12 @@ def test_wrong_ids_are_reported_with_what_each_address_answered():
     bus.attach(0x1E, RegisterFile({0x0A: 0x41, 0x0B: 0x42, 0x0C: 0x43}))
     bus.attach(0x68, RegisterFile({0x75: 0x00}))  # a DS3231 RTC shares 0x68
     with pytest.raises(SensorNotFound) as e:
-        sensors.detect(bus)
+        detect.detect(bus)
     msg = str(e.value)
     assert "[0x0D, 0x1E, 0x68]" in msg
     assert "reads 0x42" in msg and "0x41 0x42 0x43" in msg and "WHO_AM_I (0x75) reads 0x00" in msg
     assert e.value.found == (0x0D, 0x1E, 0x68)
-    assert sensors.detect_accel(bus) is None
+    assert detect.detect_accel(bus) is None
 
 
 def test_a_chip_that_answers_the_scan_but_fails_the_probe_is_reported():
@@ -90,7 +90,7 @@ def test_a_chip_that_answers_the_scan_but_fails_the_probe_is_reported():
 @pytest.mark.parametrize("chip,accel", [("gy87", True), ("gy87-qmc", True), ("qmc5883l", False)])
 def test_detect_accel(chip, accel):
     b = make_board(chip)
-    a = sensors.detect_accel(b.bus)
+    a = detect.detect_accel(b.bus)
     assert (a is not None) == accel
     if accel:
         assert type(a) is MPU6050 and a.counts_per_g == 16384
@@ -99,13 +99,13 @@ def test_detect_accel(chip, accel):
 
 def test_detect_accel_on_a_board_with_a_separate_gy521():
     b = make_board("hmc5883l", accel=True)
-    a = sensors.detect_accel(b.bus, accel_range=4)
+    a = detect.detect_accel(b.bus, accel_range=4)
     assert a.counts_per_g == 8192
     assert type(_detect(b)) is HMC5883L
 
 
 def test_bus_error_message_names_address_register_errno():
-    e = sensors.bus_error(OSError(5), 0x1E, 0x09)
+    e = i2cdevice.bus_error(OSError(5), 0x1E, 0x09)
     assert isinstance(e, BusError) and isinstance(e, OSError)
     assert (e.address, e.register, e.errno) == (0x1E, 0x09, 5)
     assert "0x1E" in str(e) and "0x09" in str(e) and "errno 5" in str(e) and "EIO" in str(e)
@@ -192,7 +192,7 @@ def test_qmc5883p_decode_never_leaves_small_int_range(raw):
 @given(period=st.integers(min_value=1, max_value=1 << 28), polls=st.integers(1, 300))
 @settings(max_examples=100)
 def test_counted_wait_times_out_after_its_bound_and_stays_small_int(period, polls):
-    mod, stats = intcheck.load("sensors")
+    mod, stats = intcheck.load("i2cdevice")
     bus = SimI2C(SimClock())
     bus.attach(0x0D, RegisterFile())  # status never ready
     poll = max(period >> 4, 250)
@@ -207,7 +207,7 @@ def test_counted_wait_times_out_after_its_bound_and_stays_small_int(period, poll
 
 def test_timeout_out_of_range_is_value_error():
     with pytest.raises(ValueError):
-        sensors.Device(SimI2C(SimClock()), 0x0D, 1000, timeout_us=(1 << 29) + 1)
+        i2cdevice.Device(SimI2C(SimClock()), 0x0D, 1000, timeout_us=(1 << 29) + 1)
 
 
 # -- the same scenario on CPython and MicroPython; allocation-free per-sample path
@@ -232,7 +232,7 @@ def test_read_into_allocates_nothing_on_micropython():
         assert o["net_bytes"] == 0, o
         assert o["instrument_bytes"] == 0, o
         # not even a transient frame: the try/except around the bus call is native code
-        # (firmware/sensors.py), whose frame lives on the C stack
+        # (firmware/detect.py), whose frame lives on the C stack
         assert o["frame_bytes"] == 0, o
     timeouts = [o for o in out if "board_timeout_us" in o]
     assert timeouts and timeouts[0]["waited_us"] >= timeouts[0]["board_timeout_us"]
@@ -251,7 +251,7 @@ def test_non_bus_errors_carry_no_errno_on_either_interpreter():
 @given(st.binary(min_size=6, max_size=6))
 def test_le16x3_decode_is_exact_and_stays_small_int(raw):
     import struct
-    mod, stats = intcheck.load("sensors")
+    mod, stats = intcheck.load("i2cdevice")
     out = [0, 0, 0]
     mod.le16x3_into(raw, out)
     assert tuple(out) == struct.unpack("<hhh", raw)

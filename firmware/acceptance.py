@@ -1,0 +1,165 @@
+"""Acceptance of a new calibration: the thresholds, and a named reason for every refusal.
+
+    from firmware import acceptance
+    acceptance.check_field(field_counts, counts_per_gauss)   # raises CalibrationRejected(reason)
+
+A fit is accepted only when it passes every check below, in this order (the calibrator runs
+them as the solve reaches each quantity); each refusal raises
+CalibrationRejected(REASON_*, detail) with the numbers in the detail:
+  too_few_samples   fewer held samples than the model needs (MIN_SAMPLES).
+  planar            the samples do not determine the model (Judd's degenerate ellipsoids):
+                    singular normal equations, or a parameter whose degeneracy ratio rho
+                    (firmware/solve.py) is below its limit - e.g. a flat spin.
+  singular          the solver broke down: the quadric is not an ellipsoid, or W^-1 did not
+                    converge.
+  offset_out_of_range  V outside int16 (correct() could not represent it; ArduPilot also
+                    bounds offsets).
+  low_coverage      fewer than MIN_COVERAGE percent of 100 equal-area sphere regions, seen
+                    from the fitted centre V, hold a sample.
+  soft_iron_out_of_range  the eigenvalues of W^-1 spread more than 5:1 (ArduPilot refuses
+                    diagonal scalings outside 0.2 .. 5 for the same reason).
+  field_out_of_range  B outside 10 .. 90 uT (NXP) when counts_per_gauss is known; else B below
+                    _MIN_FIELD_COUNTS counts (too coarse to correct).
+  fit_error_high    fit error above max_fit_error (hundredths of a percent).
+  not_better        the current calibration's fit error, aged, is lower ("sour grapes", Judd);
+                    a higher-order model gets through at <= 3.5 % (NXP), and a fit covering
+                    15 points more of the sphere at up to 3/2 the aged fit error.
+"""
+from firmware.calibration import MINMAX, ORDER
+from firmware.compat import const
+from firmware.errors import CalibrationRejected
+from firmware.fixedpoint import rdiv
+
+REASON_TOO_FEW_SAMPLES = "too_few_samples"
+REASON_PLANAR = "planar"
+REASON_SINGULAR = "singular"
+REASON_LOW_COVERAGE = "low_coverage"
+REASON_OFFSET_OUT_OF_RANGE = "offset_out_of_range"
+REASON_SOFT_IRON_OUT_OF_RANGE = "soft_iron_out_of_range"
+REASON_FIELD_OUT_OF_RANGE = "field_out_of_range"
+REASON_FIT_ERROR_HIGH = "fit_error_high"
+REASON_NOT_BETTER = "not_better"
+
+# Minimum held samples, in units of one great circle at the default separation (~33):
+# more than one circle for min/max and 4 elements, than two for 7, than three for 10
+# (Judd: a 3D ellipsoid needs data from more than two independent planes).
+MIN_SAMPLES = {MINMAX: 40, 4: 40, 7: 70, 10: 100}
+MIN_SAMPLES_GEOMETRY = const(12)  # enough to tell a flat spin from a start (4-element fit)
+# Coverage (% of 100 equal-area regions around V; one great circle crosses ~20 of them);
+# min/max needs both extremes of every axis.
+MIN_COVERAGE = {MINMAX: 40, 4: 30, 7: 40, 10: 50}
+# Degeneracy ratios rho (firmware/solve.py; parts per million). A fully covered sphere gives
+# 333333 for the centre, 66667 (dx dy) and 200000 (dx^2 - dz^2) for the shape; soft iron
+# lowers them as the ellipsoid flattens (roughly as 1 / axis ratio^2), so each threshold is
+# half the value measured on a fully covered ellipsoid with 5:1 axes, the most anisotropic
+# one accepted (_MAX_SOFT_IRON_COND_X100). The planar wind-vane log gives 1/10 of these.
+_MIN_RHO_CENTRE_PPM = const(17000)  # all models (5:1 ellipsoid: 34000)
+_MIN_RHO_SHAPE_7_PPM = const(12500)  # 7 elements (5:1 ellipsoid: 25000)
+_MIN_RHO_SHAPE_10_PPM = const(1400)  # 10 elements (5:1 ellipsoid: 2870)
+_MAX_SOFT_IRON_COND_X100 = const(500)  # W^-1 eigenvalues within 5:1 (ArduPilot: 0.2 .. 5)
+_MIN_FIELD_UT = const(10)           # NXP: plausible geomagnetic field 10 .. 90 uT
+_MAX_FIELD_UT = const(90)
+_MIN_FIELD_COUNTS = const(16)       # unknown sensitivity: 1 count is then >= 6 % of B
+# NXP's 15 %: the definition is NXP's, so its limit carries over. It refuses a sphere fit to a
+# 2:1 ellipsoid (~20 %); real 10-element fits here give 0.6-3.7 %, 9.5 % on a noisy QMC log.
+DEFAULT_MAX_FIT_ERROR = const(1500)  # hundredths of a percent
+_FIT_ERROR_UPGRADE = const(350)     # NXP: a higher-order model is accepted at <= 3.5 %
+_COVERAGE_GAIN = const(15)          # points of coverage that make a wider fit "better"...
+_COVERAGE_FIT_NUM = const(3)        # ...if its fit error is within 3/2 of the current's:
+_COVERAGE_FIT_DEN = const(2)        # a fit over part of the sphere looks better than it is
+
+
+def reject(reason, detail):
+    raise CalibrationRejected(reason, detail)
+
+
+def _pct(x100):
+    return "%d.%02d %%" % (x100 // 100, x100 % 100)
+
+
+def check_samples(n, model):
+    """too_few_samples unless `n` held samples meet the model's minimum."""
+    need = MIN_SAMPLES[model]
+    if n < need:
+        reject(REASON_TOO_FEW_SAMPLES, "%d samples held, model %s needs %d" % (n, model, need))
+
+
+def flat_spin(n, model, need):
+    """The refusal for a buffer that never filled because the samples lie near a plane."""
+    reject(REASON_PLANAR, "%d samples held (model %s needs %d), all near a plane: turn the "
+           "board over, not only around" % (n, model, need))
+
+
+def rho_limit(centre, model):
+    """The smallest acceptable degeneracy ratio (ppm) of a centre or a shape parameter."""
+    if centre:
+        return _MIN_RHO_CENTRE_PPM
+    return _MIN_RHO_SHAPE_7_PPM if model == 7 else _MIN_RHO_SHAPE_10_PPM
+
+
+def check_rho(rho_ppm, centre, model, name):
+    """planar when the least determined parameter's rho is below its limit."""
+    lim = rho_limit(centre, model)
+    if rho_ppm < lim:
+        reject(REASON_PLANAR, "%s is undetermined (rho %d ppm < %d, %d-element fit): samples "
+               "confined near a plane, or two?" % (name, rho_ppm, lim, model))
+
+
+def check_offset(v):
+    """offset_out_of_range unless V fits int16 (Calibration.correct's domain)."""
+    for i in range(3):
+        if not -32768 <= v[i] <= 32767:
+            reject(REASON_OFFSET_OUT_OF_RANGE, "V = (%d, %d, %d) counts is outside int16"
+                   % (v[0], v[1], v[2]))
+
+
+def check_coverage(cov, model):
+    if cov < MIN_COVERAGE[model]:
+        reject(REASON_LOW_COVERAGE, "%d %% of sphere regions covered around V, model %s needs "
+               "%d %%" % (cov, model, MIN_COVERAGE[model]))
+
+
+def check_soft_iron(cond_x100, field_out):
+    """soft_iron_out_of_range unless InvW is positive definite with eigenvalues within 5:1."""
+    if cond_x100 is None or cond_x100 > _MAX_SOFT_IRON_COND_X100 or field_out <= 0:
+        reject(REASON_SOFT_IRON_OUT_OF_RANGE, "W^-1 eigenvalue ratio %s/100 > %d/100"
+               % (cond_x100, _MAX_SOFT_IRON_COND_X100))
+
+
+def field_ok(field, counts_per_gauss):
+    """True when B (counts) is a plausible geomagnetic field for this sensitivity."""
+    if counts_per_gauss:
+        # B [uT] = field * 100 / counts_per_gauss
+        return _MIN_FIELD_UT * counts_per_gauss <= field * 100 <= _MAX_FIELD_UT * counts_per_gauss
+    return field >= _MIN_FIELD_COUNTS
+
+
+def check_field(field, counts_per_gauss):
+    if field_ok(field, counts_per_gauss):
+        return
+    if counts_per_gauss:
+        reject(REASON_FIELD_OUT_OF_RANGE, "B = %d counts = %d uT at %d counts/G, not in %d..%d "
+               "uT" % (field, rdiv(field * 100, counts_per_gauss),
+                       counts_per_gauss, _MIN_FIELD_UT, _MAX_FIELD_UT))
+    reject(REASON_FIELD_OUT_OF_RANGE, "B = %d counts < %d: too coarse to calibrate"
+           % (field, _MIN_FIELD_COUNTS))
+
+
+def check_fit_error(fe, max_fit_error):
+    if fe > max_fit_error:
+        reject(REASON_FIT_ERROR_HIGH, "fit error %s > %s" % (_pct(fe), _pct(max_fit_error)))
+
+
+def check_better(model, fe, cov, current, aged):
+    """not_better unless the new fit beats `current` (whose fit error aged to `aged`)."""
+    if current.model is None:
+        return
+    upgrade = ORDER[model] > ORDER[current.model] and fe <= _FIT_ERROR_UPGRADE
+    # A fit over more of the sphere is worth a somewhat higher fit error: the first fit, on
+    # ~100 samples from part of it, would otherwise never be replaced.
+    wider = (cov >= current.coverage + _COVERAGE_GAIN and ORDER[model] >= ORDER[current.model]
+             and fe * _COVERAGE_FIT_DEN <= aged * _COVERAGE_FIT_NUM)
+    if fe >= aged and not upgrade and not wider:
+        reject(REASON_NOT_BETTER, "fit error %s at %d %% coverage is not better than the "
+               "current calibration's %s (aged) at %d %% (model %s)"
+               % (_pct(fe), cov, _pct(aged), current.coverage, current.model))

@@ -1,0 +1,134 @@
+"""The calibration record: hard iron V, inverse soft iron InvW in Q15, field B; applied with
+`>> 15` and serialised for the store.
+
+    from firmware.calibration import Calibration, UNCALIBRATED
+    cal = Calibration(model=10, offset=(120, -80, 35), invw=invw_q15, field=5800, field_out=5790)
+    cal.correct(raw, out)             # out = InvW (raw - V) >> 15: allocation-free, small ints
+    Calibration.from_bytes(cal.to_bytes()) == cal
+
+Calibration(model, offset, invw, field, field_out, fit_error, samples, coverage)
+  model      None (uncalibrated identity), 'minmax', 4, 7 or 10 (AN4246's 4-, 7-, 10-element fits)
+  offset     V, three int16 counts (AN4246 eq. 8: B_raw = W B + V)
+  invw       InvW = W^-1, nine Q15 ints row-major; each row's absolute sum <= 32767
+  field      B, the geomagnetic field strength in raw counts
+  field_out  |correct(raw)| on the calibrated sphere, in counts (B through InvW's Q15 scale)
+  fit_error  hundredths of a percent (AN4246 eq. 24, in NXP's normalisation)
+  samples, coverage   held samples and percent of the sphere covered, at solve time
+Bad values raise ValueError naming the field. .k is InvW then V as array('h'), the argument
+of correct(k, raw, out) and of its fast mirror firmware.fast.correct (same bits).
+
+correct(k, raw, out) writes InvW * sat16(raw - V) >> 15 (rounded) into out[0:3]: AN4246's
+equation 10 in Q15. |InvW row| <= 32767 and |sat16| <= 32768 keep every partial sum below
+2**30 - 2**15, so it stays a small int on a 32-bit board, and the frame (three arguments, three
+locals) stays within the 11 words MicroPython keeps on the C stack: nothing is allocated.
+
+to_bytes() / from_bytes(b): the 46-byte little-endian payload (firmware.store adds the record
+header and CRC); from_bytes raises ValueError naming what is wrong.
+"""
+import struct
+from array import array
+
+from firmware.compat import const
+from firmware.fixedpoint import sat16
+
+MINMAX = "minmax"
+MODELS = (MINMAX, 4, 7, 10)
+ORDER = {None: -1, MINMAX: 0, 4: 4, 7: 7, 10: 10}  # which model is "higher"
+
+_IDENTITY_Q15 = (32767, 0, 0, 0, 32767, 0, 0, 0, 32767)
+_MODEL_CODE = {None: 0, MINMAX: 1, 4: 4, 7: 7, 10: 10}
+_CODE_MODEL = {0: None, 1: MINMAX, 4: 4, 7: 7, 10: 10}
+_PAYLOAD_VERSION = const(1)
+_PAYLOAD = "<BBBBHH3i9hii"  # version, model, coverage, 0, fit_error, samples, V, InvW, B, B_out
+PAYLOAD_SIZE = const(46)
+
+
+def correct(k, raw, out):
+    """out[0:3] = InvW sat16(raw - V) >> 15, rounded; k = InvW (0..8) then V (9..11)."""
+    x = sat16(raw[0] - k[9])
+    y = sat16(raw[1] - k[10])
+    z = sat16(raw[2] - k[11])
+    out[0] = (k[0] * x + k[1] * y + k[2] * z + 16384) >> 15
+    out[1] = (k[3] * x + k[4] * y + k[5] * z + 16384) >> 15
+    out[2] = (k[6] * x + k[7] * y + k[8] * z + 16384) >> 15
+
+
+class Calibration:
+    """One calibration: V (offset, counts), InvW (9 Q15 ints, row-major), B (field, counts).
+
+    correct(raw, out) writes InvW * sat16(raw - V) >> 15 (rounded) into out[0:3]; its
+    magnitude on the calibrated sphere is .field_out counts (= .field scaled by the Q15
+    normalisation of InvW). .fit_error: hundredths of a percent. .model: None
+    (uncalibrated identity), 'minmax', 4, 7 or 10. .samples, .coverage (%) at solve time.
+    """
+
+    def __init__(self, model=None, offset=(0, 0, 0), invw=_IDENTITY_Q15, field=0, field_out=0,
+                 fit_error=0, samples=0, coverage=0):
+        if model not in _MODEL_CODE:
+            raise ValueError("unknown calibration model %r" % (model,))
+        if len(offset) != 3 or len(invw) != 9:
+            raise ValueError("offset needs 3 ints and invw 9, got %d and %d"
+                             % (len(offset), len(invw)))
+        for v in tuple(offset) + tuple(invw):
+            if not isinstance(v, int) or not -32768 <= v <= 32767:
+                raise ValueError("offset and invw take int16 ints, got %r" % (v,))
+        for i in range(3):
+            t = abs(invw[3 * i]) + abs(invw[3 * i + 1]) + abs(invw[3 * i + 2])
+            if t > 32767:  # the small-int bound of correct() rests on this
+                raise ValueError("invw row %d absolute sum %d > 32767" % (i, t))
+        for name, v, lo, hi in (("field", field, 0, 0x3FFFFFFF), ("field_out", field_out, 0,
+                                0x3FFFFFFF), ("fit_error", fit_error, 0, 0x3FFFFFFF),
+                                ("samples", samples, 0, 0x3FFFFFFF), ("coverage", coverage, 0, 100)):
+            if not isinstance(v, int) or not lo <= v <= hi:
+                raise ValueError("calibration %s=%r: expected an int in %d..%d" % (name, v, lo, hi))
+        if model is not None and (field == 0 or field_out == 0):
+            raise ValueError("calibration model %s with field %d, field_out %d counts: a fitted "
+                             "field is never 0" % (model, field, field_out))
+        self.model = model
+        self.offset = (offset[0], offset[1], offset[2])
+        self.invw = tuple(invw)
+        self.k = array("h", self.invw + self.offset)  # correct()'s argument: InvW 0..8, V 9..11
+        self.field = field
+        self.field_out = field_out
+        self.fit_error = fit_error
+        self.samples = samples
+        self.coverage = coverage
+
+    def correct(self, raw, out):
+        """out[0:3] = InvW sat16(raw - V) >> 15, rounded (AN4246 section 3); see correct()."""
+        correct(self.k, raw, out)
+
+    def to_bytes(self):
+        """The 46-byte little-endian payload (storage adds its own header and CRC)."""
+        fe = self.fit_error if self.fit_error < 65535 else 65535
+        n = self.samples if self.samples < 65535 else 65535
+        return struct.pack(_PAYLOAD, _PAYLOAD_VERSION, _MODEL_CODE[self.model], self.coverage,
+                           0, fe, n, self.offset[0], self.offset[1], self.offset[2],
+                           *(self.invw + (self.field, self.field_out)))
+
+    @classmethod
+    def from_bytes(cls, b):
+        """Inverse of to_bytes; raises ValueError naming what is wrong."""
+        if len(b) != PAYLOAD_SIZE:
+            raise ValueError("calibration payload is %d bytes, expected %d"
+                             % (len(b), PAYLOAD_SIZE))
+        f = struct.unpack(_PAYLOAD, b)
+        if f[0] != _PAYLOAD_VERSION:
+            raise ValueError("calibration payload version %d, expected %d"
+                             % (f[0], _PAYLOAD_VERSION))
+        if f[1] not in _CODE_MODEL:
+            raise ValueError("calibration payload model code %d unknown" % f[1])
+        return cls(model=_CODE_MODEL[f[1]], offset=f[6:9], invw=f[9:18], field=f[18],
+                   field_out=f[19], fit_error=f[4], samples=f[5], coverage=f[2])
+
+    def __eq__(self, other):
+        return isinstance(other, Calibration) and self.to_bytes() == other.to_bytes()
+
+    def __repr__(self):
+        return ("Calibration(model=%r, offset=%r, invw=%r, field=%d, field_out=%d, "
+                "fit_error=%d, samples=%d, coverage=%d)" % (
+                    self.model, self.offset, self.invw, self.field, self.field_out,
+                    self.fit_error, self.samples, self.coverage))
+
+
+UNCALIBRATED = Calibration()

@@ -1,0 +1,187 @@
+"""The shape of the tree: one job per module, no import cycles, a heading-only runtime that
+loads without the calibration machinery, portability shims in one place, no emitter
+decorators in plain modules, and a simulator that knows nothing of the firmware."""
+import ast
+import os
+import re
+
+import pytest
+
+from tests import mp
+
+ROOT = mp.ROOT
+FW = os.path.join(ROOT, "firmware")
+PIPELINE = ["compat", "errors", "fixedpoint", "i2cdevice", "detect", "qmc5883l", "hmc5883l",
+            "qmc5883p", "mpu6050", "axes", "samples", "accum", "solve", "calibration",
+            "acceptance", "calibrator", "kang_tables", "trig", "compass", "store", "app", "fast"]
+CALIBRATION_MACHINERY = {"firmware.calibrator", "firmware.solve", "firmware.accum",
+                         "firmware.samples", "firmware.acceptance"}
+
+
+def _modules(folder):
+    return sorted(f[:-3] for f in os.listdir(folder) if f.endswith(".py") and f != "__init__.py")
+
+
+def _imports(path, package, lazy=True):
+    """Every module `path` imports (module level, and inside functions when lazy), as dotted
+    names."""
+    tree = ast.parse(open(path).read(), path)
+    out = set()
+    for node in (ast.walk(tree) if lazy else tree.body):
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            out.add(node.module)
+            if node.module == package:
+                out.update(package + "." + a.name for a in node.names)
+        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+              and node.func.id == "__import__" and node.args
+              and isinstance(node.args[0], ast.BinOp)):
+            out.add(package + ".*")  # detect.driver_class: a chip driver by name
+    return out
+
+
+def _graph(lazy=True):
+    g = {}
+    for m in _modules(FW):
+        deps = _imports(os.path.join(FW, m + ".py"), "firmware", lazy)
+        g[m] = sorted(d.split(".", 1)[1] for d in deps
+                      if d.startswith("firmware.") and d != "firmware.*")
+    return g
+
+
+def test_firmware_reads_as_the_pipeline_one_module_per_job():
+    assert set(_modules(FW)) - {"field", "motioncal"} == set(PIPELINE)
+
+
+def test_no_import_cycles_in_firmware():
+    g = _graph()
+    state = {}
+
+    def visit(m, path):
+        if state.get(m) == 1:
+            raise AssertionError("import cycle: " + " -> ".join(path + [m]))
+        if state.get(m) == 2:
+            return
+        state[m] = 1
+        for d in g.get(m, ()):
+            visit(d, path + [m])
+        state[m] = 2
+
+    for m in g:
+        visit(m, [])
+
+
+def test_chip_drivers_import_only_the_device_base_and_errors():
+    g = _graph()
+    for chip in ("qmc5883l", "hmc5883l", "qmc5883p", "mpu6050"):
+        assert set(g[chip]) <= {"compat", "errors", "i2cdevice"}, (chip, g[chip])
+
+
+def test_the_heading_only_modules_do_not_import_the_calibration_machinery():
+    g = _graph(lazy=False)  # module level: what importing them loads
+    seen = set()
+    todo = ["app", "store", "compass", "calibration", "qmc5883l"]
+    while todo:
+        m = todo.pop()
+        if m not in seen:
+            seen.add(m)
+            todo.extend(g[m])
+    assert not {"firmware." + m for m in seen} & CALIBRATION_MACHINERY, sorted(seen)
+
+
+@pytest.mark.parametrize("micro", [False, True], ids=["cpython", "micropython"])
+def test_a_board_booted_from_a_stored_calibration_loads_no_calibration_machinery(micro):
+    out = mp.json_lines(mp.run(["tests/scenarios/app_modules.py"], micro=micro))
+    first, second = out
+    assert first["phase"] == "heading_only" and first["heading"] == 100
+    assert not first["collecting"]
+    loaded = set(first["modules"])
+    assert not loaded & CALIBRATION_MACHINERY, sorted(loaded)
+    assert {"firmware.app", "firmware.calibration", "firmware.compass", "firmware.store",
+            "firmware.qmc5883l"} <= loaded
+    # collecting imports it, lazily, and the heading goes on
+    assert second["collecting"] and second["heading"] == 100
+    assert CALIBRATION_MACHINERY <= set(second["modules"])
+
+
+def _code_lines(path):
+    return [ln for ln in open(path).read().splitlines() if not ln.lstrip().startswith("#")]
+
+
+def test_no_plain_module_carries_an_emitter_decorator():
+    for m in _modules(FW):
+        if m == "fast":
+            continue
+        src = "\n".join(_code_lines(os.path.join(FW, m + ".py")))
+        assert not re.search(r"@micropython\.(native|viper)", src), m
+    # and the fast path is imported in one place only, inside try/except
+    for m in _modules(FW):
+        deps = _imports(os.path.join(FW, m + ".py"), "firmware")
+        if m != "compat":
+            assert "firmware.fast" not in deps, m
+
+
+def test_portability_shims_have_one_home():
+    # const, the clock and the emitter switch come from firmware.compat only
+    for m in _modules(FW):
+        if m in ("compat", "fast"):
+            continue
+        path = os.path.join(FW, m + ".py")
+        deps = _imports(path, "firmware")
+        assert not deps & {"micropython", "time", "utime"}, (m, deps)
+        for node in ast.walk(ast.parse(open(path).read())):
+            if isinstance(node, ast.FunctionDef):
+                assert node.name != "const", m  # no local fallback copy
+
+
+def test_test_only_reference_code_lives_under_tests():
+    # the solver steps run to completion and the exact references are tests' business
+    from firmware import accum, solve
+    for name in ("fit", "invw_from_a2", "q15_from_invw", "field_q16", "minmax_fit",
+                 "sqrtm_sym3", "back_substitute", "fit_error_x100", "_run"):
+        assert not hasattr(solve, name), name
+    assert not hasattr(accum, "batch")
+
+
+def test_the_simulator_imports_nothing_of_firmware_boards_or_tests():
+    sim = os.path.join(ROOT, "host_sim")
+    for f in os.listdir(sim):
+        if f.endswith(".py"):
+            deps = _imports(os.path.join(sim, f), "host_sim")
+            bad = [d for d in deps if d.split(".")[0] in ("firmware", "boards", "tests")]
+            assert not bad, (f, bad)
+
+
+def _cli_files():
+    base = os.path.join(ROOT, "host_sim", "cli")
+    for dirpath, _, files in os.walk(base):
+        for f in files:
+            if f.endswith(".py"):
+                yield os.path.join(dirpath, f)
+
+
+def test_commands_never_import_tests_and_load_numpy_matplotlib_only_where_needed():
+    for path in _cli_files():
+        if path.endswith(os.path.join("benchmarks", "reference.py")):
+            continue  # the float64 references themselves, imported by the bench when it runs
+        tree = ast.parse(open(path).read(), path)
+        deps = _imports(path, "host_sim")
+        assert not [d for d in deps if d.split(".")[0] == "tests"], path
+        top = set()
+        for node in tree.body:  # module level only: a command imports them when it runs
+            if isinstance(node, ast.Import):
+                top.update(a.name.split(".")[0] for a in node.names)
+            elif isinstance(node, ast.ImportFrom) and node.module:
+                top.add(node.module.split(".")[0])
+        assert not top & {"numpy", "matplotlib"}, path
+
+
+def test_comments_cite_what_a_reader_can_follow():
+    pat = re.compile(r"\bseed[ -]00\d|\bissue \d+\b|STYLE\.md|style guide", re.I)
+    for folder in ("firmware", "host_sim", "boards"):
+        for dirpath, _, files in os.walk(os.path.join(ROOT, folder)):
+            for f in files:
+                if f.endswith(".py"):
+                    text = open(os.path.join(dirpath, f)).read()
+                    assert not pat.search(text), (f, pat.search(text).group(0))
