@@ -12,6 +12,8 @@ import sqlite3
 from host_sim.cli.qualitydb import records
 
 SCHEMA_VERSION = 1
+SELECT_DEVICES = 500 # devices per look-up of stored records
+INSERT_ROWS = 40     # 40 rows x 20 columns = 800 placeholders: below SQLite's old limit of 999
 TABLE = "calibration"
 
 
@@ -122,15 +124,23 @@ class Store:
         duplicates are the rows already stored or repeated in the batch. With duplicates and
         not skip_duplicates, DuplicateError is raised and nothing is stored."""
         names = records.COLUMN_NAMES
-        ins = self._sql("INSERT INTO %s (%s) VALUES (%s)"
-                        % (TABLE, ", ".join(names), ", ".join("?" * len(names))))
-        sel = self._sql("SELECT time, digest FROM %s WHERE device = ?" % TABLE)
+        one = "(%s)" % ", ".join("?" * len(names))
+
+        def ins(n):
+            return self._sql("INSERT INTO %s (%s) VALUES %s"
+                             % (TABLE, ", ".join(names), ", ".join([one] * n)))
+
+        def sel(n):
+            return self._sql("SELECT device, time, digest FROM %s WHERE device IN (%s)"
+                             % (TABLE, ", ".join("?" * n)))
 
         def run(cur):
             seen = set()
-            for d in sorted({r["device"] for r in rows}):
-                cur.execute(sel, (d,))
-                seen.update((d, t, g) for t, g in cur.fetchall())
+            devices = sorted({r["device"] for r in rows})
+            for i in range(0, len(devices), SELECT_DEVICES):
+                chunk = devices[i:i + SELECT_DEVICES]
+                cur.execute(sel(len(chunk)), chunk)
+                seen.update(tuple(r) for r in cur.fetchall())
             new, dups = [], []
             for r in rows:
                 key = (r["device"], r["time"], r["digest"])
@@ -141,8 +151,10 @@ class Store:
                     new.append(r)
             if dups and not skip_duplicates:
                 raise DuplicateError(dups)
-            if new:
-                cur.executemany(ins, [tuple(r[c] for c in names) for r in new])
+            # INSERT_ROWS rows per statement: one round trip each on a server
+            for i in range(0, len(new), INSERT_ROWS):
+                chunk = new[i:i + INSERT_ROWS]
+                cur.execute(ins(len(chunk)), [r[c] for r in chunk for c in names])
             return new, dups
         return self._run(run)
 
@@ -247,10 +259,11 @@ def _pg_connect(url, wait):
     else:
         kw["host"] = u.hostname or "localhost"
         kw["port"] = port
+    where = kw.get("unix_sock") or "%s:%d" % (kw["host"], port)
     try:
         return pg8000.dbapi.connect(**kw)
     except (pg8000.dbapi.Error, OSError) as e:
         msg = e.args[0] if e.args else e
         if isinstance(msg, dict):
             msg = msg.get("M", msg)
-        raise StoreError("%s: cannot connect: %s" % (describe(url), msg))
+        raise StoreError("%s: cannot connect to %s: %s" % (describe(url), where, msg))
