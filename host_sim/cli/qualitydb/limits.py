@@ -9,7 +9,7 @@ Three kinds of limit (the `basis` of a flag):
   fleet   every record of the parameter: median +- k * 1.4826 * MAD (1.4826 * MAD estimates
           sigma of a normal distribution; median and MAD ignore the few changed devices).
 Repeatability: the spread of the difference between a device's consecutive calibrations,
-1.4826 * MAD(differences) / sqrt(2) over the fleet (a difference of two records has sqrt(2)
+1.4826 * median(|differences|) / sqrt(2) over the fleet (a difference of two records has sqrt(2)
 times one record's noise; a component change or a slow drift moves only a few differences,
 which the median ignores). A control chart's moving-range sigma, made robust.
 
@@ -166,13 +166,19 @@ def by_device(rows):
 
 
 def repeatability(groups, p):
-    """The fleet's calibration-to-calibration sigma of parameter p, or None."""
+    """The fleet's calibration-to-calibration sigma of parameter p, or None.
+    Differences are taken as centred on zero (a slow drift moves them little):
+    1.4826 * median |d| / sqrt(2); when more than half of them are exactly zero (a parameter
+    that repeats bit for bit), their root mean square / sqrt(2) instead."""
     diffs = []
     for g in groups.values():
         diffs.extend(b[p] - a[p] for a, b in zip(g, g[1:]))
     if not diffs:
         return None
-    return robust_sigma(diffs)[1] / math.sqrt(2)
+    s = MAD_TO_SIGMA * median([abs(d) for d in diffs])
+    if s == 0:
+        s = math.sqrt(sum(d * d for d in diffs) / len(diffs))
+    return s / math.sqrt(2)
 
 
 def fleet_limits(rows, groups, p, k):
