@@ -110,10 +110,10 @@ class Store:
         text = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
         low = text.lower()
         if "locked" in low or "busy" in low:
-            return ("%s: database is locked by another writer (waited the --wait time); "
-                    "nothing was stored" % self.name)
+            return ("%s: database is locked by another writer (waited --wait seconds); "
+                    "nothing was changed" % self.name)
         if "readonly" in low or "read-only" in low:
-            return "%s: database is read-only; nothing was stored" % self.name
+            return "%s: database is read-only; nothing was changed" % self.name
         if "unique" in low or "duplicate key" in low or "23505" in low:
             return ("%s: a record is already stored (another ingest at the same time?); "
                     "nothing was stored" % self.name)
