@@ -10,7 +10,7 @@ BOARD  ?= rp2040
 PORT   ?= /dev/ttyACM0
 BUILD  := build/$(BOARD)
 
-.PHONY: run test fuzz bench bench-smoke deploy mpy package-json clean venv
+.PHONY: run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg
 
 venv: $(STAMP)
 
@@ -34,6 +34,14 @@ bench: $(STAMP)
 
 bench-smoke: $(STAMP)
 	$(PY) -m host_sim bench --smoke
+
+# `host_sim quality` on a throwaway PostgreSQL server (docs/quality.md); installs Debian's
+# postgresql first when its binaries are missing and we are root. make test skips that test
+# without them.
+quality-pg: $(STAMP)
+	@ls /usr/lib/postgresql/*/bin/initdb >/dev/null 2>&1 || { test "$$(id -u)" = 0 && \
+	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq postgresql; }
+	$(PY) -m pytest -q -rs tests/test_quality.py -k postgresql
 
 # --- deploy to a board -------------------------------------------------------------------
 # make deploy BOARD=rp2040 PORT=/dev/ttyACM0   (make -n deploy ... prints the commands)

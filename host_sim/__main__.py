@@ -2,11 +2,12 @@
 
 The only place, with host_sim/cli/, where the simulator and the firmware meet.
 Commands: run (the compass on the simulated board), calibrate (offline calibration of a CSV
-log), demo (the end-to-end story, JSON with --json), bench (make bench).
+log), demo (the end-to-end story, JSON with --json), bench (make bench), quality (the
+calibration quality database, docs/quality.md; CPython only).
 """
 import sys
 
-_COMMANDS = ("run", "calibrate", "demo", "bench")
+_COMMANDS = ("run", "calibrate", "demo", "bench", "quality")
 
 
 def main(argv):

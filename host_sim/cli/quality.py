@@ -1,0 +1,268 @@
+"""`python -m host_sim quality --db DB COMMAND ...`: the calibration quality database.
+
+Keeps every calibration's parameters (the calibrate command's --json record plus device and
+time), checks each against limits from a limits file or learned from the device's history and
+the fleet, and shows each parameter's history. See docs/quality.md. CPython only.
+"""
+import argparse
+import csv
+import json
+import sys
+
+USAGE = """usage: python -m host_sim quality --db DB COMMAND [options]
+
+DB is an SQLite file (created by ingest) or postgresql://user@host:port/dbname
+(?host=/socket/dir for a unix socket; password in the URL or PGPASSWORD).
+
+commands:
+  ingest FILE... [--skip-duplicates]   store JSON-line records (- reads stdin), all or none
+  check [--limits FILE] [--k SIGMAS]   print each flagged record as a JSON line
+  export --csv FILE                    every record as CSV (- writes stdout)
+  plot PARAMETER -o FILE.png [--limits FILE] [--k SIGMAS] [--device D]...
+  trend [--device D] [--json]          per parameter: mean, sigma, drift per month
+
+options:
+  --wait SECONDS   how long to wait for another writer's lock (default 2)
+  -h, --help       this text; COMMAND --help for a command's
+
+exit status: 0 done (check: nothing flagged); 1 check flagged a record; 2 bad usage,
+unreadable or invalid input, or a database that cannot be read or written (nothing stored).
+"""
+
+
+class UsageError(Exception):
+    pass
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):
+        raise UsageError(message)
+
+
+def _parser():
+    from host_sim.cli.qualitydb.records import PARAMETERS
+    top = _Parser(prog="python -m host_sim quality", usage=USAGE, add_help=False)
+    top.add_argument("-h", "--help", action="store_true")
+    top.add_argument("--db")
+    top.add_argument("--wait", type=float, default=2.0)
+    sub = top.add_subparsers(dest="cmd", parser_class=_Parser,
+                             prog="python -m host_sim quality --db DB")
+
+    def cmd(name, helptext):
+        p = sub.add_parser(name, help=helptext, description=helptext)
+        p.add_argument("--db", default=argparse.SUPPRESS, help="as before the command")
+        p.add_argument("--wait", type=float, default=argparse.SUPPRESS,
+                       help="as before the command")
+        return p
+
+    p = cmd("ingest", "store JSON-line calibration records, all or none")
+    p.add_argument("files", nargs="+", metavar="FILE", help="JSON lines; - for stdin")
+    p.add_argument("--skip-duplicates", action="store_true",
+                   help="store the new records and report duplicates instead of refusing")
+    p = cmd("check", "check every record against its limits")
+    p.add_argument("--limits", metavar="FILE", help="limits file (JSON, or .toml)")
+    p.add_argument("--k", type=float, metavar="SIGMAS", help="sigmas for learned limits")
+    p = cmd("export", "write every record as CSV")
+    p.add_argument("--csv", required=True, metavar="FILE", help="- for stdout")
+    p = cmd("plot", "a parameter's history chart (PNG)")
+    p.add_argument("parameter", choices=PARAMETERS, metavar="PARAMETER",
+                   help="one of " + ", ".join(PARAMETERS))
+    p.add_argument("-o", "--output", required=True, metavar="FILE.png")
+    p.add_argument("--limits", metavar="FILE")
+    p.add_argument("--k", type=float, metavar="SIGMAS")
+    p.add_argument("--device", action="append", help="only this device (repeatable)")
+    p = cmd("trend", "per parameter: mean, sigma, repeatability, drift per month")
+    p.add_argument("--device", help="only this device")
+    p.add_argument("--json", action="store_true", help="JSON lines instead of a table")
+    return top
+
+
+def _err(msg):
+    sys.stderr.write("quality: %s\n" % msg)
+
+
+def main(argv):
+    from host_sim.cli.qualitydb.limits import LimitsError
+    from host_sim.cli.qualitydb.records import RecordError
+    from host_sim.cli.qualitydb.store import StoreError
+    try:
+        parser = _parser()
+        try:
+            a = parser.parse_args(argv)
+        except SystemExit as e:            # a subcommand's --help
+            return e.code or 0
+        if a.help or (not argv):
+            print(USAGE)
+            return 0 if argv else 2
+        if a.cmd is None:
+            raise UsageError("no command (ingest, check, export, plot or trend)")
+        if not a.db:
+            raise UsageError("--db DB is required (an SQLite file or postgresql://...)")
+        if a.wait < 0:
+            raise UsageError("--wait %s: expected seconds >= 0" % a.wait)
+        if getattr(a, "k", None) is not None and not a.k > 0:
+            raise UsageError("--k %s: expected sigmas > 0" % a.k)
+        return _COMMANDS[a.cmd](a)
+    except UsageError as e:
+        _err("%s (try --help)" % e)
+        return 2
+    except (RecordError, LimitsError, StoreError) as e:
+        _err(str(e))
+        return 2
+    except BrokenPipeError:                # e.g. `check | head`: the reader has gone
+        import os
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 2
+    except KeyboardInterrupt:
+        _err("interrupted; nothing was stored by an unfinished ingest")
+        return 2
+
+
+def _open(a, write=False):
+    from host_sim.cli.qualitydb.store import Store
+    return Store(a.db, write=write, wait=a.wait)
+
+
+# --- commands -----------------------------------------------------------------------------
+def cmd_ingest(a):
+    from host_sim.cli.qualitydb import records
+    from host_sim.cli.qualitydb.store import DuplicateError
+    rows = []
+    for name in a.files:
+        if name == "-":
+            rows.extend(_tag(records.iter_file(sys.stdin, "<stdin>"), "<stdin>"))
+            continue
+        try:
+            with open(name) as f:
+                rows.extend(_tag(records.iter_file(f, name), name))
+        except OSError as e:
+            raise UsageError("cannot read %s: %s" % (name, e.strerror or e))
+        except UnicodeDecodeError as e:
+            raise UsageError("%s: not text (%s)" % (name, e.reason))
+    store = _open(a, write=True)
+    try:
+        new, dups = store.ingest(rows, skip_duplicates=a.skip_duplicates)
+    except DuplicateError as e:
+        first = e.rows[0]
+        _err("%s: duplicate of a stored record (device %s, time %s, same parameters); %d "
+             "duplicate(s) in all, nothing stored (--skip-duplicates stores the rest)"
+             % (first["_where"], first["device"], first["time"], len(e.rows)))
+        return 2
+    finally:
+        store.close()
+    for r in dups:
+        _err("%s: duplicate (device %s, time %s), not stored again"
+             % (r["_where"], r["device"], r["time"]))
+    print("stored %d record(s), %d duplicate(s) skipped" % (len(new), len(dups)))
+    return 0
+
+
+def _tag(it, name):
+    for n, row in it:
+        row["_where"] = "%s:%d" % (name, n)
+        yield row
+
+
+def _limits(a):
+    from host_sim.cli.qualitydb import limits
+    lim = limits.load(a.limits) if a.limits else limits.Limits()
+    if a.k is not None:
+        lim.k = a.k
+    return lim
+
+
+def _rows(a, device=None):
+    store = _open(a)
+    try:
+        return store.rows(device)
+    finally:
+        store.close()
+
+
+def cmd_check(a):
+    from host_sim.cli.qualitydb import limits
+    lim = _limits(a)
+    flags = limits.check(_rows(a), lim)
+    for f in flags:
+        print(json.dumps(f))
+    return 1 if flags else 0
+
+
+def cmd_export(a):
+    from host_sim.cli.qualitydb.records import PARAMETERS
+    cols = ("device", "time", "source", "model") + PARAMETERS + ("samples",)
+    rows = _rows(a)
+    try:
+        f = sys.stdout if a.csv == "-" else open(a.csv, "w", newline="")
+    except OSError as e:
+        raise UsageError("cannot write %s: %s" % (a.csv, e.strerror or e))
+    try:
+        w = csv.writer(f)
+        w.writerow(cols)
+        for r in rows:
+            w.writerow([("" if r[c] is None else r[c]) for c in cols])
+    finally:
+        if f is not sys.stdout:
+            f.close()
+    if a.csv != "-":
+        print("wrote %d record(s) to %s" % (len(rows), a.csv))
+    return 0
+
+
+def cmd_plot(a):
+    from host_sim.cli.qualitydb import chart, limits
+    lim = _limits(a)
+    p = a.parameter
+    rows = _rows(a)
+    groups = limits.by_device(rows)
+    spec = lim.parameters.get(p, {"learned": list(limits.BASES)})
+    fleet = None
+    if "fleet" in spec.get("learned", ()):
+        fleet = limits.fleet_limits(rows, groups, p, spec.get("k", lim.k))
+    one = limits.Limits(lim.k, lim.min_history, lim.window, {p: spec})
+    flags = limits.check(rows, one)
+    mean = sum(r[p] for r in rows) / len(rows) if rows else None
+    if a.device:
+        missing = [d for d in a.device if d not in groups]
+        if missing:
+            raise UsageError("--device %s: no records of that device" % missing[0])
+        keep = set(a.device)
+        rows = [r for r in rows if r["device"] in keep]
+        flags = [f for f in flags if f["device"] in keep]
+    try:
+        chart.draw(rows, p, flags, fleet, (spec.get("low"), spec.get("high")), a.output,
+                   mean=mean)
+    except OSError as e:
+        raise UsageError("cannot write %s: %s" % (a.output, e.strerror or e))
+    print("wrote %s (%d records, %d flagged)" % (a.output, len(rows), len(flags)))
+    return 0
+
+
+def cmd_trend(a):
+    from host_sim.cli.qualitydb import trend
+    rows = _rows(a, a.device)
+    if a.device and not rows:
+        raise UsageError("--device %s: no records of that device" % a.device)
+    out = trend.summary(rows)
+    if a.json:
+        for s in out:
+            print(json.dumps(s))
+        return 0
+
+    def g(v):
+        return "-" if v is None else "%.5g" % v
+    print("%-10s %7s %7s %11s %11s %11s %13s" % ("parameter", "records", "devices", "mean",
+                                                 "sigma", "repeat", "drift/month"))
+    for s in out:
+        print("%-10s %7d %7d %11s %11s %11s %13s" % (
+            s["parameter"], s["records"], s["devices"], g(s["mean"]), g(s["sigma"]),
+            g(s["repeatability"]), g(s["drift_per_month"])))
+    return 0
+
+
+_COMMANDS = {"ingest": cmd_ingest, "check": cmd_check, "export": cmd_export,
+             "plot": cmd_plot, "trend": cmd_trend}
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
