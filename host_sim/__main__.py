@@ -2,11 +2,12 @@
 
 The only place, with host_sim/cli/, where the simulator and the firmware meet.
 Commands: run (the compass on the simulated board), calibrate (offline calibration of a CSV
-log), demo (the end-to-end story, JSON with --json), bench (make bench).
+log), demo (the end-to-end story, JSON with --json), bench (make bench), wmm (write the
+board's field-model table: make wmm), field (the board's field model at given points).
 """
 import sys
 
-_COMMANDS = ("run", "calibrate", "demo", "bench")
+_COMMANDS = ("run", "calibrate", "demo", "bench", "wmm", "field")
 
 
 def main(argv):
