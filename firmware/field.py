@@ -52,10 +52,9 @@ except ImportError:  # CPython
 
 try:
     from binascii import crc32 as _crc32
-except ImportError:  # a port without binascii.crc32
+except ImportError:  # a port without binascii.crc32: firmware.calstore's, imported when needed
     _crc32 = None
 
-from firmware.calstore import crc32_int
 from firmware.fixedpoint import bit_length, isqrt
 from firmware.heading import atan2, kang_to_cdeg
 
@@ -82,7 +81,8 @@ _ONE = const(4096)  # Q12: interpolation weights and the fraction of a cell
 _LAT_U4 = const(900000)  # 90 deg in 1e-4 deg, the grid's coordinate unit
 _LON_U4 = const(1800000)
 _TURN_U4 = const(3600000)
-_LAT_E7 = const(900000000)
+_LAT_E7 = const(900000000)  # 90 deg in 1e-7 deg (180 and 360 deg are written out below:
+# above 2**30 they are long ints on a 32-bit board, compared with but never computed)
 _BLACKOUT_NT = const(2000)  # WMM2025 report: H below 2000 nT, compasses unreliable
 _CAUTION_NT = const(6000)  # WMM2025 report: H below 6000 nT, compass accuracy degraded
 _NORM_BITS = const(14)  # atan2 and isqrt inputs: |v| < 2**14 keeps v*v + w*w below 2**30
@@ -208,9 +208,9 @@ class FieldModel:
         self.epoch_e3 = _u32(h, 14)
         self.life_e3 = _u16(h, 18)
         if (h[20] != _MAIN_NT or h[21] != _SV_PER_NT or h[22] != _RECORD or step_e7 == 0
-                or step_e7 % 1000 or 2 * _LAT_E7 % step_e7 or self._pad < 1
-                or self._n_lat != 2 * _LAT_E7 // step_e7 + 1 + 2 * self._pad
-                or self._n_lon != 4 * _LAT_E7 // step_e7 or self.life_e3 == 0):
+                or step_e7 % 1000 or 1800000000 % step_e7 or self._pad < 1
+                or self._n_lat != 1800000000 // step_e7 + 1 + 2 * self._pad
+                or self._n_lon != 3600000000 // step_e7 or self.life_e3 == 0):
             self._bad(REASON_BAD_HEADER, "inconsistent grid or units")
         self._step = step_e7 // 1000  # 1e-4 deg
         size = _HEADER + self._n_lat * self._n_lon * _RECORD
@@ -218,10 +218,11 @@ class FieldModel:
         if end != size:
             self._bad(REASON_TRUNCATED if end < size else REASON_BAD_HEADER,
                       "%d bytes, the header describes %d" % (end, size))
-        want = _u32(h, 24)
         got = self._crc(size)
-        if got != want:
-            self._bad(REASON_BAD_CRC, "crc 0x%08x, stored 0x%08x" % (got, want))
+        # compared as 16-bit halves: a CRC above 2**30 is a long int on a 32-bit board
+        if got & 0xFFFF != _u16(h, 24) or got >> 16 != _u16(h, 26):
+            self._bad(REASON_BAD_CRC, "crc 0x%08x, stored 0x%04x%04x"
+                      % (got, _u16(h, 26), _u16(h, 24)))
 
     def _crc(self, size):
         f = self._f
@@ -237,9 +238,10 @@ class FieldModel:
             if _crc32 is not None:
                 crc = _crc32(mv[:n], crc)
             else:
+                from firmware.calstore import crc32_int
                 crc = crc32_int(mv[:n], crc)
             left -= n
-        return crc & 0xFFFFFFFF
+        return crc  # unsigned, as binascii.crc32 and crc32_int return it
 
     def close(self):
         self._f.close()
@@ -256,7 +258,7 @@ class FieldModel:
         _check_int(lon_e7, "lon_e7", "1e-7 deg")
         if not -_LAT_E7 <= lat_e7 <= _LAT_E7:
             raise ValueError("lat_e7 %d outside -900000000..900000000 (1e-7 deg)" % lat_e7)
-        if not -2 * _LAT_E7 <= lon_e7 <= 2 * _LAT_E7:
+        if not -1800000000 <= lon_e7 <= 1800000000:
             raise ValueError("lon_e7 %d outside -1800000000..1800000000 (1e-7 deg)" % lon_e7)
         if year_e3 is None:
             dt = self.life_e3 >> 1
