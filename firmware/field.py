@@ -81,8 +81,8 @@ _ONE = const(4096)  # Q12: interpolation weights and the fraction of a cell
 _LAT_U4 = const(900000)  # 90 deg in 1e-4 deg, the grid's coordinate unit
 _LON_U4 = const(1800000)
 _TURN_U4 = const(3600000)
-_LAT_E7 = const(900000000)  # 90 deg in 1e-7 deg (180 and 360 deg are written out below:
-# above 2**30 they are long ints on a 32-bit board, compared with but never computed)
+_LAT_E7 = const(900000000)  # 90 deg in 1e-7 deg (180 and 360 deg are long ints on a 32-bit
+# board: the header check divides by them once, and lon_e7 is checked in 1e-4 deg)
 _BLACKOUT_NT = const(2000)  # WMM2025 report: H below 2000 nT, compasses unreliable
 _CAUTION_NT = const(6000)  # WMM2025 report: H below 6000 nT, compass accuracy degraded
 _NORM_BITS = const(14)  # atan2 and isqrt inputs: |v| < 2**14 keeps v*v + w*w below 2**30
@@ -145,11 +145,11 @@ def _u32(b, k):
 def _weights(t, w):
     """Cubic Lagrange weights through the nodes -1, 0, 1, 2 at t / 4096 (0 <= t <= 4096),
     Q12, written into w[0..3]; they sum to exactly 4096 and every product stays below 2**30:
-      w-1 = -t(t-1)(t-2)/6   w0 = (t+1)(t-1)(t-2)/2   w1 = -(t+1)t(t-2)/2   w2 = (t+1)t(t-1)/6"""
-    u = t - 2 * _ONE  # t - 2, in -8192..-4096
-    w[0] = -(((t * (t - _ONE)) >> 6) * u) // (6 << 18)
-    w[1] = (((t * t - _ONE * _ONE) >> 8) * u) // (2 << 16)
-    w[2] = -((((t + _ONE) * t) >> 9) * u) // (2 << 15)
+      w-1 = -t(1-t)(2-t)/6   w0 = (1+t)(1-t)(2-t)/2   w1 = (1+t)t(2-t)/2   w2 = (1+t)t(t-1)/6"""
+    u = 2 * _ONE - t  # 2 - t, in 4096..8192; each product is cut to 16 bits, rounded, first
+    w[0] = -((((t * (_ONE - t) + 32) >> 6) * u + (3 << 18)) // (6 << 18))
+    w[1] = (((_ONE * _ONE - t * t + 128) >> 8) * u + (1 << 16)) // (2 << 16)
+    w[2] = ((((t + _ONE) * t + 256) >> 9) * u + (1 << 15)) // (2 << 15)
     w[3] = _ONE - w[0] - w[1] - w[2]
 
 
@@ -258,7 +258,8 @@ class FieldModel:
         _check_int(lon_e7, "lon_e7", "1e-7 deg")
         if not -_LAT_E7 <= lat_e7 <= _LAT_E7:
             raise ValueError("lat_e7 %d outside -900000000..900000000 (1e-7 deg)" % lat_e7)
-        if not -1800000000 <= lon_e7 <= 1800000000:
+        lon_u4 = lon_e7 // 1000  # small even where lon_e7 itself is a long int (> 2**30)
+        if lon_u4 < -_LON_U4 or lon_u4 > _LON_U4 or (lon_u4 == _LON_U4 and lon_e7 % 1000):
             raise ValueError("lon_e7 %d outside -1800000000..1800000000 (1e-7 deg)" % lon_e7)
         if year_e3 is None:
             dt = self.life_e3 >> 1
@@ -269,7 +270,7 @@ class FieldModel:
             if dt < 0 or dt > self.life_e3:
                 return self._outside()
             status = STATUS_OK
-        self._cell(lat_e7 // 1000, lon_e7 // 1000)
+        self._cell(lat_e7 // 1000, lon_u4)
         self._interpolate(dt)
         self._derive(status)
         return (self.declination_cdeg, self.inclination_cdeg, self.field_nt, self.status)
