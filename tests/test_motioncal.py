@@ -205,7 +205,6 @@ def test_reader_finds_every_packet_behind_any_garbage_in_any_pieces(parts, sizes
     r = mc.PacketReader()
     ev = feed_all(r, stream, sizes) + r.end()
     got = [v for k, v in ev if k == mc.PACKET]
-    assume(all(k != mc.BAD_CRC or v not in packets for k, v in ev))
     assert got == packets
     # garbage is counted once; a false start's bytes belong to its bad_crc candidate
     n_bad = sum(1 for k, _ in ev if k == mc.BAD_CRC)
@@ -243,6 +242,11 @@ def test_reader_reports_bad_crc_truncated_and_garbage():
     r = mc.PacketReader()
     r.feed(b"zzu")
     assert r.end() == [(mc.GARBAGE, 3)]
+    # repeated and broken signature bytes are garbage, counted once each
+    p = packet_of(6)
+    r = mc.PacketReader()
+    assert r.feed(b"uuuxTuzu" + p[:1]) == ()
+    assert r.feed(p[1:]) == [(mc.GARBAGE, 8), (mc.PACKET, p)] and r.skipped == 8
 
 
 # ---- packet -> calibration -------------------------------------------------------------------
@@ -268,7 +272,7 @@ def test_packet_calibration_corrects_motioncal_ellipsoid_to_a_sphere_of_field_ou
     for trial in range(8):
         B = rng.uniform(25, 65)
         V = [rng.uniform(-1, 1) * 20000 * 100 / cpg * 0.8 for _ in range(3)]
-        invw = soft_iron(rng, rng.uniform(1.0, 3.0))
+        invw = soft_iron(rng, rng.uniform(1.0, 3.0)) * rng.uniform(0.6, 1.6)  # det != 1
         fields = mc.calibration_fields(ref.build_packet(V, B, invw), cpg)
         cal = Calibration(**fields)
         W = np.linalg.inv(f32_matrix(invw))
@@ -327,7 +331,7 @@ def test_calibration_fields_limits_are_the_stated_ones():
 @settings(max_examples=100)
 def test_random_packets_are_accepted_exactly_when_a_float_check_says_so(seed, cpg):
     rng = random.Random(seed)
-    V = [rng.uniform(-300, 300) * 100 / cpg * 20 for _ in range(3)]
+    V = [rng.uniform(-40000, 40000) * 100 / cpg for _ in range(3)]  # counts -> uT
     B = rng.uniform(0, 100)
     invw = soft_iron(rng, rng.uniform(1, 7)) * rng.uniform(0.5, 2)
     if rng.random() < 0.2:
@@ -337,9 +341,12 @@ def test_random_packets_are_accepted_exactly_when_a_float_check_says_so(seed, cp
     k = cpg / 100.0
     off = [ref.f32(v) * k for v in V]
     Bf = ref.f32(B)
-    # stay clear of the boundaries, where float64 and the Q15 fixed point may disagree
+    # stay clear of the boundaries, where float64 and the fixed point may disagree: the
+    # ratio is magcal's (power iteration, a lower bound: up to ~2 % low when the two largest
+    # eigenvalues are within 5 %), entries are Q24 then Q15, so near-singular is unclear
     cond = ev[-1] / ev[0] if ev[0] > 0 else None
-    assume(ev[0] <= 0 or abs(cond - 5) > 0.02)
+    assume(abs(ev[0]) > 1e-3 * abs(ev[-1]))
+    assume(ev[0] <= 0 or abs(cond - 5) > 0.15)
     assume(abs(Bf - 10) > 1e-4 and abs(Bf - 90) > 1e-4)
     assume(all(abs(abs(o) - 32767.5) > 0.01 for o in off))
     if ev[0] <= 0:
