@@ -418,3 +418,39 @@ def echo(packet):
     x = packet_values(packet, _ECHO_SCALE)
     d0, d1, d2, o01, o02, o12 = x[10:16]
     return cal_echo(x[6:9], x[9], (d0, o01, o02, o01, d1, o12, o02, o12, d2), x[0:6])
+
+
+# ---- Adafruit's WebSerial 3D model viewer ------------------------------------------------
+# Its read loop (adafruit/Adafruit_WebSerial_3DModelViewer, js/script.js) splits the stream at
+# LF, trims each line and reads "Orientation:" (heading, pitch, roll in degrees, used in its
+# Euler mode), "Quaternion:" and "Calibration:" (system, gyro, accelerometer, magnetometer,
+# each 0 uncalibrated .. 3 fully calibrated; any other value breaks its display). MotionCal
+# skips both lines without a failure (neither is "Raw:", "Cal1:" or "Cal2:").
+
+def _cdeg(v):
+    s = "-" if v < 0 else ""
+    v = -v if v < 0 else v
+    return "%s%d.%02d" % (s, v // 100, v % 100)
+
+
+def orientation_line(heading_cdeg, pitch_cdeg, roll_cdeg):
+    """`Orientation: h,p,r` CR LF, angles in centidegrees (heading.kang_to_cdeg)."""
+    return ("Orientation: %s,%s,%s\r\n" % (_cdeg(heading_cdeg), _cdeg(pitch_cdeg),
+                                           _cdeg(roll_cdeg))).encode()
+
+
+def mag_level(model, fit_error):
+    """The viewer's magnetometer level for a calibration: 0 none, 1 min/max or 4 elements,
+    2 a 7/10-element fit above 5 % fit error (hundredths), 3 a 10-element fit at or below
+    5 % (MotionCal's own Send Cal limit)."""
+    if model is None:
+        return 0
+    if model == 10 and fit_error <= 500:
+        return 3
+    return 2 if model in (7, 10) else 1
+
+
+def calibration_line(system, gyro, accel, mag):
+    """`Calibration: s,g,a,m` CR LF, each level clamped to 0..3."""
+    v = [x if 0 <= x <= 3 else (0 if x < 0 else 3) for x in (system, gyro, accel, mag)]
+    return ("Calibration: %d,%d,%d,%d\r\n" % (v[0], v[1], v[2], v[3])).encode()

@@ -426,6 +426,8 @@ def test_motioncal_same_bits_on_micropython_and_cpython():
         assert len(p.raw) == 1
     for bits, scale, value in by["f32"]["values"]:
         assert value == expected_fixed(bits, scale)
+    assert by["reader"]["totals"][:3] == [2, by["reader"]["totals"][1], 0]  # 2 packets found
+    assert [k for k, _ in by["reader"]["events"]].count(mc.PACKET) == 2
     fields = by["fields"]["results"]
     assert sum(1 for f in fields if isinstance(f, list)) >= 2
     assert {f for f in fields if isinstance(f, str)} >= {
@@ -436,3 +438,31 @@ def test_per_sample_path_allocates_nothing_on_micropython():
     o = json_lines(run([SCENARIO, "alloc"], micro=True))[0]
     assert o["raw_line_into"] == 0 and o["mag_01ut_into"] == 0 and o["feed_garbage"] == 0
     assert o["feed_partial"] == 0
+
+
+# ---- Adafruit WebSerial 3D viewer lines ------------------------------------------------------
+
+def viewer_read(line):
+    """The viewer's reading of one line (split at LF, trim, split at ',', JS Number())."""
+    text = line.decode().split("\n")[0].strip()
+    for head in ("Orientation:", "Calibration:"):
+        if text.startswith(head):
+            return head, [float(x) for x in text[len(head):].strip().split(",")]
+    return None, []
+
+
+@given(st.integers(0, 35999), st.integers(-9000, 9000), st.integers(-18000, 18000))
+def test_orientation_line_reads_back_in_the_viewer_and_motioncal_skips_it(h, p, r):
+    line = mc.orientation_line(h, p, r)
+    assert viewer_read(line) == ("Orientation:", [h / 100, p / 100, r / 100])
+    m = ref.MotionCal()
+    m.read(line + mc.calibration_line(0, 0, 3, 3) + mc.raw_line((1, 2, 3), (0, 0, 0), (4, 5, 6)))
+    assert m.failures == 0 and m.raw == [(1, 2, 3, 0, 0, 0, 4, 5, 6)]
+
+
+def test_calibration_line_levels_stay_in_the_viewers_range():
+    assert mc.calibration_line(0, -1, 7, 2) == b"Calibration: 0,0,3,2\r\n"
+    assert viewer_read(mc.calibration_line(0, 0, 3, mc.mag_level(10, 320))) == (
+        "Calibration:", [0, 0, 3, 3])
+    assert [mc.mag_level(m, f) for m, f in ((None, 0), ("minmax", 0), (4, 100), (7, 100),
+                                            (10, 501), (10, 500))] == [0, 1, 1, 2, 2, 3]

@@ -158,3 +158,10 @@ emit("reader", [("events", events), ("totals", [r.packets, r.bad_crc, r.truncate
 # the echo
 echo = [[c.decode() for c in mc.echo(p)] for p in good + bad[:2]]
 emit("echo", [("lines", echo)])
+
+# the 3D viewer's lines
+viewer = [mc.orientation_line(h, p, r).decode() for h, p, r in
+          ((0, 0, 0), (35999, -9000, 18000), (15130, -5, 7), (5, 1234, -17999))]
+viewer += [mc.calibration_line(s, 0, 3, mc.mag_level(m, f)).decode()
+           for s, m, f in ((0, None, 0), (1, 10, 500), (3, 7, 90), (-2, 4, 0))]
+emit("viewer", [("lines", viewer)])
