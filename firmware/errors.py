@@ -19,11 +19,11 @@ SensorOverflow(ValueError) the chip flagged the sample as out of range (QMC5883L
                           -4096). Carries ``.address`` and ``.raw`` (the raw axis values).
                           Caller: drop the sample (a magnet is too close or the range too small).
 CalibrationRejected(Exception) a new calibration failed an acceptance check. Carries
-                          ``.reason`` (one of the REASON_* names in firmware.magcal) and
+                          ``.reason`` (one of the REASON_* names in firmware.acceptance) and
                           ``.detail`` (a human-readable string with the numbers). Caller: keep
                           the current calibration; show the reason to the user.
 StoreError(Exception)     a stored calibration record cannot be used. Carries ``.reason``, one
-                          of firmware.calstore's: missing, truncated, bad_length, bad_magic,
+                          of firmware.store's: missing, truncated, bad_length, bad_magic,
                           bad_crc, unknown_version, other_sensor, other_range, verify_failed
                           (a save read back different bytes). Caller: keep running uncalibrated
                           or with the other slot; never use the record.

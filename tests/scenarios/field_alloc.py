@@ -1,7 +1,7 @@
 # MicroPython only: what the field model costs on the heap.
 #
 # import_bytes     live heap after `import firmware.field` (its bytecode and constants; the
-#                  modules it imports, firmware.heading and firmware.fixedpoint, imported first)
+#                  modules it imports, firmware.trig and firmware.fixedpoint, imported first)
 # model_bytes      live heap held by one FieldModel (open file, 12-byte record buffer, weights)
 # first_bytes      micropython.mem_total() (every byte allocated, freed or not) across the
 #                  first query (includes one-time costs of the first atan2 call)
@@ -13,7 +13,7 @@ import json
 import micropython
 
 import firmware.fixedpoint  # noqa: F401
-import firmware.heading  # noqa: F401
+import firmware.trig  # noqa: F401
 
 mt = micropython.mem_total
 gc.collect()
