@@ -43,6 +43,17 @@ _FIT_ERROR_DOUBLING_S = const(60000)  # aging: NXP's e-folding time of 24 h = 59
 DEFAULT_SLICE_GROUP = const(1)
 
 
+def _widen(e, i, v):
+    # extremes e[i] (low) and e[i + 3] (high) take v in; True when one moved
+    if v < e[i]:
+        e[i] = v
+        return True
+    if v > e[i + 3]:
+        e[i + 3] = v
+        return True
+    return False
+
+
 class Calibrator:
     """Collects samples and solves for a Calibration (see the module docstring).
 
@@ -132,26 +143,7 @@ class Calibrator:
     def _extend(self, x, y, z):
         # the running extremes (min/max model, auto separation); True when one moved
         e = self._ext
-        g = False
-        if x < e[0]:
-            e[0] = x
-            g = True
-        elif x > e[3]:
-            e[3] = x
-            g = True
-        if y < e[1]:
-            e[1] = y
-            g = True
-        elif y > e[4]:
-            e[4] = y
-            g = True
-        if z < e[2]:
-            e[2] = z
-            g = True
-        elif z > e[5]:
-            e[5] = z
-            g = True
-        return g
+        return _widen(e, 0, x) | _widen(e, 1, y) | _widen(e, 2, z)
 
     def _grow_separation(self):
         # radius estimate: mean half-range of the raw data seen so far

@@ -62,7 +62,9 @@ class SensorOverflow(ValueError):
         self.raw = raw
 
 
-class CalibrationRejected(Exception):
+class Refusal(Exception):
+    """Base of the refusals that carry a named .reason and a human-readable .detail."""
+
     def __init__(self, reason, detail=""):
         super().__init__(reason, detail)
         self.reason = reason
@@ -72,11 +74,9 @@ class CalibrationRejected(Exception):
         return "%s: %s" % (self.reason, self.detail) if self.detail else self.reason
 
 
-class StoreError(Exception):
-    def __init__(self, reason, detail=""):
-        super().__init__(reason, detail)
-        self.reason = reason
-        self.detail = detail
+class CalibrationRejected(Refusal):
+    pass
 
-    def __str__(self):
-        return "%s: %s" % (self.reason, self.detail) if self.detail else self.reason
+
+class StoreError(Refusal):
+    pass

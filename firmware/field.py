@@ -50,6 +50,7 @@ except ImportError:  # a port without binascii.crc32: firmware.store's, imported
     _crc32 = None
 
 from firmware.compat import const
+from firmware.errors import Refusal
 from firmware.fixedpoint import bit_length, isqrt
 from firmware.trig import atan2, kang_to_cdeg
 
@@ -86,16 +87,8 @@ _NORM_BITS = const(14)  # atan2 and isqrt inputs: |v| < 2**14 keeps v*v + w*w be
 _CUM_DAYS = (0, 31, 59, 90, 120, 151, 181, 212, 243, 273, 304, 334)
 
 
-class FieldTableError(Exception):
+class FieldTableError(Refusal):
     """The field-model table cannot be used: .reason (a REASON_* name) and .detail."""
-
-    def __init__(self, reason, detail=""):
-        super().__init__(reason, detail)
-        self.reason = reason
-        self.detail = detail
-
-    def __str__(self):
-        return "%s: %s" % (self.reason, self.detail) if self.detail else self.reason
 
 
 def _check_int(v, name, unit):

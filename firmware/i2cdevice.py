@@ -25,8 +25,8 @@ sample; the `with` frame stays on the stack, so a read allocates nothing
 (tests/scenarios/drivers_alloc.py).
 
 option_code(chip, name, value, table): the register code of a keyword option.
-le16x3_into(d, buf), be16x3_into(d, buf): three int16, LSB first (QMC5883L, QMC5883P data
-blocks) or MSB first (MPU6050), sign-extended by hand.
+int16x3_into(d, buf, msb): three int16, LSB first (QMC5883L, QMC5883P data blocks) or MSB
+first (MPU6050), sign-extended by hand.
 """
 from firmware.compat import const, sleep_us, ticks_diff, ticks_us
 from firmware.errors import BusError, DataReadyTimeout, SensorNotFound
@@ -63,25 +63,13 @@ def option_code(chip, name, value, table):
     return table.index(value)
 
 
-def le16x3_into(d, buf):
-    """buf[0..2] = the three int16, LSB first, of d[0..5], sign-extended by hand:
-    struct.unpack would allocate a tuple."""
-    v = d[1] << 8 | d[0]
-    buf[0] = v - 0x10000 if v & 0x8000 else v
-    v = d[3] << 8 | d[2]
-    buf[1] = v - 0x10000 if v & 0x8000 else v
-    v = d[5] << 8 | d[4]
-    buf[2] = v - 0x10000 if v & 0x8000 else v
-
-
-def be16x3_into(d, buf):
-    """buf[0..2] = the three int16, MSB first, of d[0..5] (MPU6050 accelerometer block)."""
-    v = d[0] << 8 | d[1]
-    buf[0] = v - 0x10000 if v & 0x8000 else v
-    v = d[2] << 8 | d[3]
-    buf[1] = v - 0x10000 if v & 0x8000 else v
-    v = d[4] << 8 | d[5]
-    buf[2] = v - 0x10000 if v & 0x8000 else v
+def int16x3_into(d, buf, msb):
+    """buf[0..2] = the three int16 of d[0..5], LSB first (msb=0: QMC5883L, QMC5883P data
+    blocks) or MSB first (msb=1: MPU6050), sign-extended by hand: struct.unpack would
+    allocate a tuple."""
+    for i in range(3):
+        v = d[2 * i + 1 - msb] << 8 | d[2 * i + msb]
+        buf[i] = v - 0x10000 if v & 0x8000 else v
 
 
 class BusGuard:

@@ -18,7 +18,7 @@ Errors: SensorNotFound (WHO_AM_I is not 0x68), BusError.
 from firmware.compat import const
 
 from firmware.errors import SensorNotFound
-from firmware.i2cdevice import Device, be16x3_into, option_code
+from firmware.i2cdevice import Device, int16x3_into, option_code
 
 # Registers (register map rev 4.2)
 _CONFIG = const(0x1A)         # DLPF_CFG[2:0]
@@ -76,7 +76,7 @@ class MPU6050(Device):
         """Read the accelerometer (counts) into buf[0..2]. Allocates nothing."""
         with self.guard:
             self._read_into(_ACCEL_XOUT_H, self._buf)
-        be16x3_into(self._buf, buf)
+        int16x3_into(self._buf, buf, 1)
 
     def read_accel(self):
         """(x, y, z) raw counts, the chip's axes."""

@@ -23,7 +23,7 @@ SensorOverflow (OVL: the six data bytes are still read first, to release the dat
 from firmware.compat import const
 
 from firmware.errors import SensorNotFound, SensorOverflow
-from firmware.i2cdevice import Device, le16x3_into, option_code
+from firmware.i2cdevice import Device, int16x3_into, option_code
 
 # Registers (datasheet register map)
 _XOUT_L = const(0x00)      # X, Y, Z int16 LSB first in 0x00..0x05
@@ -111,12 +111,12 @@ class QMC5883L(Device):
             self.skipped += 1
         if status & _OVL:
             self._overflow()
-        le16x3_into(d, buf)
+        int16x3_into(d, buf, 0)
 
     def _overflow(self):
         d = self._buf
         v = [0, 0, 0]
-        le16x3_into(d, v)
+        int16x3_into(d, v, 0)
         raw = tuple(v)
         raise SensorOverflow("QMC5883L at 0x%02X: OVL set (an axis is beyond +-%d G), raw %s; "
                              "use range=8 or move the magnet away"

@@ -19,7 +19,7 @@ Errors: SensorNotFound, BusError, DataReadyTimeout, SensorOverflow (status OVFL)
 from firmware.compat import const
 
 from firmware.errors import SensorNotFound, SensorOverflow
-from firmware.i2cdevice import Device, le16x3_into, option_code
+from firmware.i2cdevice import Device, int16x3_into, option_code
 
 # Registers (hardware.md)
 _CHIP_ID = const(0x00)
@@ -101,12 +101,12 @@ class QMC5883P(Device):
         self._read_into(_XOUT_L, d)  # the whole block in one transaction
         if status & _OVFL:
             self._overflow()
-        le16x3_into(d, buf)
+        int16x3_into(d, buf, 0)
 
     def _overflow(self):
         d = self._buf
         v = [0, 0, 0]
-        le16x3_into(d, v)
+        int16x3_into(d, v, 0)
         raw = tuple(v)
         raise SensorOverflow("QMC5883P at 0x%02X: OVFL set (an axis is beyond +-%d G), raw %s; "
                              "use a larger range" % (self.address, _RANGES_G[self.range_code],

@@ -349,14 +349,27 @@ def fit_steps(c, s, model, out, check=None):
     equations, ~10 entries of one elimination row, a few back-substitution rows...).
     Fills `out` (a Fit). Raises SolveError with a reason name on a degenerate system.
     `check(out)`, if given, runs as soon as the degeneracy ratios are known (before the
-    quadric is examined), so a caller can refuse degenerate geometry first."""
+    quadric is examined), so a caller can refuse degenerate geometry first.
+    Steps: re-centre, normal equations and elimination (beta, P), degeneracy ratios rho,
+    the quadric A2 b2 e2 (an ellipsoid?), its centre V and K2 (AN4246 eqs. 19-21)."""
     if model not in MODELS:
         raise ValueError("model %r: expected one of 4, 7, 10" % (model,))
-    n = s[0]
     f = out
-    f.n = n
+    f.n = s[0]
+    s = yield from _recentre_steps(c, s, f)
+    a, r = yield from _least_squares_steps(s, model, f)
+    yield from _rho_steps(a, r, s, model, f)
+    if check is not None:
+        check(f)
+    yield
+    yield from _quadric_steps(model, f)
+    yield from _centre_steps(f)
+
+
+def _recentre_steps(c, s, f):
     # Re-centre at the integer mean: the fit does not change (translation invariance) and
     # the elimination's numbers shrink when the first sample was far from the others.
+    n = f.n
     if n > 0:
         cm = (c[0] + rdiv(s[1], n), c[1] + rdiv(s[2], n), c[2] + rdiv(s[3], n))
         yield
@@ -365,21 +378,24 @@ def fit_steps(c, s, model, out, check=None):
         s = s2
         c = cm
     f.c = c
+    return s
+
+
+def _least_squares_steps(s, model, f):
+    # normal equations M beta = r, then one fraction-free elimination of [M | r | I]: it gives
+    # beta and the diagonal of M^-1 (for rho); f.D, f.beta_num, f.p_num = P * D
     nc = len(_COLS[model])
     m = [[0] * nc for _ in range(nc)]
     r = [0] * nc
     yyo = [0]
     yield from _normal_steps(s, model, m, r, yyo)
-    yy = yyo[0]
     yield
-    # Augmented [M | r | I]: one elimination gives beta and the diagonal of M^-1.
     a = []
     for i in range(nc):
         row = m[i] + [r[i]] + [0] * nc
         row[nc + 1 + i] = 1
         a.append(row)
-    width = 2 * nc + 1
-    yield from _bareiss_steps(a, nc, width)
+    yield from _bareiss_steps(a, nc, 2 * nc + 1)
     yield
     d = a[nc - 1][nc - 1]
     f.D = d
@@ -390,8 +406,16 @@ def fit_steps(c, s, model, out, check=None):
     acc = 0
     for i in range(nc):
         acc += beta[i] * r[i]
-    f.p_num = yy * d - acc  # P * D, P = Y^T Y - beta . X^T Y
-    # rho_i = 1 / (N (M^-1)_ii s^deg) with s = (N sum|d|^2 - |sum d|^2) / N^2
+    f.p_num = yyo[0] * d - acc  # P * D, P = Y^T Y - beta . X^T Y
+    return a, r
+
+
+def _rho_steps(a, r, s, model, f):
+    # rho_i = 1 / (N (M^-1)_ii s^deg) with s = (N sum|d|^2 - |sum d|^2) / N^2; the least
+    # determined parameter's rho and column go to f.rho_min_ppm, f.rho_col
+    n = f.n
+    d = f.D
+    nc = len(r)
     spread = n * (s[4] + s[7] + s[9]) - (s[1] * s[1] + s[2] * s[2] + s[3] * s[3])
     degs = _DEG[model]
     best = None
@@ -413,11 +437,13 @@ def fit_steps(c, s, model, out, check=None):
             best = rho
             f.rho_col = i
     f.rho_min_ppm = best
-    if check is not None:
-        check(f)
-    yield
-    # The quadric, scaled by 2D to integers: A2 = 2D (I - S(beta)), b2 = -2 beta_lin, e2.
-    bt = beta
+
+
+def _quadric_steps(model, f):
+    # The quadric, scaled by 2D to integers: A2 = 2D (I - S(beta)), b2 = -2 beta_lin, e2;
+    # A2 must be positive definite (an ellipsoid): leading minors > 0
+    d = f.D
+    bt = f.beta_num
     if model == 4:
         a2 = [[2 * d, 0, 0], [0, 2 * d, 0], [0, 0, 2 * d]]
         lin = 0
@@ -429,28 +455,31 @@ def fit_steps(c, s, model, out, check=None):
         a2 = [[2 * d - 2 * bt[0], -bt[2], -bt[3]], [-bt[2], 2 * d - 2 * bt[1], -bt[4]],
               [-bt[3], -bt[4], 2 * d + 2 * bt[0] + 2 * bt[1]]]
         lin = 5
-    b2 = [-2 * bt[lin], -2 * bt[lin + 1], -2 * bt[lin + 2]]
-    e2 = -2 * bt[lin + 3]
     f.a2 = a2
-    f.b2 = b2
-    f.e2 = e2
+    f.b2 = [-2 * bt[lin], -2 * bt[lin + 1], -2 * bt[lin + 2]]
+    f.e2 = -2 * bt[lin + 3]
     yield
-    # A2 must be positive definite (an ellipsoid): leading minors > 0
     da = det3(a2)
     f.det_a2 = da
     if a2[0][0] <= 0 or a2[0][0] * a2[1][1] - a2[0][1] * a2[1][0] <= 0 or da <= 0:
         raise SolveError("singular", "fitted quadric is not an ellipsoid (A not positive "
                          "definite)")
     yield
-    adj = adj3(a2)
+
+
+def _centre_steps(f):
+    # V = c + d0, d0 = -A2^-1 b2 / 2 (eq. 19); K2 = d0^T A2 d0 - e2 (eq. 21)
+    c = f.c
+    b2 = f.b2
+    da = f.det_a2
+    adj = adj3(f.a2)
     yield
     w = mat_vec3(adj, b2)  # A2^-1 b2 = w / da
-    # V = c + d0, d0 = -w / (2 da)   (eq. 19)
     f.v_den = 2 * da
     f.v_num = [c[0] * 2 * da - w[0], c[1] * 2 * da - w[1], c[2] * 2 * da - w[2]]
     yield
-    # K2 = d0^T A2 d0 - e2 = (b2 . w - 4 da e2) / (4 da)
-    f.k2_num = b2[0] * w[0] + b2[1] * w[1] + b2[2] * w[2] - 4 * da * e2
+    # K2 = (b2 . w - 4 da e2) / (4 da)
+    f.k2_num = b2[0] * w[0] + b2[1] * w[1] + b2[2] * w[2] - 4 * da * f.e2
     f.k2_den = 4 * da
     if f.k2_num <= 0:
         raise SolveError("singular", "fitted ellipsoid has no real points (K <= 0)")

@@ -249,10 +249,12 @@ def test_non_bus_errors_carry_no_errno_on_either_interpreter():
 
 
 @given(st.binary(min_size=6, max_size=6))
-def test_le16x3_decode_is_exact_and_stays_small_int(raw):
+def test_int16x3_decode_is_exact_in_both_byte_orders_and_stays_small_int(raw):
     import struct
     mod, stats = intcheck.load("i2cdevice")
     out = [0, 0, 0]
-    mod.le16x3_into(raw, out)
+    mod.int16x3_into(raw, out, 0)
     assert tuple(out) == struct.unpack("<hhh", raw)
+    mod.int16x3_into(raw, out, 1)
+    assert tuple(out) == struct.unpack(">hhh", raw)
     assert stats.max_abs < 1 << 30
