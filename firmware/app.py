@@ -169,10 +169,10 @@ class CompassApp:
         kn = kernels() if fast is None or fast is True else None
         self.fast = kn is not None
         if kn is None:
-            from firmware import axes, calibration, trig
+            from firmware import axes, calibration
             self._correct = calibration.correct
             self._apply = axes.apply
-            compass.use_kernels(trig)
+            compass.use_kernels(False)
         else:
             self._correct = kn.correct
             self._apply = kn.apply

@@ -16,9 +16,11 @@ heading(b, g=None, declination=0)
                east positive); g None means a level board. ValueError for a zero b or g.
 Compass        the same heading plus pitch, roll, field magnitude and dip, and the flags below,
                all updated in place: the per-sample path allocates nothing.
-The angle arithmetic (atan2, sin, norm14, isqrt) is firmware/trig.py's, or firmware/fast.py's
-viper mirror of the same functions where the port has the native emitter: use_kernels() picks
-(at import), use_kernels(trig) forces the plain ones, .KERNELS says which. Same bits either way.
+Compass.update runs three steps on an int array of working state: orient (normalise, tilt or
+level, de-rotate, eq. 22), magnitude and dip, then the flags. Where the port has the native
+emitter the steps are firmware/fast.py's viper mirrors of the functions here (same names,
+same signatures, same bits): use_kernels() picks at import, use_kernels(False) forces the
+plain ones, KERNELS says which set is in use.
 
 Flags (Compass.flags bits; the booleans mirror the first three):
   FLAG_INTERFERENCE  .interference: |b| is outside field * (1 +- field_tol_pct %). A magnet,
@@ -39,8 +41,10 @@ allocated, not even a call frame: MicroPython puts the frame of a function whose
 locals and stack exceed 11 words on the heap (py/objfun.c VM_MAX_STATE_ON_STACK), so the work
 is split into small methods that keep their state on the Compass object.
 """
-from firmware import trig
+from array import array
+
 from firmware.compat import const, kernels
+from firmware.trig import ZERO_VECTOR as _ZERO_VECTOR, atan2, isqrt, norm14, sin
 
 _KANG_90 = const(16384)
 _Q15_ONE = const(32768)
@@ -49,32 +53,21 @@ _DIP_LIMIT_KANG = const(13653)  # 75 deg: heading unreliable beyond this inclina
 _GIMBAL_PITCH_KANG = const(14564)  # 80 deg: roll noise x 1/cos(80 deg) = 5.8 (gimbal lock at 90)
 _FIELD_TOL_PCT = const(10)  # +-10 %: twice the |B| spread MotionCal accepts (variance < 4.5 %)
 _NO_LIMIT = const(0x3FFFFFFF)  # field window when no reference field is set
-_ZERO_VECTOR = const(-128)  # trig.norm14's answer for (0, 0, 0)
 
-# The steps' kernels, module-wide: firmware.trig's functions, or their viper mirrors in
-# firmware.fast where this port has the native emitter (same bits; see use_kernels). Globals,
-# not attributes: a global costs no extra word in the calling frame.
-_atan2 = trig.atan2
-_sin = trig.sin
-_norm14 = trig.norm14
-_isqrt = trig.isqrt
-KERNELS = trig
-
-
-def use_kernels(kn=None):
-    """Route every Compass's angle arithmetic through the kernel set `kn`: a module with
-    trig's atan2, sin, norm14 and isqrt (firmware.trig, firmware.fast); None picks
-    firmware.fast where the native emitter exists, else firmware.trig. Returns the set now
-    in use (.KERNELS)."""
-    global _atan2, _sin, _norm14, _isqrt, KERNELS
-    if kn is None:
-        kn = kernels() or trig
-    _atan2 = kn.atan2
-    _sin = kn.sin
-    _norm14 = kn.norm14
-    _isqrt = kn.isqrt
-    KERNELS = kn
-    return kn
+# The working state of one Compass, array('i') (the steps below read and write it):
+#   0..2 b scaled by trig.norm14, 3..5 g likewise, 6 b's shift, 7/8 sin/cos of roll and
+#   9/10 of pitch (Q15), 11 roll, 12 pitch (KANG), 13..15 the de-rotated field Bf (eq. 19)
+_KB = const(6)
+_SPHI = const(7)
+_CPHI = const(8)
+_STH = const(9)
+_CTH = const(10)
+_ROLL = const(11)
+_PITCH = const(12)
+_BFX = const(13)
+_BFY = const(14)
+_BFZ = const(15)
+STATE_SIZE = const(16)
 
 
 FLAG_INTERFERENCE = const(1)
@@ -82,6 +75,109 @@ FLAG_DIP_HIGH = const(2)
 FLAG_GIMBAL = const(4)
 FLAG_NO_FIELD = const(8)
 FLAG_NO_GRAVITY = const(16)
+
+
+def orient(st, b, g):
+    """The magnetic heading 0..65535 (AN4248 eq. 22) of body-frame b and g (None: a level
+    board), the tilt and Bf left in st; -1 when b is (0, 0, 0), -2 when g is."""
+    k = norm14(b, st, 0)
+    if k == _ZERO_VECTOR:
+        return -1
+    st[_KB] = k
+    if g is None:
+        level(st)
+    elif norm14(g, st, 3) == _ZERO_VECTOR:
+        return -2
+    else:
+        tilt(st)
+    derotate(st)
+    return atan2(-st[_BFY], st[_BFX]) & 0xFFFF  # psi = atan2(-Bfy, Bfx), eq. 22
+
+
+def level(st):
+    st[_ROLL] = 0
+    st[_PITCH] = 0
+    st[_SPHI] = 0
+    st[_CPHI] = _Q15_ONE  # exact 1.0: the level path is the identity
+    st[_STH] = 0
+    st[_CTH] = _Q15_ONE
+
+
+def tilt(st):
+    """Roll (eq. 13) and pitch (eq. 15) from g in st[3..5], with their Q15 sines and cosines."""
+    gy = st[4]
+    gz = st[5]
+    a = atan2(gy, gz)  # roll phi
+    st[_ROLL] = a
+    s = sin(a)
+    c = sin(a + _KANG_90)
+    st[_SPHI] = s
+    st[_CPHI] = c
+    a = (gy * s + gz * c + _ROUND15) >> 15  # = sqrt(Gy**2 + Gz**2) >= 0: eq. 15 denominator
+    a = atan2(-st[3], a)  # pitch theta in [-90, 90] deg; defined at +-90 deg
+    st[_PITCH] = a
+    st[_STH] = sin(a)
+    st[_CTH] = sin(a + _KANG_90)
+
+
+def derotate(st):
+    """Bf = Ry(-theta) Rx(-phi) Bp, AN4248 eq. 19 (b already hard/soft-iron corrected)."""
+    s = st[_SPHI]
+    c = st[_CPHI]
+    t = (st[1] * s + st[2] * c + _ROUND15) >> 15  # By sin(phi) + Bz cos(phi)
+    st[_BFY] = (st[1] * c - st[2] * s + _ROUND15) >> 15
+    s = st[_STH]
+    c = st[_CTH]
+    st[_BFX] = (st[0] * c + t * s + _ROUND15) >> 15
+    st[_BFZ] = (t * c - st[0] * s + _ROUND15) >> 15
+
+
+def magnitude(st):
+    """|b| in b's units, from the scaled b in st and its shift."""
+    m = isqrt(st[0] * st[0] + st[1] * st[1] + st[2] * st[2])
+    k = st[_KB]
+    if k > 0:  # undo norm14's shift, rounding
+        return (m + (1 << (k - 1))) >> k
+    if k < 0:
+        return m << -k
+    return m
+
+
+def dip(st):
+    """Inclination (KANG, positive down): vertical over horizontal de-rotated field."""
+    x = st[_BFX]
+    y = st[_BFY]
+    return atan2(st[_BFZ], isqrt(x * x + y * y))
+
+
+# The steps a Compass runs, module-wide: the plain functions above, or their viper mirrors in
+# firmware.fast where this port has the native emitter (same bits; see use_kernels). Globals,
+# not attributes: a global costs no extra word in the calling frame.
+_orient = orient
+_magnitude = magnitude
+_dip = dip
+KERNELS = None
+
+
+def use_kernels(kn=None):
+    """Run every Compass's steps (orient, magnitude, dip) with the kernel set `kn`:
+    None picks firmware.fast where the native emitter exists (else the plain functions),
+    False the plain functions, a module (firmware.fast) its mirrors. Returns the set in use
+    (None for the plain functions)."""
+    global _orient, _magnitude, _dip, KERNELS
+    if kn is None:
+        kn = kernels()
+    if not kn:
+        _orient = orient
+        _magnitude = magnitude
+        _dip = dip
+        KERNELS = None
+        return None
+    _orient = kn.orient
+    _magnitude = kn.magnitude
+    _dip = kn.dip
+    KERNELS = kn
+    return kn
 
 
 class Compass:
@@ -103,23 +199,14 @@ class Compass:
         # the steps' kernels: firmware.trig, or its viper mirror firmware.fast (same bits)
         self.declination_kang = declination_kang
         self.heading_kang = 0
-        self.pitch_kang = 0
-        self.roll_kang = 0
         self.dip_kang = 0
         self.magnitude = 0
         self.flags = 0
         self.interference = False
         self.dip_high = False
         self.gimbal = False
-        self._v = [0, 0, 0, 0, 0, 0]  # b then g, normalised by trig.norm14
-        self._kb = 0  # b's shift, to scale |b| back
-        self._sphi = 0  # Q15 sin/cos of roll and pitch
-        self._cphi = _Q15_ONE
-        self._stheta = 0
-        self._ctheta = _Q15_ONE
-        self._bfx = 0  # de-rotated field, AN4248 eq. 19
-        self._bfy = 0
-        self._bfz = 0
+        self.st = array("i", bytearray(4 * STATE_SIZE))  # the steps' working state
+        level(self.st)
         self.field = 0
         self.field_tol_pct = field_tol_pct
         self._lo = 0
@@ -139,90 +226,34 @@ class Compass:
         self._lo = field - d if field else 0
         self._hi = field + d if field else _NO_LIMIT
 
+    @property
+    def roll_kang(self):
+        return self.st[_ROLL]
+
+    @property
+    def pitch_kang(self):
+        return self.st[_PITCH]
+
     def update(self, b, g=None):
-        h = self._orient(b, g)
+        h = _orient(self.st, b, g)
         if h < 0:
-            return h
-        self._check_field()
-        self._check_dip()
+            self.flags = FLAG_NO_FIELD if h == -1 else FLAG_NO_GRAVITY
+            return -1
+        self._check_field(_magnitude(self.st))
+        self._check_dip(_dip(self.st))
         h = (h + self.declination_kang) & 0xFFFF
         self.heading_kang = h
         return h
 
-    def _orient(self, b, g):
-        """Magnetic heading 0..65535 (eq. 22); -1 and a flag when b or g is zero."""
-        v = self._v
-        k = _norm14(b, v, 0)
-        if k == _ZERO_VECTOR:
-            self.flags = FLAG_NO_FIELD
-            return -1
-        self._kb = k
-        if g is None:
-            self._level()
-        elif _norm14(g, v, 3) == _ZERO_VECTOR:
-            self.flags = FLAG_NO_GRAVITY
-            return -1
-        else:
-            self._tilt()
-        self._derotate()
-        self.flags = 0
-        return _atan2(-self._bfy, self._bfx) & 0xFFFF  # psi = atan2(-Bfy, Bfx), eq. 22
-
-    def _level(self):
-        self.roll_kang = 0
-        self.pitch_kang = 0
-        self._sphi = 0
-        self._cphi = _Q15_ONE  # exact 1.0: the level path is the identity
-        self._stheta = 0
-        self._ctheta = _Q15_ONE
-
-    def _tilt(self):
-        v = self._v
-        gy = v[4]
-        gz = v[5]
-        a = _atan2(gy, gz)  # roll phi, eq. 13
-        self.roll_kang = a
-        s = _sin(a)
-        c = _sin(a + _KANG_90)
-        self._sphi = s
-        self._cphi = c
-        a = (gy * s + gz * c + _ROUND15) >> 15  # = sqrt(Gy**2 + Gz**2) >= 0: eq. 15 denominator
-        a = _atan2(-v[3], a)  # pitch theta in [-90, 90] deg, eq. 15; defined at +-90 deg
-        self.pitch_kang = a
-        self._stheta = _sin(a)
-        self._ctheta = _sin(a + _KANG_90)
-
-    def _derotate(self):
-        """Bf = Ry(-theta) Rx(-phi) Bp, AN4248 eq. 19 (b already hard/soft-iron corrected)."""
-        v = self._v
-        s = self._sphi
-        c = self._cphi
-        t = (v[1] * s + v[2] * c + _ROUND15) >> 15  # By sin(phi) + Bz cos(phi)
-        self._bfy = (v[1] * c - v[2] * s + _ROUND15) >> 15
-        s = self._stheta
-        c = self._ctheta
-        self._bfx = (v[0] * c + t * s + _ROUND15) >> 15
-        self._bfz = (t * c - v[0] * s + _ROUND15) >> 15
-
-    def _check_field(self):
-        v = self._v
-        m = _isqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-        k = self._kb
-        if k > 0:  # undo norm14's shift, rounding
-            m = (m + (1 << (k - 1))) >> k
-        elif k < 0:
-            m <<= -k
+    def _check_field(self, m):
         self.magnitude = m
         self.interference = m < self._lo or m > self._hi
-        self.flags |= FLAG_INTERFERENCE if self.interference else 0
+        self.flags = FLAG_INTERFERENCE if self.interference else 0
 
-    def _check_dip(self):
-        x = self._bfx
-        y = self._bfy
-        x = _atan2(self._bfz, _isqrt(x * x + y * y))  # inclination: vertical over horizontal field
+    def _check_dip(self, x):
         self.dip_kang = x
         self.dip_high = x > _DIP_LIMIT_KANG or x < -_DIP_LIMIT_KANG
-        x = self.pitch_kang
+        x = self.st[_PITCH]
         self.gimbal = x > _GIMBAL_PITCH_KANG or x < -_GIMBAL_PITCH_KANG
         x = self.flags
         if self.dip_high:
@@ -238,9 +269,9 @@ _PLAIN = Compass()  # scratch for heading(): one sample at a time, like the sens
 
 def heading(b, g=None, declination=0):
     """Tilt-compensated heading in KANG 0..65535 (see the module docstring)."""
-    h = _PLAIN._orient(b, g)
+    h = _orient(_PLAIN.st, b, g)
     if h < 0:
-        if _PLAIN.flags == FLAG_NO_FIELD:
+        if h == -1:
             raise ValueError("heading: zero field vector b=%r" % (b,))
         raise ValueError("heading: zero gravity vector g=%r" % (g,))
     return (h + declination) & 0xFFFF

@@ -8,12 +8,18 @@ and the Compass use these automatically; the results are the same bits.
     plain (its home)                          mirror here
     calibration.correct(k, raw, out)          correct(k, raw, out)
     axes.apply(m, src, dst)                   apply(m, src, dst)
+    compass.orient(st, b, g)                  orient(st, b, g)   (and its steps level, tilt,
+    compass.magnitude(st), compass.dip(st)    magnitude(st), dip(st)        derotate)
     trig.norm14(src, dst, o)                  norm14(src, dst, o)
-    trig.atan2(y, x), trig.sin(a)             atan2(y, x), sin(a)
+    trig.atan2(y, x), trig.sin(a), cos(a)     atan2(y, x), sin(a), cos(a)
     fixedpoint.isqrt(n)                       isqrt(n), for n < 2**30 (the compass's range)
 
-Each computes, operation for operation, what its plain original computes; the orchestration
-(Compass.update, the app's step) is the plain code in both paths. Viper ints are machine words
+Each computes, operation for operation, what its plain original computes and calls the
+mirrors of what its original calls; the orchestration (Compass.update, the app's step) is the
+plain code in both paths. The compass's state `st` is its array('i') (ptr32 loads and stores;
+a load is zero-extended on the 64-bit unix port, so every value read back, all below 2**16 in
+magnitude, is sign-extended from 18 bits: ((v + 0x20000) & 0x3FFFF) - 0x20000, the same on a
+32-bit board). Viper ints are machine words
 (32 bits on the boards, 64 on the unix port): every intermediate here is below 2**30 for int16
 inputs, the bound tests/test_heading.py proves for the plain code, so the words never wrap.
 `//` and `>>` have Python's floor semantics in viper; ptr16 loads are unsigned and are
@@ -30,6 +36,7 @@ from firmware.kang_tables import ATAN_T, SIN_T
 
 _AT = array("i", ATAN_T)
 _ST = array("i", SIN_T)
+_NONE = None  # viper compares an object with a global, not with the None literal
 
 
 @micropython.viper
@@ -111,6 +118,100 @@ def _rshift(v: int, n: int) -> int:
     if v < 0:
         return 0 - ((0 - v + (1 << (n - 1))) >> n)
     return (v + (1 << (n - 1))) >> n
+
+
+@micropython.viper
+def orient(st, b, g) -> int:
+    """compass.orient."""
+    p = ptr32(st)
+    k = int(norm14(b, st, 0))
+    if k == -128:  # trig.ZERO_VECTOR
+        return -1
+    p[6] = k
+    if g is _NONE:
+        level(st)
+    elif int(norm14(g, st, 3)) == -128:
+        return -2
+    else:
+        tilt(st)
+    derotate(st)
+    y = ((p[14] + 0x20000) & 0x3FFFF) - 0x20000
+    x = ((p[13] + 0x20000) & 0x3FFFF) - 0x20000
+    return int(atan2(0 - y, x)) & 0xFFFF
+
+
+@micropython.viper
+def level(st):
+    """compass.level."""
+    p = ptr32(st)
+    p[11] = 0
+    p[12] = 0
+    p[7] = 0
+    p[8] = 32768
+    p[9] = 0
+    p[10] = 32768
+
+
+@micropython.viper
+def tilt(st):
+    """compass.tilt."""
+    p = ptr32(st)
+    gx = ((p[3] + 0x20000) & 0x3FFFF) - 0x20000
+    gy = ((p[4] + 0x20000) & 0x3FFFF) - 0x20000
+    gz = ((p[5] + 0x20000) & 0x3FFFF) - 0x20000
+    a = int(atan2(gy, gz))
+    p[11] = a
+    s = int(sin(a))
+    c = int(sin(a + 16384))
+    p[7] = s
+    p[8] = c
+    a = int(atan2(0 - gx, (gy * s + gz * c + 0x4000) >> 15))
+    p[12] = a
+    p[9] = int(sin(a))
+    p[10] = int(sin(a + 16384))
+
+
+@micropython.viper
+def derotate(st):
+    """compass.derotate."""
+    p = ptr32(st)
+    x = ((p[0] + 0x20000) & 0x3FFFF) - 0x20000
+    y = ((p[1] + 0x20000) & 0x3FFFF) - 0x20000
+    z = ((p[2] + 0x20000) & 0x3FFFF) - 0x20000
+    s = ((p[7] + 0x20000) & 0x3FFFF) - 0x20000
+    c = ((p[8] + 0x20000) & 0x3FFFF) - 0x20000
+    t = (y * s + z * c + 0x4000) >> 15
+    p[14] = (y * c - z * s + 0x4000) >> 15
+    s = ((p[9] + 0x20000) & 0x3FFFF) - 0x20000
+    c = ((p[10] + 0x20000) & 0x3FFFF) - 0x20000
+    p[13] = (x * c + t * s + 0x4000) >> 15
+    p[15] = (t * c - x * s + 0x4000) >> 15
+
+
+@micropython.viper
+def magnitude(st) -> int:
+    """compass.magnitude."""
+    p = ptr32(st)
+    x = ((p[0] + 0x20000) & 0x3FFFF) - 0x20000
+    y = ((p[1] + 0x20000) & 0x3FFFF) - 0x20000
+    z = ((p[2] + 0x20000) & 0x3FFFF) - 0x20000
+    m = int(isqrt(x * x + y * y + z * z))
+    k = ((p[6] + 0x20000) & 0x3FFFF) - 0x20000
+    if k > 0:
+        return (m + (1 << (k - 1))) >> k
+    if k < 0:
+        return m << (0 - k)
+    return m
+
+
+@micropython.viper
+def dip(st) -> int:
+    """compass.dip."""
+    p = ptr32(st)
+    x = ((p[13] + 0x20000) & 0x3FFFF) - 0x20000
+    y = ((p[14] + 0x20000) & 0x3FFFF) - 0x20000
+    z = ((p[15] + 0x20000) & 0x3FFFF) - 0x20000
+    return int(atan2(z, int(isqrt(x * x + y * y))))
 
 
 @micropython.viper

@@ -98,6 +98,13 @@ def kernels_agree(v):
     d1 = [0, 0, 0, 0]
     d2 = [0, 0, 0, 0]
     check("norm14", [FAST.norm14(v, d2, 1)] + d2, [trig.norm14(v, d1, 1)] + d1, v)
+    st1 = array("i", bytearray(4 * compass.STATE_SIZE))
+    st2 = array("i", bytearray(4 * compass.STATE_SIZE))
+    for g in (None, [v[2], v[0], v[1]], [0, 0, 0], [1, -1, 16384]):
+        check("orient", FAST.orient(st2, v, g), compass.orient(st1, v, g), [v, g])
+        check("state", list(st2), list(st1), [v, g])
+        check("magnitude", FAST.magnitude(st2), compass.magnitude(st1), [v, g])
+        check("dip", FAST.dip(st2), compass.dip(st1), [v, g])
     n = (v[0] * v[0] + v[1] * v[1]) >> 2  # < 2**30, the mirror's domain
     check("isqrt", FAST.isqrt(n), fixedpoint.isqrt(n), n)
 
@@ -106,7 +113,7 @@ def pipeline(v, g, kern):
     compass.use_kernels(kern)
     c = compass.Compass(field=3700, declination_kang=-1234)
     b = array("h", (0, 0, 0))
-    fast = kern is not trig
+    fast = kern is not False
     (FAST.correct if fast else calibration.correct)(CAL.k, v, b)
     (FAST.apply if fast else axes.apply)(MAPS[1].m, b, b)
     h = c.update(b, g)
@@ -127,7 +134,7 @@ def run():
     for v in vs + logs:
         g = gs[i % len(gs)]
         i += 1
-        check("pipeline", pipeline(v, g, FAST), pipeline(v, g, trig), v)
+        check("pipeline", pipeline(v, g, FAST), pipeline(v, g, False), v)
     compass.use_kernels()
     out["cases"] = cases
     out["mismatches"] = bad
@@ -144,7 +151,10 @@ def allocation():
     res = {}
     k = CAL.k
     m = MAPS[3].m
-    for name in ("correct", "apply", "atan2", "sin", "norm14", "isqrt"):
+    st = array("i", bytearray(4 * compass.STATE_SIZE))
+    g = array("h", (300, -200, 16000))
+    for name in ("correct", "apply", "atan2", "sin", "norm14", "isqrt", "orient", "magnitude",
+                 "dip"):
         f = getattr(FAST, name)
         t = mt()
         for _ in range(200):
@@ -158,6 +168,10 @@ def allocation():
                 f(12345)
             elif name == "norm14":
                 f(v, d, 1)
+            elif name == "orient":
+                f(st, v, g)
+            elif name in ("magnitude", "dip"):
+                f(st)
             else:
                 f(123456789)
         res[name] = (mt() - t) // 200

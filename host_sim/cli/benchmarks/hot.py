@@ -61,7 +61,7 @@ mmap = AxisMap("x,-y,-z")
 amap = AxisMap("-x,y,z")
 compass = Compass(field=c10.field_out)
 fast = kernels()           # firmware.fast where the port has the native emitter, else None
-kern = fast if fast is not None else trig
+kern = fast if fast is not None else False
 fcorrect = kern.correct if fast is not None else calibration.correct
 fapply = kern.apply if fast is not None else axes.apply
 K = c10.k
@@ -115,7 +115,7 @@ def o4(n):
 
 
 def ours(n):
-    compass_mod.use_kernels(trig)  # the plain path
+    compass_mod.use_kernels(False)  # the plain path
     bus.rewind()
     for i in range(n):
         mag.read_into(raw)
