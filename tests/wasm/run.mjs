@@ -276,15 +276,18 @@ if (mode === "script") {
 // One Python block catches what the script raises: the traceback goes to stderr like the unix
 // port's, SystemExit becomes the exit status (an int, 0 for None, 1 and the value printed else).
 const indent = (s) => s.split("\n").map((l) => (l ? "    " + l : l)).join("\n");
+// A script may end with the heap locked (micropython.heap_lock): the handlers store only into
+// names that exist already, then unlock (heap_lock() and heap_unlock() return the depth).
+const unlock = "    micropython.heap_lock()\n    while micropython.heap_unlock():\n        pass\n";
 const wrapper = setup +
-    "_run_mjs_rc = 0\n" +
+    "import micropython\n_run_mjs_rc = 0\n_run_mjs_e = _run_mjs_v = None\n" +
     "try:\n" + indent(body) +
-    "except SystemExit as _run_mjs_e:\n" +
+    "except SystemExit as _run_mjs_e:\n" + unlock +
     "    _run_mjs_v = _run_mjs_e.args[0] if _run_mjs_e.args else None\n" +
     "    if _run_mjs_v is None:\n        _run_mjs_rc = 0\n" +
     "    elif isinstance(_run_mjs_v, int):\n        _run_mjs_rc = _run_mjs_v & 255\n" +
     "    else:\n        print(_run_mjs_v, file=sys.stderr)\n        _run_mjs_rc = 1\n" +
-    "except BaseException as _run_mjs_e:\n" +
+    "except BaseException as _run_mjs_e:\n" + unlock +
     "    sys.print_exception(_run_mjs_e, sys.stderr)\n" +
     "    _run_mjs_rc = 1\n";
 
