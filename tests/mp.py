@@ -150,6 +150,9 @@ def run(argv, micro, timeout=600, heap=None):
     out = p.stdout
     if t.name == "arm":  # the device's UART: CR LF lines; mpremote exits 0 after a traceback
         out = out.replace("\r\n", "\n")
+        banner = "Local directory %s is mounted at /remote\n" % ROOT  # mpremote's, on stdout
+        if out.startswith(banner):
+            out = out[len(banner):]
         if "Traceback (most recent call last)" in out and p.returncode == 0:
             p = subprocess.CompletedProcess(p.args, 1, out, p.stderr)
     if p.returncode != 0:
