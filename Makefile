@@ -10,7 +10,7 @@ BOARD  ?= rp2040
 PORT   ?= /dev/ttyACM0
 BUILD  := build/$(BOARD)
 
-.PHONY: run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm
+.PHONY: run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm wasm test-arm
 
 venv: $(STAMP)
 
@@ -23,8 +23,32 @@ $(STAMP): requirements.txt
 run: $(STAMP)
 	$(PY) -m host_sim run
 
-test: $(STAMP)
+test: $(STAMP) wasm
 	$(PY) -m pytest -q
+
+# --- 32-bit test tiers (tests/mp.py) -------------------------------------------------------
+# wasm: the MicroPython WebAssembly port from npm (tests/wasm/package.json), installed into the
+# work tree once per package-lock.json; without node or npm the tier's tests skip.
+WASM_DIR   := tests/wasm
+WASM_STAMP := $(WASM_DIR)/node_modules/.installed-$(shell cksum < $(WASM_DIR)/package-lock.json | cut -d' ' -f1)
+
+wasm:
+	@if ! command -v node >/dev/null 2>&1; then echo "wasm tier skipped: node not found on PATH"; \
+	elif ! command -v npm >/dev/null 2>&1; then echo "wasm tier skipped: npm not found on PATH"; \
+	elif [ ! -f $(WASM_STAMP) ]; then \
+	  if npm ci --prefix $(WASM_DIR) --no-audit --no-fund --loglevel=error; then touch $(WASM_STAMP); \
+	  else echo "wasm tier skipped: npm ci failed (tests/wasm/node_modules not installed)"; fi; \
+	fi
+
+# arm: the parity scenarios on the Cortex-M qemu firmware in ../shared/tools (minutes; not in
+# `make test`). Installs qemu-system-arm from Debian when missing and run as root.
+test-arm: $(STAMP)
+	@if ! command -v qemu-system-arm >/dev/null 2>&1; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    apt-get update -qq && apt-get install -y -qq qemu-system-arm >/dev/null || exit 1; \
+	  else echo "arm tier skipped: qemu-system-arm missing (as root: apt-get install -y qemu-system-arm)"; exit 0; fi; \
+	fi; \
+	ARM_TIER=1 $(PY) -m pytest -q -p no:randomly tests/test_tiers.py -k arm
 
 fuzz: $(STAMP)
 	HYPOTHESIS_PROFILE=fuzz $(PY) -m pytest -q tests

@@ -94,15 +94,15 @@ def test_the_heading_only_modules_do_not_import_the_calibration_machinery():
 def test_a_board_booted_from_a_stored_calibration_loads_no_calibration_machinery(micro):
     out = mp.json_lines(mp.run(["tests/scenarios/app_modules.py"], micro=micro))
     first, second = out
-    assert first["phase"] == "heading_only" and first["heading"] == 100
-    assert not first["collecting"]
-    loaded = set(first["modules"])
+    assert first[0] == "heading_only" and first[2] == 100
+    assert not first[3]
+    loaded = set(first[1])
     assert not loaded & CALIBRATION_MACHINERY, sorted(loaded)
     assert {"firmware.app", "firmware.calibration", "firmware.compass", "firmware.store",
             "firmware.qmc5883l"} <= loaded
     # collecting imports it, lazily, and the heading goes on
-    assert second["collecting"] and second["heading"] == 100
-    assert CALIBRATION_MACHINERY <= set(second["modules"])
+    assert second[3] and second[2] == 100
+    assert CALIBRATION_MACHINERY <= set(second[1])
 
 
 def _code_lines(path):

@@ -7,13 +7,14 @@ from firmware.axes import AxisMap
 from firmware.compass import Compass, heading
 from firmware.trig import atan2, cdeg_to_kang, cos, kang_to_cdeg, kang_to_str, sin
 
-_seed = [12345]
+from smallrand import SmallRand  # noqa: E402  (beside this script)
+
+_R = SmallRand(12345)
 
 
 def rnd16():
     # LCG (Numerical Recipes constants): the same integers on both interpreters
-    _seed[0] = (_seed[0] * 1664525 + 1013904223) & 0xFFFFFFFF
-    return (_seed[0] >> 16) - 32768
+    return _R.u16() - 32768
 
 
 def emit(name, v):

@@ -32,13 +32,15 @@ if mode == "import":
 from firmware import motioncal as mc  # noqa: E402
 from firmware.fixedpoint import bit_length  # noqa: E402
 
+from smallrand import SmallRand  # noqa: E402  (beside this script)
+
 seed = 2024
+_R = SmallRand(seed)
 
 
 def rnd(n):
     global seed
-    seed = (seed * 1103515245 + 12345) & 0x7FFFFFFF
-    return (seed >> 4) % n
+    return (_R.u30() >> 4) % n
 
 
 def f32_bits(k, shift):

@@ -64,14 +64,17 @@ r, alloc = locked(buf.coverage, 0, 0, 0)
 out["coverage"] = [0 <= r <= 100, alloc]
 # many offers under one lock: a random walk, every path taken many times
 x, y, z = 0, 0, 0
+from smallrand import SmallRand  # noqa: E402  (beside this script)
+
 seed = 1
+_R = SmallRand(seed)
 
 
 def walk(n, _b, _c):
     global x, y, z, seed
     kept = 0
     for _ in range(n):
-        seed = (seed * 1103515245 + 12345) & 0x3FFFFFFF
+        seed = _R.u30()
         x += ((seed >> 8) & 255) - 127
         y += ((seed >> 16) & 255) - 127
         z += ((seed >> 4) & 255) - 127

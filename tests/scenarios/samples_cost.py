@@ -19,12 +19,15 @@ except ImportError:  # CPython: counts only
     def ticks_diff(a, b):
         return 0
 
+from smallrand import SmallRand  # noqa: E402  (beside this script)
+
 seed = 7
+_R = SmallRand(seed)
 
 
 def rnd():
     global seed
-    seed = (seed * 1103515245 + 12345) & 0x7FFFFFFF
+    seed = _R.u30()
     return ((seed >> 8) & 0x7FFF) - 16384
 
 

@@ -6,12 +6,15 @@ import json
 from firmware.fixedpoint import isqrt
 from firmware.samples import REPLACED, SampleBuffer, region, separation_for
 
+from smallrand import SmallRand  # noqa: E402  (beside this script)
+
 seed = 12345
+_R = SmallRand(seed)
 
 
 def rnd(bits):
     global seed
-    seed = (seed * 1103515245 + 12345) & 0x7FFFFFFF
+    seed = _R.u30()
     return (seed >> 8) & ((1 << bits) - 1)
 
 
