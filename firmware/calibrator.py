@@ -90,6 +90,8 @@ class Calibrator:
         self._fresh = True  # no raw sample since construction or clear()
         self._ext = array("h", (0, 0, 0, 0, 0, 0))  # raw extremes: lo x, y, z, then hi
         self.slice_group = DEFAULT_SLICE_GROUP
+        self._strict = True
+        self.overridden = []  # refusals a solve(checks=False) went past: (reason, detail)
 
     @property
     def count(self):
@@ -201,22 +203,40 @@ class Calibrator:
             raise ValueError("model %r: expected 'minmax', 4, 7, 10 or 'auto'" % (model,))
         return model
 
-    @staticmethod
-    def _check_rho(f):
-        acceptance.check_rho(f.rho_min_ppm, solve.column_degree(f.model, f.rho_col) == 1,
-                             f.model, solve.column_name(f.model, f.rho_col))
+    def extremes(self):
+        """((x, y, z) lowest, (x, y, z) highest) raw value of every sample since clear()."""
+        e = self._ext
+        return (e[0], e[1], e[2]), (e[3], e[4], e[5])
 
-    def solve(self, model=None, accept=True):
+    def _check_rho(self, f):
+        self._verify(acceptance.check_rho, f.rho_min_ppm,
+                     solve.column_degree(f.model, f.rho_col) == 1, f.model,
+                     solve.column_name(f.model, f.rho_col))
+
+    def _verify(self, check, *args):
+        # one acceptance check; with checks off a refusal is noted in .overridden instead
+        try:
+            check(*args)
+        except CalibrationRejected as e:
+            if self._strict:
+                raise
+            self.overridden.append((e.reason, e.detail))
+
+    def solve(self, model=None, accept=True, checks=True):
         """Solve now; returns the new Calibration (also made .current) or raises
-        CalibrationRejected. accept=False runs the checks but leaves .current alone."""
-        g = self.solve_steps(model, accept)
+        CalibrationRejected. accept=False runs the checks but leaves .current alone.
+        checks=False (the desktop tool's --force) returns the fit even where an acceptance
+        check refuses it, each refusal noted in .overridden as (reason, detail); a fit the
+        solver cannot compute (singular, too few samples to solve at all, V outside int16)
+        still raises."""
+        g = self.solve_steps(model, accept, checks=checks)
         while True:
             try:
                 next(g)
             except StopIteration as e:
                 return e.value
 
-    def solve_steps(self, model=None, accept=True, group=None):
+    def solve_steps(self, model=None, accept=True, group=None, checks=True):
         """The solve as a generator doing bounded work per next() (for the app's loop):
             job = cal.solve_steps()
             ... each tick:  next(job)   -> StopIteration when done (.value = Calibration),
@@ -230,7 +250,7 @@ class Calibrator:
         k = self.slice_group if group is None else group
         if k < 1:
             raise ValueError("slice group %d < 1" % k)
-        job = self._solve_slices(model, accept)
+        job = self._solve_slices(model, accept, checks)
         if k == 1:
             return (yield from job)
         n = 0
@@ -244,8 +264,10 @@ class Calibrator:
                 n = 0
                 yield
 
-    def _solve_slices(self, model, accept):
+    def _solve_slices(self, model, accept, checks=True):
         # the solve as named steps; each yield ends a slice (see solve_steps)
+        self._strict = checks
+        self.overridden = []
         model = self._pick_model(model)
         n = self.buffer.count
         c, s = self.moments.snapshot()
@@ -278,8 +300,9 @@ class Calibrator:
                         solve.column_degree(f.model, f.rho_col) == 1, f.model):
                     planar = True
                 if planar:
-                    acceptance.flat_spin(n, model, need)
-        acceptance.check_samples(n, model)
+                    self._verify(acceptance.flat_spin, n, model, need)
+                    break
+        self._verify(acceptance.check_samples, n, model)
 
     def _fit_minmax(self, c, s, r):
         # the running extremes of every raw sample since clear() (what users know; unlike the
@@ -297,7 +320,7 @@ class Calibrator:
         try:
             yield from solve.fit_steps(c, s, 4, f, self._check_rho)
         except solve.SolveError as x:
-            reject(REASON_PLANAR, x.detail)
+            self._verify(reject, REASON_PLANAR, x.detail)
         r[0] = (offset, w, b_q16, fe)
 
     def _fit_model(self, model, c, s, r):
@@ -338,14 +361,17 @@ class Calibrator:
         yield from self.buffer.coverage_steps(offset[0], offset[1], offset[2], r)
         cov = r[0]
         yield
-        acceptance.check_coverage(cov, model)
+        self._verify(acceptance.check_coverage, cov, model)
         yield from solve.cond_steps(invw, r)
         yield
-        acceptance.check_soft_iron(r[0], field_out)
-        acceptance.check_field(field, self.counts_per_gauss)
-        acceptance.check_fit_error(fe, self.max_fit_error)
+        if field_out <= 0:  # not even a forced fit can correct with this InvW
+            reject(REASON_SINGULAR, "W^-1 maps the fitted ellipsoid to a zero field")
+        self._verify(acceptance.check_soft_iron, r[0], field_out)
+        self._verify(acceptance.check_field, field, self.counts_per_gauss)
+        self._verify(acceptance.check_fit_error, fe, self.max_fit_error)
         if self.current.model is not None:
-            acceptance.check_better(model, fe, cov, self.current, self.aged_fit_error())
+            self._verify(acceptance.check_better, model, fe, cov, self.current,
+                         self.aged_fit_error())
         result = Calibration(model=model, offset=offset, invw=invw, field=field,
                              field_out=field_out, fit_error=fe, samples=n,
                              coverage=cov)
