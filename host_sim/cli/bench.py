@@ -24,6 +24,8 @@ import subprocess
 import sys
 import time
 
+from host_sim.cli.args import Parser, UsageError, error_line
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BIN = os.path.dirname(sys.executable)
 MICROPYTHON = os.path.join(BIN, "micropython")
@@ -661,49 +663,51 @@ def update_readme(section, path=None):
         f.write(text)
 
 
+def parser():
+    p = Parser("bench", "[--smoke] [--json PATH] [--readme | --no-readme]",
+               "make bench: the benchmark scripts on CPython and MicroPython, a table, JSON and the\n"
+               "README section (see this module's docstring).")
+    p.option("--smoke", "flag",
+             help="the same code paths with tiny counts (seconds; the test\n"
+                  "suite runs it); writes build/bench-smoke.json and leaves the\n"
+                  "README alone")
+    p.option("--json", "path", metavar="PATH",
+             help="where the JSON goes (default build/bench.json, smoke\n"
+                  "build/bench-smoke.json)")
+    p.option("--readme", "flag", help="update README.md (default: yes for a full run)")
+    p.option("--no-readme", "flag", help="leave README.md alone (default for --smoke)")
+    p.epilog = ("exit status: 0 done; 1 a script failed or MicroPython is missing; 2 bad usage "
+                "or not\nCPython (it drives subprocesses).")
+    return p
+
+
 def parse(argv):
-    opts = {"smoke": False, "json": None, "readme": None}
-    i = 0
-    while i < len(argv):
-        a = argv[i]
-        if a in ("-h", "--help"):
-            opts["help"] = True
-        elif a == "--smoke":
-            opts["smoke"] = True
-        elif a == "--readme":
-            opts["readme"] = True
-        elif a == "--no-readme":
-            opts["readme"] = False
-        elif a == "--json":
-            if i + 1 >= len(argv):
-                raise BenchError("--json needs a path")
-            opts["json"] = argv[i + 1]
-            i += 1
-        else:
-            raise BenchError("unknown option %s" % a)
-        i += 1
+    """The options as a dict with the defaults resolved; UsageError on bad usage."""
+    return _resolve(parser().parse(argv))
+
+
+def _resolve(opts):
+    if opts["readme"] and opts["no_readme"]:
+        raise UsageError("--readme and --no-readme: give one")
     if opts["json"] is None:
         opts["json"] = os.path.join(ROOT, "build", "bench-smoke.json" if opts["smoke"]
                                     else "bench.json")
-    if opts["readme"] is None:
-        opts["readme"] = not opts["smoke"]
+    opts["readme"] = (not opts["smoke"]) if not (opts["readme"] or opts["no_readme"]) \
+        else opts["readme"]
     return opts
 
 
 def main(argv):
+    return parser().main(argv, body)
+
+
+def body(opts):
     if sys.implementation.name != "cpython":
-        print("bench: run it with CPython (it starts MicroPython itself): make bench")
-        return 2
-    try:
-        opts = parse(argv)
-    except BenchError as e:
-        print("bench: %s (try --help)" % e)
-        return 2
-    if opts.get("help"):
-        print(__doc__)
-        return 0
+        raise UsageError("run it with CPython (it starts MicroPython itself): make bench")
+    opts = _resolve(opts)
     if not os.path.exists(MICROPYTHON):
-        print("bench: no MicroPython at %s (make venv installs it)" % MICROPYTHON)
+        print(error_line("bench", "no MicroPython at %s (make venv installs it)" % MICROPYTHON),
+              file=sys.stderr)
         return 1
     t0 = time.time()
     m = machine()

@@ -242,11 +242,12 @@ class Log:
                     self.names = fields
                     self.header_line = lineno
                     return None
-            self.sep = sep
-            if self._numeric(fields):
-                return lineno, b
-            if find_columns(fields) is not None or not self._numeric_any(fields):
-                self.header_line = lineno   # a header (or metadata) line above the data
+            else:
+                self.sep = sep
+                if self._numeric(fields):
+                    return lineno, b
+                # a header (or metadata) line above the data
+                self.header_line = lineno
                 self.names = fields if len(fields) > max(self.columns) else None
             if lineno >= HEADER_SEARCH:
                 break
