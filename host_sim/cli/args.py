@@ -191,6 +191,8 @@ class Parser:
         '-' -> '_'). `default` is used as is (not converted) when the option is absent."""
         if dest is None:
             dest = name.lstrip("-").replace("-", "_")
+        if kind == "flag" and default is None:
+            default = False
         if kind == "decimal":
             lo = _as_decimal(lo)
             hi = _as_decimal(hi)

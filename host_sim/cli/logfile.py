@@ -211,6 +211,7 @@ class Log:
         self.skipped = 0          # corrupt rows of the last pass
         self.rows_read = 0        # valid rows yielded by the last pass (after skip)
         self.warnings = []        # (lineno, message) of the first MAX_WARNINGS corrupt rows
+        self._first_data = None   # line number where the data begins (known after a pass)
         check_readable(path)
 
     def bad(self, lineno, message):
@@ -225,7 +226,13 @@ class Log:
         return ["column %d" % (c + 1) for c in self.columns]
 
     def _start(self, lines):
-        """Consume preamble and header; returns the first data line or None."""
+        """Consume preamble and header; returns the first data line or None. A later pass
+        starts where the first one found the data."""
+        if self._first_data is not None:
+            for lineno, b in lines:
+                if lineno >= self._first_data:
+                    return lineno, b
+            return None
         for lineno, b in lines:
             if b is None:
                 continue
@@ -241,10 +248,12 @@ class Log:
                     self.sep = sep
                     self.names = fields
                     self.header_line = lineno
+                    self._first_data = lineno + 1
                     return None
             else:
                 self.sep = sep
                 if self._numeric(fields):
+                    self._first_data = lineno
                     return lineno, b
                 # a header (or metadata) line above the data
                 self.header_line = lineno
