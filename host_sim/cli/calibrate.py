@@ -381,8 +381,15 @@ def _print_warnings(log):
         warn(COMMAND, "%s: %d more corrupt rows skipped" % (log.path, more))
 
 
+def hint_for(reason, model):
+    """What to try after a refusal for `reason` with --model `model` (text)."""
+    if reason == "too_few_samples" and model in ("4", "minmax"):
+        return "log more samples, turning the board through every orientation; or --force"
+    return HINTS.get(reason, "--force to fit anyway")
+
+
 def _refused(opts, rej, info):
-    hint = HINTS.get(rej.reason, "--force to fit anyway")
+    hint = hint_for(rej.reason, opts["model"])
     fail = info.get("force_failed")
     if fail is not None:
         hint = "even --force cannot fit: %s: %s" % (fail.reason, fail.detail)
