@@ -209,6 +209,11 @@ def test_unusable_inputs_exit_2_with_one_line(tmp_path, capsys):
         assert err.startswith("host_sim calibrate: error: ") and p in err, (name, err)
 
 
+def test_skipping_every_row_says_so(clean, capsys):
+    rc, out, err = call(capsys, clean, "--skip", "600")
+    assert rc == 2 and out == "" and "--skip 600" in err and err.count("\n") == 1
+
+
 def test_rows_outside_the_sensors_output_are_corrupt(tmp_path, capsys):
     # HMC5883L outputs -2048..2047 (-4096 marks an overflow): a 3000-count log is not one
     far = text_rows(sphere(centre=(9000, 0, 0)))           # x in 6000..12000 counts

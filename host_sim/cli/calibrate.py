@@ -16,7 +16,8 @@ import sys
 
 from host_sim.cli import calfile, logfile
 from host_sim.cli.args import (STATUS_OK, STATUS_REFUSED, Parser, UsageError, decimal_text,
-                               parse_decimal, warn)
+                               warn)
+from host_sim.cli.args import parse_decimal  # noqa: F401  (its earlier home; tests use it)
 
 DESKTOP_CAPACITY = 1000
 COMMAND = "calibrate"
@@ -266,6 +267,8 @@ def run(opts):
             ln, msg = log.warnings[0]
             raise UsageError("%s: no valid data row (%d corrupt; line %d: %s)"
                              % (path, log.skipped, ln, msg))
+        if opts["skip"]:
+            raise UsageError("%s: no data rows left after --skip %d" % (path, opts["skip"]))
         raise UsageError("%s: no data rows%s" % (path, " after the header (line %d)"
                                                  % log.header_line if log.header_line else ""))
     num, den, cpg, p = conversion(opts, board, mag, path)
