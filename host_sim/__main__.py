@@ -18,7 +18,8 @@ def main(argv):
         return 0 if argv else 2
     cmd = argv[0]
     if cmd not in _COMMANDS:
-        print("host_sim: unknown command %r; expected one of %s" % (cmd, ", ".join(_COMMANDS)))
+        print("host_sim: error: unknown command %r; expected one of %s"
+              % (cmd, ", ".join(_COMMANDS)), file=sys.stderr)
         return 2
     mod = __import__("host_sim.cli." + cmd, None, None, ["main"])
     return mod.main(argv[1:])

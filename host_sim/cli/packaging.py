@@ -7,6 +7,8 @@ import json
 import os
 import sys
 
+from host_sim.cli.args import Parser
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
@@ -23,6 +25,11 @@ def package_json():
 
 
 def main(argv=()):
+    p = Parser("cli.packaging", "", "Print the mip package.json (make package-json writes it).")
+    return p.main(list(argv), _body)
+
+
+def _body(opts):
     print(json.dumps(package_json(), indent=2))
     return 0
 
