@@ -1,4 +1,4 @@
-"""`python -m host_sim bench [--smoke]` (make bench / make bench-smoke): issue 6's figures.
+"""`python -m host_sim bench [--smoke]` (make bench / make bench-smoke): the benchmark figures.
 
 Runs the scripts of host_sim/cli/benchmarks/ on CPython and on the MicroPython unix port
 (one process per script and interpreter, one after the other: the machine is shared, so
@@ -32,7 +32,7 @@ MICROPYTHON = os.path.join(BIN, "micropython")
 MPY_CROSS = os.path.join(BIN, "mpy-cross")
 BEGIN = "<!-- bench:begin -->"
 END = "<!-- bench:end -->"
-BUDGET_32BIT = 32 * 1024          # issue 6 item 4
+BUDGET_32BIT = 32 * 1024          # the board-memory goal for the full app
 PROCESSES = 5                     # timing scripts run this many times; medians reported
 QMC_ODR_HZ = 200                  # QMC5883L's fastest output data rate
 I2C_HZ = 400000                   # boards/*/board.py
@@ -282,7 +282,7 @@ def boards(res):
     out = {"source": SOURCE, "unix_ms_per_1e6": ys, "i2c_wire_us_per_sample": wire,
            "assumptions": [
                "board time = unix port time x (board / unix time of the same reference "
-               "loop); int loop for the firmware, float loop for seed 004's float math",
+               "loop); int loop for the firmware, float loop for the heading guide's float math",
                "plus, per int operation that is a long int only on a 32-bit port "
                "(intcount.py), the published cost of one long-int result: (int_mul - "
                "int_add) per iteration",
@@ -566,7 +566,7 @@ def table_md(R):
 
 
 def summary(res, derived):
-    """Plain-language answers to issue 6 items 4 and 6 from the figures."""
+    """Plain-language answers to the memory and stall questions from the figures."""
     out = []
     rp = derived.get("rp2040_125mhz") or {}
     e2 = derived.get("esp32_240mhz") or {}

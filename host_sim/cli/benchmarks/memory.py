@@ -6,7 +6,10 @@ SESSION.bin: a recorded session (mag bytes then accel bytes, 6 per sample each; 
 writes it with host_sim on CPython, so host_sim is never imported here and its memory does
 not count). Steps, each after gc.collect() (gc.mem_alloc = live heap):
   base       the interpreter, this script and the session bytes
-  imported   + every firmware module a board loads (app, drivers, calibration, store)
+  heading_only  + what a calibrated board imports to show a heading (the app, the store,
+             the record, the compass, the QMC5883L and MPU6050 drivers; the fast path where
+             the port has the native emitter)
+  imported   + the calibration machinery and the other drivers (the full app)
   app        + CompassApp over ReplayBus (drivers, Calibrator with its preallocated
              300-sample buffer and hash, Compass), before the first sample
   peak       the largest live heap seen while solves run in the first lap of the session
@@ -15,8 +18,12 @@ not count). Steps, each after gc.collect() (gc.mem_alloc = live heap):
              separated buffer saturates near 3/4 of its capacity on one sphere; its arrays
              are preallocated, so the fill hardly changes the heap)
   fast       + firmware.fast (the viper kernels and their tables)
-Also: the moment sums that are small ints on this 64-bit port but long ints (heap objects)
-on a 32-bit board, to estimate the 32-bit figure.
+Also: bytes allocated per sample in the steady state (micropython.mem_total over 1000 steps
+once the session is calibrated, the collector still offered every sample), whether the run
+was complete (a 10-element calibration accepted, then 1000 headings), and the moment sums
+that are small ints on a 64-bit port but long ints (heap objects) on a 32-bit board.
+With --min the script only runs the session (the smallest-heap search runs it with
+-X heapsize=N and looks at the exit status and "complete").
 """
 import gc
 import sys
@@ -33,6 +40,12 @@ class Clock:
 
     def ticks(self):
         return self.now
+
+
+def mem_total():
+    import micropython
+    f = getattr(micropython, "mem_total", None)
+    return f() if f is not None else None
 
 
 def live():
@@ -59,9 +72,11 @@ def main():
     m = {"base": live()}
     import firmware.app  # noqa: F401
     import firmware.store  # noqa: F401
-    import firmware.hmc5883l  # noqa: F401
     import firmware.mpu6050  # noqa: F401
     import firmware.qmc5883l  # noqa: F401
+    m["heading_only"] = live()
+    import firmware.calibrator  # noqa: F401
+    import firmware.hmc5883l  # noqa: F401
     import firmware.qmc5883p  # noqa: F401
     m["imported"] = live()
     from firmware.app import CompassApp
@@ -85,14 +100,31 @@ def main():
     for _ in range(steps):
         clock.now += PERIOD_US
         app.step()
+    ok = 0
+    t = mem_total()
+    for _ in range(1000):  # steady state: calibrated, the collector still offered every sample
+        clock.now += PERIOD_US
+        if app.step():
+            ok += 1
+    per_sample = (mem_total() - t) // 1000 if t is not None else None
+    res["complete"] = app.calibration.model == 10 and ok == 1000
+    res["steady_bytes_per_sample"] = per_sample
+    res["fast"] = app.fast
+    if "--min" in sys.argv:
+        common.emit(res)
+        return
     m["peak_solving"] = peak if solving else None
     m["running"] = live()
     m["after"] = m["running"]
-    import firmware.fast  # noqa: F401
+    try:
+        import firmware.fast  # noqa: F401
+    except (ImportError, SyntaxError, ValueError):  # no native emitter on this port
+        pass
     m["fast"] = live()
     res["heap_bytes"] = m
     base = m["base"]
-    res["firmware_bytes"] = {"imports": m["imported"] - base, "app_start": m["app"] - base,
+    res["firmware_bytes"] = {"heading_only": m["heading_only"] - base,
+                             "imports": m["imported"] - base, "app_start": m["app"] - base,
                              "app_running": m["running"] - base,
                              "peak_solving": (peak - base) if solving else None,
                              "fast_module": m["fast"] - m["after"]}
