@@ -380,7 +380,7 @@ def rows(res, derived):
     if "error" in mp or "error" in cp:
         R.append(("1 hot path", cp.get("error", ""), mp.get("error", ""), "", "ERROR"))
     else:
-        R.append(("1 per sample, seed-004 float path [us]", _f(cp.get("float_cpu_us"), "%.2f"),
+        R.append(("1 per sample, float path of the heading guide [us]", _f(cp.get("float_cpu_us"), "%.2f"),
                   _f(mp.get("float_cpu_us"), "%.2f"), "reference", ""))
         r = mp.get("ratio_cpu")
         R.append(("1 per sample, firmware bytecode [us]", _f(cp.get("ours_cpu_us"), "%.2f"),
@@ -630,7 +630,7 @@ def readme_section(R, m, derived, res=None):
         "",
         "How: per sample = the drivers' `read_into` over an allocation-free replay bus "
         "(its own cost, measured in the same run, subtracted), `correct`, `AxisMap`, "
-        "`Compass.update`; the seed-004 float path reads the same bytes. Bytecode = the "
+        "`Compass.update`; the float path of the heading guide reads the same bytes. Bytecode = the "
         "plain firmware; fast = the same steps with `firmware/fast.py`'s viper mirrors (the same bits, "
         "tested in `tests/test_fast.py`). Board rows are **estimates**: unix times scaled "
         "by the published time of the same reference loop on each board (%s), plus the "
