@@ -29,7 +29,6 @@ import struct
 from array import array
 
 from firmware.compat import const
-from firmware.fixedpoint import sat16
 
 MINMAX = "minmax"
 MODELS = (MINMAX, 4, 7, 10)
@@ -44,10 +43,14 @@ PAYLOAD_SIZE = const(46)
 
 
 def correct(k, raw, out):
-    """out[0:3] = InvW sat16(raw - V) >> 15, rounded; k = InvW (0..8) then V (9..11)."""
-    x = sat16(raw[0] - k[9])
-    y = sat16(raw[1] - k[10])
-    z = sat16(raw[2] - k[11])
+    """out[0:3] = InvW sat16(raw - V) >> 15, rounded; k = InvW (0..8) then V (9..11).
+    The clamp is fixedpoint.sat16 written out: three calls would cost more than the rest."""
+    x = raw[0] - k[9]
+    x = 32767 if x > 32767 else -32768 if x < -32768 else x
+    y = raw[1] - k[10]
+    y = 32767 if y > 32767 else -32768 if y < -32768 else y
+    z = raw[2] - k[11]
+    z = 32767 if z > 32767 else -32768 if z < -32768 else z
     out[0] = (k[0] * x + k[1] * y + k[2] * z + 16384) >> 15
     out[1] = (k[3] * x + k[4] * y + k[5] * z + 16384) >> 15
     out[2] = (k[6] * x + k[7] * y + k[8] * z + 16384) >> 15
