@@ -196,7 +196,6 @@ class Compass:
     """
 
     def __init__(self, field=0, declination_kang=0, field_tol_pct=_FIELD_TOL_PCT):
-        # the steps' kernels: firmware.trig, or its viper mirror firmware.fast (same bits)
         self.declination_kang = declination_kang
         self.heading_kang = 0
         self.dip_kang = 0
