@@ -551,6 +551,9 @@ class CompassApp:
             self.pending = cal
             self.change = jump
             self._history_record(cal, 2)  # FLAG_PENDING: evidence, not in force
+            # the calibration in force may not fit the board: its samples keep refining the
+            # evidence, as while relearning (firmware.calibrator.Collector.relearning)
+            self.collector.relearning = True
 
     # --- history: a jump is not made current silently ------------------------------------
     def _history_check(self, cal):
@@ -591,6 +594,7 @@ class CompassApp:
             return False
         self.pending = None
         self.change = None
+        self.collector.relearning = False
         self._use(cal)
         if self._hist is not None:
             self._hist_flags = 5  # FLAG_ACCEPTED | FLAG_BASELINE
@@ -606,8 +610,8 @@ class CompassApp:
             return False
         self.pending = None
         self.change = None
-        if self.collector is not None:
-            self.collector.calibrator.current = self.calibration
+        self.collector.relearning = False
+        self.collector.calibrator.current = self.calibration
         if self.status == STATUS_CHANGED:
             self.status = STATUS_OK
         return True
