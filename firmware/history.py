@@ -36,7 +36,10 @@ hardware change, FLAG_BASELINE); with none of them, the calibration in force sta
   fit_error        0.01 %, too high only               the same model
 With MIN_STATS reference values or more, the limits are mean +- max(K_SIGMA sigma, floor);
 with fewer, mean +- a fixed wide half-width. Floors and widths of V and B are fractions of
-the reference field B, so they hold at every range setting. Integers only: sums of squares
+the reference field B, so they hold at every range setting. Across models (a 4-element fit
+against 10-element entries) V and B are widened by the larger fit error of the two, as a
+radial RMS error in counts (fit error x B): a model without soft iron places V and B only
+that well. Integers only: sums of squares
 are long ints on a 32-bit port, computed once per accepted calibration, never per sample.
 """
 import struct
@@ -121,11 +124,20 @@ def jump(cal, refs):
     excess = 0
     fs = [r.field for r in refs if _comparable(0, cal, r)]
     field = sum(fs) // len(fs) if fs else cal.field
+    cross = 0  # the larger fit error where models differ, 0.01 %
+    for r in refs:
+        if r.model != cal.model and _comparable(0, cal, r):
+            for fe in (r.fit_error, cal.fit_error):
+                if fe > cross:
+                    cross = fe
     for i in range(len(NAMES)):
         values = [_value(r, i) for r in refs if _comparable(i, cal, r)]
         if not values:
             continue
         lo, hi = limits(i, values, field)
+        if i < _FIELD_PARAMS:
+            lo -= cross * field // 10000
+            hi += cross * field // 10000
         v = _value(cal, i)
         if i == _FIT_ERROR:
             lo = 0  # a fit better than its history is no hardware change

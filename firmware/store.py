@@ -42,7 +42,10 @@ is still never written over the current one. A slot whose write or read-back fai
 last by later saves of the same session. `validate` (set by the app to
 Calibration.from_bytes) judges what an intact payload means: a record it refuses with
 ValueError is skipped as bad_payload, so a record with an impossible field or of an unknown
-payload version never hides an intact older one.
+payload version never hides an intact older one. save() numbers past every unreadable slot
+too (one more per such slot: records are numbered one past the newest visible one), so a
+slot that becomes readable again cannot win with an older record - unless every slot was
+unreadable when the store object was made, the one case where no number is known.
 
 Refusals carry a reason (StoreError.reason), one of the REASON_* names below.
 """
@@ -227,6 +230,7 @@ class CalStore:
         self.path = None
         self.last_skipped = []
         self._write_failed = [False, False, False]
+        self._written = None  # the sequence number of this object's last save
 
     def _read(self, path):
         try:
@@ -312,11 +316,11 @@ class CalStore:
                 rank += 2
             if best < 0 and slots[i][3] is not None:
                 rank += 1
-            order.append((rank, i))
-        order.sort(key=lambda r: r[0])
+            order.append((rank * 4 + i, i))  # the index breaks ties: MicroPython's sort
+        order.sort(key=lambda r: r[0])         # is not stable
         for j in range(len(order) - 1):  # equal ranks of intact records: the older first
             (r1, i1), (r2, i2) = order[j], order[j + 1]
-            if r1 == r2 and r1 & 1 and _newer(slots[i1][3], slots[i2][3]):
+            if r1 >> 2 == r2 >> 2 and r1 & 4 and _newer(slots[i1][3], slots[i2][3]):
                 order[j], order[j + 1] = order[j + 1], order[j]
         return [i for _, i in order]
 
@@ -332,10 +336,20 @@ class CalStore:
         slots = self._scan()
         best = self._current(slots)
         top = None
+        unread = 0
         for s in slots:
             if s[3] is not None and (top is None or _newer(s[3], top)):
                 top = s[3]
-        seq = 1 if top is None else (top + 1) & 0xFFFFFFFF
+            if s[2] == REASON_IO_ERROR:
+                unread += 1
+        if top is None:
+            top = 0
+        # An unreadable slot may hold the newest record, numbered at most one past the
+        # others per such slot: number past that too, so it cannot win if it comes back -
+        # unless this object wrote the newest visible record, already numbered past them.
+        if top != self._written:
+            top += unread
+        seq = (top + 1) & 0xFFFFFFFF
         record = encode_record(payload, self.sensor, self.range_code, seq)
         err = None
         for target in self._targets(slots, best):
@@ -356,6 +370,7 @@ class CalStore:
                 raise StoreError(REASON_VERIFY_FAILED, "%s read back %s bytes of %d"
                                  % (path, "no" if back is None else len(back), len(record)))
             self._write_failed[target] = False
+            self._written = seq
             return seq
         if err is not None:
             raise err  # every spare slot refused: the filesystem's own error says why
