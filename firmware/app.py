@@ -729,6 +729,6 @@ def status_line(app):
     if app.save_errors:
         parts.append("save failed: %s" % app.save_reason)
     if app.change is not None:
-        parts.append("hardware changed? %s %d outside %d..%d: accept_change() or "
-                     "discard_change()" % app.change)
+        parts.append("jump: %s %d outside %d..%d, accept_change() or discard_change()"
+                     % app.change)
     return " | ".join(parts)
