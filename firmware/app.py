@@ -565,7 +565,7 @@ class CompassApp:
                 from firmware.history import History
                 self._hist = History(self.store)
             return self._hist.check(cal, self.calibration)
-        except (OSError, StoreError, ValueError, MemoryError, ImportError) as e:
+        except Exception as e:  # noqa: BLE001 - evidence only: never stop the loop for it
             self._history_failed(e)
         return None
 
@@ -576,7 +576,7 @@ class CompassApp:
         try:
             h.record(cal, flags, self.date_s() if self.date_s is not None else 0)
             self.history_reason = None
-        except (OSError, StoreError, ValueError, MemoryError) as e:
+        except Exception as e:  # noqa: BLE001 - as above
             self._history_failed(e)
 
     def _history_failed(self, e):

@@ -306,3 +306,22 @@ def test_a_power_cut_during_the_apps_history_write_keeps_the_history_and_boots(f
     assert after == before
     again = W.make_app(W.make_sim("gy271", m=motion.still(), seed=61), store=CalStore("/", fs=cfs))
     assert again.load_reason is None and again.calibration == app.calibration
+
+
+def test_a_failing_history_never_stops_the_app_nor_blocks_a_calibration(monkeypatch):
+    # every history file a directory: the calibration is still put in force and saved
+    fs = W.MemFs()
+    for k in range(ENTRIES):
+        fs.bad["/ecompass_h%d.cal" % k] = "dir"
+    _, app = session(fs, world(), seed=70)
+    assert app.calibration.model == 10 and app.stored >= 1 and app.pending is None
+    assert app.history_errors >= 1 and app.history_reason.endswith(" 21")  # EISDIR
+    # a bug in the check itself (any exception) is counted, not raised out of step()
+    import firmware.history
+
+    def broken(self, c, current=None):
+        raise TypeError("a bug")
+    monkeypatch.setattr(firmware.history.History, "check", broken)
+    _, app = session(W.MemFs(), world(), seed=71)
+    assert app.calibration.model == 10 and app.stored >= 1
+    assert app.history_errors >= 1 and "TypeError" in app.history_reason
