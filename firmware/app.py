@@ -79,7 +79,7 @@ changed?" (in place of ok or interference: the heading still uses the old calibr
 the old calibration is in force, the evidence is in the history, and the next fit that shows
 the same jump is flagged again. .date_s: None, or a function returning the date in seconds
 when the board knows it (e.g. after NTP), written with each entry. History errors are
-counted in .history_errors and never stop the loop.
+counted in .history_errors (the last one in .history_reason) and never stop the loop.
 """
 from array import array
 
@@ -575,7 +575,6 @@ class CompassApp:
             return
         try:
             h.record(cal, flags, self.date_s() if self.date_s is not None else 0)
-            self.history_reason = None
         except Exception as e:  # noqa: BLE001 - as above
             self._history_failed(e)
 
