@@ -63,9 +63,23 @@ the flag stays up for _STALE_US (with no _CLEAN_US clean spell) the calibration 
 describes the board (its hard iron changed): collection restarts (.relearning) and any new
 accepted fit replaces the stale one.
 
-Storage: load at start (StoreError or a payload Calibration.from_bytes refuses -> identity,
-reason in .load_reason); save on every accept; a failed save (OSError, StoreError) is
-counted in .save_errors, never stops the loop, and is retried every _SAVE_RETRY_US.
+Storage: load at start: the newest slot whose record is intact AND whose payload
+Calibration.from_bytes accepts (the store skips a torn, unreadable or meaningless slot and
+falls back to an older one); when none is usable, identity with the reason in .load_reason.
+Save on every accept; a failed save (OSError, StoreError, MemoryError) is counted in
+.save_errors, never stops the loop, and is retried every _SAVE_RETRY_US.
+
+History (firmware.history, imported at the first accept): before an accepted calibration
+replaces the one in force it is compared with the store's history of accepted calibrations.
+Inside the limits, it is put in force, saved and, once saved, recorded. Outside, it is kept as evidence
+(.pending, recorded as a pending entry) and NOT put in force: .status reads "hardware
+changed?" (in place of ok or interference: the heading still uses the old calibration) and .change names the parameter as
+(parameter, value, low, high). accept_change() puts it in force and starts a new baseline
+(a new mounting); discard_change() drops it. A pending change lives in RAM: after a reboot
+the old calibration is in force, the evidence is in the history, and the next fit that shows
+the same jump is flagged again. .date_s: None, or a function returning the date in seconds
+when the board knows it (e.g. after NTP), written with each entry. History errors are
+counted in .history_errors (the last one in .history_reason) and never stop the loop.
 """
 from array import array
 
@@ -85,9 +99,11 @@ STATUS_OVERFLOW = "overflow"          # QMC5883L OVL, HMC5883L -4096: sample dro
 STATUS_NO_FIELD = "no_field"          # corrected field (0, 0, 0): no heading
 STATUS_NO_GRAVITY = "no_gravity"      # accelerometer (0, 0, 0): asleep after a reset, or free fall
 STATUS_STARTING = "starting"          # before the first step
+STATUS_CHANGED = "hardware changed?"  # a new fit jumped outside its history's limits: pending
 
 LOAD_BAD_PAYLOAD = "bad_payload"      # .load_reason: the record is intact, its payload is not
 LOAD_IO_ERROR = "io_error"            # .load_reason: the filesystem raised OSError
+LOAD_NO_MEMORY = "no_memory"          # .load_reason / .save_reason: MemoryError
 REASON_SOLVER_ERROR = "solver_error"  # .last_reason: the solver raised something unexpected
 REASON_NO_MEMORY = "no_memory"        # .last_reason: MemoryError during a solve
 
@@ -145,7 +161,7 @@ class CompassApp:
     """See the module docstring. Attributes after each step(): heading_kang, compass, raw,
     body, gravity, status, calibration, calibrator (None until collecting), collector,
     last_reason, last_detail, accepted, refused, worst_stall_us, errors, stored,
-    save_errors, load_reason, reinits, relearning, fast."""
+    save_errors, load_reason, reinits, relearning, fast, pending, change, history_errors."""
 
     def __init__(self, i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z",
                  model=10, declination_cdeg=0, store=None, delay_us=None, ticks_us=None,
@@ -197,6 +213,12 @@ class CompassApp:
         self.reinits = 0
         self.reinit_failures = 0
         self.steps = 0
+        self.pending = None         # a calibration whose parameters jumped (see History)
+        self.change = None          # (parameter, value, low, high) of the jump
+        self.history_errors = 0
+        self.history_reason = None
+        self._hist = None           # firmware.history.History, from the first accept on
+        self._hist_flags = 0        # flags of the history entry due once the save succeeds
 
         self.store = store
         self.compass = Compass(declination_kang=cdeg_to_kang(declination_cdeg))
@@ -271,6 +293,8 @@ class CompassApp:
         # records are tied to the sensor and its range: bind the store to the chip found
         st.sensor = self.mag.KIND
         st.range_code = self.mag.range_code
+        # a record that is intact but means nothing valid is skipped like a torn one
+        st.validate = Calibration.from_bytes
         try:
             return Calibration.from_bytes(st.load())
         except StoreError as e:
@@ -279,6 +303,8 @@ class CompassApp:
             self.load_reason = LOAD_BAD_PAYLOAD
         except OSError:
             self.load_reason = LOAD_IO_ERROR
+        except MemoryError:
+            self.load_reason = LOAD_NO_MEMORY
         return UNCALIBRATED
 
     def _save(self):
@@ -290,10 +316,17 @@ class CompassApp:
             self.stored += 1
             self._unsaved = False
             self.save_reason = None
+            if self._hist_flags:  # the history follows the store: recorded once saved
+                self._history_record(self.calibration, self._hist_flags)
+                self._hist_flags = 0
         except StoreError as e:
             self._save_failed(e.reason)
         except OSError as e:
             self._save_failed("os_error %s" % (e.args[0] if e.args else "?"))
+        except MemoryError:
+            self._save_failed(LOAD_NO_MEMORY)
+        except ValueError as e:  # a payload the store refuses: a bug, never a crash
+            self._save_failed("bad_payload %s" % (e,))
         d = self._wall_diff(self._wall(), t)
         if d > self.worst_save_us:
             self.worst_save_us = d
@@ -352,6 +385,9 @@ class CompassApp:
         c = self.collector
         if c is not None and (c.job is not None or c.due()):
             self._solve()
+        if self.pending is not None and (self.status == STATUS_OK
+                                         or self.status == STATUS_INTERFERENCE):
+            self.status = STATUS_CHANGED  # the likely cause of the interference, too
         return ok
 
     def _clock(self):
@@ -505,8 +541,79 @@ class CompassApp:
             self.worst_stall_us = d
 
     def _accept(self, cal):
+        jump = self._history_check(cal)
+        if jump is None:
+            self._use(cal)
+            if self._hist is not None:
+                self._hist_flags = 1  # firmware.history.FLAG_ACCEPTED
+            self._save()
+        else:
+            self.pending = cal
+            self.change = jump
+            self._history_record(cal, 2)  # FLAG_PENDING: evidence, not in force
+            # the calibration in force may not fit the board: its samples keep refining the
+            # evidence, as while relearning (firmware.calibrator.Collector.relearning)
+            self.collector.relearning = True
+
+    # --- history: a jump is not made current silently ------------------------------------
+    def _history_check(self, cal):
+        # -> None (in limits, or no history to judge by) or (parameter, value, low, high)
+        try:
+            if self._hist is None:
+                if self.store is None or not hasattr(self.store, "prefix"):
+                    return None
+                from firmware.history import History
+                self._hist = History(self.store)
+            return self._hist.check(cal, self.calibration)
+        except Exception as e:  # noqa: BLE001 - evidence only: never stop the loop for it
+            self._history_failed(e)
+        return None
+
+    def _history_record(self, cal, flags):
+        h = self._hist
+        if h is None:
+            return
+        try:
+            h.record(cal, flags, self.date_s() if self.date_s is not None else 0)
+        except Exception as e:  # noqa: BLE001 - as above
+            self._history_failed(e)
+
+    def _history_failed(self, e):
+        self.history_errors += 1
+        self.history_reason = "%s %s" % (type(e).__name__, e.args[0] if e.args else "")
+
+    date_s = None  # a function returning the date in seconds, when the board knows it
+
+    def accept_change(self):
+        """Put the pending calibration in force: the hardware did change (a new mounting, a
+        new chip). It is saved and starts a new baseline of the history. False when none
+        is pending."""
+        cal = self.pending
+        if cal is None:
+            return False
+        self.pending = None
+        self.change = None
+        self.collector.relearning = False
         self._use(cal)
+        if self._hist is not None:
+            self._hist_flags = 5  # FLAG_ACCEPTED | FLAG_BASELINE
         self._save()
+        if self.status == STATUS_CHANGED:
+            self.status = STATUS_OK
+        return True
+
+    def discard_change(self):
+        """Drop the pending calibration: the one in force stays (the evidence stays in the
+        history); new fits are again judged against it. False when none is pending."""
+        if self.pending is None:
+            return False
+        self.pending = None
+        self.change = None
+        self.collector.relearning = False
+        self.collector.calibrator.current = self.calibration
+        if self.status == STATUS_CHANGED:
+            self.status = STATUS_OK
+        return True
 
     # --- reporting --------------------------------------------------------------------
     @property
@@ -567,7 +674,8 @@ class CompassApp:
                 "status": self.status, "interference": self.compass.interference,
                 "relearning": self.relearning, "stored": self.stored,
                 "save_errors": self.save_errors, "load_reason": self.load_reason,
-                "worst_stall_us": self.worst_stall_us}
+                "worst_stall_us": self.worst_stall_us, "change": self.change,
+                "history_errors": self.history_errors}
 
     def run(self, n=None, report=None, every=REPORT_EVERY, every_us=None):
         """step() n times (None: forever); report(app) every `every` steps, or every
@@ -619,4 +727,7 @@ def status_line(app):
         parts.append("last refusal: %s" % p["last_reason"])
     if app.save_errors:
         parts.append("save failed: %s" % app.save_reason)
+    if app.change is not None:
+        parts.append("jump: %s %d outside %d..%d, accept_change() or discard_change()"
+                     % app.change)
     return " | ".join(parts)

@@ -24,8 +24,10 @@ CalibrationRejected(Exception) a new calibration failed an acceptance check. Car
                           the current calibration; show the reason to the user.
 StoreError(Exception)     a stored calibration record cannot be used. Carries ``.reason``, one
                           of firmware.store's: missing, truncated, bad_length, bad_magic,
-                          bad_crc, unknown_version, other_sensor, other_range, verify_failed
-                          (a save read back different bytes). Caller: keep running uncalibrated
+                          bad_crc, unknown_version, other_sensor, other_range, io_error (the
+                          slot cannot be read), bad_payload (intact, but its payload means
+                          nothing valid), verify_failed (a save read back different bytes),
+                          no_slot (a save found no slot but the current record's). Caller: keep running uncalibrated
                           or with the other slot; never use the record.
 """
 

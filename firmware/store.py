@@ -23,9 +23,10 @@ Bytes 0-7, the sequence number at 28-31 (when the header has 32 bytes or more) a
 trailer are the same in every version, so a record of a newer version is still recognised
 intact and refused as 'unknown_version', not as garbage, and save() numbers past it.
 
-Power safety: two slot files, <name>_a.cal and <name>_b.cal. save() writes the whole new
-record, with a higher sequence number, into the slot that does NOT hold the record load()
-would return now, then reads it back. Whatever a power cut leaves in that slot (nothing, a
+Power safety: two slot files, <name>_a.cal and <name>_b.cal, and a spare, <name>_c.cal.
+save() writes the whole new record, with a higher sequence number, into a slot that does NOT
+hold the record load() would return now (the other of a and b; the spare only when that one
+cannot be read or written), then reads it back. Whatever a power cut leaves in that slot (nothing, a
 prefix, a torn tail of zeros or garbage, the old bytes), its CRC fails or its sequence number
 is older, so load() returns the previous calibration; once the record is complete, load()
 returns the new one. The scheme relies only on (1) a write to one file never altering
@@ -33,6 +34,18 @@ another file's committed bytes, and (2) CRC-32 catching a torn record (it detect
 burst up to 32 bits, and any other corruption with probability 1 - 2**-32). It does not rely
 on rename being atomic (true on LittleFS, not on FAT), nor on a write being atomic (true of
 neither: LittleFS commits a file at close/sync, FAT writes in place).
+
+Faulty slots. A slot that cannot be read (EIO, a directory where the file should be) is
+skipped like a torn one (reason io_error): load() returns the newest valid record of the
+others, and save() writes to a healthy slot - the spare stands in for a or b, so a record
+is still never written over the current one. A slot whose write or read-back failed is tried
+last by later saves of the same session. `validate` (set by the app to
+Calibration.from_bytes) judges what an intact payload means: a record it refuses with
+ValueError is skipped as bad_payload, so a record with an impossible field or of an unknown
+payload version never hides an intact older one. save() numbers past every unreadable slot
+too (one more per such slot: records are numbered one past the newest visible one), so a
+slot that becomes readable again cannot win with an older record - unless every slot was
+unreadable when the store object was made, the one case where no number is known.
 
 Refusals carry a reason (StoreError.reason), one of the REASON_* names below.
 """
@@ -58,6 +71,9 @@ REASON_OTHER_SENSOR = "other_sensor"        # intact, but made for another magne
 REASON_OTHER_RANGE = "other_range"          # intact, but made at another range setting
 REASON_OLDER = "older"                      # load(): intact and usable, but the other is newer
 REASON_VERIFY_FAILED = "verify_failed"      # save(): the record read back differs
+REASON_IO_ERROR = "io_error"                # the slot cannot be read (EIO, a directory, ...)
+REASON_BAD_PAYLOAD = "bad_payload"          # intact, but validate() refused the payload
+REASON_NO_SLOT = "no_slot"                  # save(): no slot but the current one took it
 
 MAGIC = b"eCAL"
 VERSION = const(1)
@@ -69,9 +85,9 @@ _SENSOR_LEN = const(16)
 # (Emscripten's numbering)
 _ENOENT = (2, 44)
 
-# Why load() failed when no slot is usable: the most telling reason of the two slots.
+# Why load() failed when no slot is usable: the most telling reason of the slots.
 _REASON_RANK = (REASON_OTHER_SENSOR, REASON_OTHER_RANGE, REASON_UNKNOWN_VERSION,
-                REASON_BAD_CRC, REASON_BAD_LENGTH, REASON_TRUNCATED, REASON_BAD_MAGIC,
+                REASON_BAD_PAYLOAD, REASON_IO_ERROR, REASON_BAD_CRC, REASON_BAD_LENGTH, REASON_TRUNCATED, REASON_BAD_MAGIC,
                 REASON_MISSING)
 
 
@@ -181,29 +197,40 @@ class _OsFs:
         os.remove(path)
 
 
+_SPARE = const(2)  # index of the spare slot in .paths
+
+
 class CalStore:
-    """Two-slot, CRC-protected calibration record in `directory` (see the module doc).
+    """Power-safe, CRC-protected calibration record in `directory` (see the module doc).
 
     fs: object with open(path, mode) -> file (read/write/close) and remove(path); default the
-    real filesystem. After load(): .seq and .path of the record returned, .last_skipped the
-    list of (path, reason) for the slot(s) not used.
+    real filesystem. validate: None, or a function of the payload that raises ValueError
+    when the payload means nothing valid (the app sets Calibration.from_bytes). After load():
+    .seq and .path of the record returned, .last_skipped the list of (path, reason) for the
+    slot(s) not used (the spare only when it holds something). .prefix: the path of the
+    slot files without their '_a.cal' ending (firmware.history names its files after it).
     """
 
-    def __init__(self, directory="/", name="ecompass", sensor="qmc5883l", range_code=0, fs=None):
+    def __init__(self, directory="/", name="ecompass", sensor="qmc5883l", range_code=0, fs=None,
+                 validate=None):
         _sensor_field(sensor)
         if not 0 <= range_code <= 255:
             raise ValueError("range code %d not in 0..255" % range_code)
         self.sensor = sensor
         self.range_code = range_code
         self.fs = fs if fs is not None else _OsFs()
+        self.validate = validate
         if directory in ("", "/"):
             prefix = directory
         else:
             prefix = directory.rstrip("/") + "/"
-        self.paths = (prefix + name + "_a.cal", prefix + name + "_b.cal")
+        self.prefix = prefix + name
+        self.paths = (self.prefix + "_a.cal", self.prefix + "_b.cal", self.prefix + "_c.cal")
         self.seq = None
         self.path = None
         self.last_skipped = []
+        self._write_failed = [False, False, False]
+        self._written = None  # the sequence number of this object's last save
 
     def _read(self, path):
         try:
@@ -218,8 +245,11 @@ class CalStore:
             f.close()
 
     def _inspect(self, path):
-        # -> (seq or None, payload or None, reason or None, crc_ok_seq or None)
-        data = self._read(path)
+        # -> (seq or None, payload or None, reason or None, intact seq or None)
+        try:
+            data = self._read(path)
+        except OSError:
+            return None, None, REASON_IO_ERROR, None
         if data is None:
             return None, None, REASON_MISSING, None
         try:
@@ -230,6 +260,11 @@ class CalStore:
                     and data[5] >= HEADER_LEN):
                 intact = struct.unpack("<I", bytes(data[28:32]))[0]
             return None, None, e.reason, intact
+        if self.validate is not None:
+            try:
+                self.validate(payload)
+            except ValueError:
+                return None, None, REASON_BAD_PAYLOAD, seq
         return seq, payload, None, seq
 
     def _scan(self):
@@ -238,19 +273,19 @@ class CalStore:
     @staticmethod
     def _current(slots):
         best = -1
-        for i in (0, 1):
+        for i in range(len(slots)):
             seq = slots[i][0]
             if seq is not None and (best < 0 or _newer(seq, slots[best][0])):
                 best = i
         return best
 
     def load(self):
-        """The newest usable payload (bytes); StoreError(reason) if neither slot has one."""
+        """The newest usable payload (bytes); StoreError(reason) if no slot has one."""
         slots = self._scan()
         best = self._current(slots)
         self.last_skipped = []
-        for i in (0, 1):
-            if i != best:
+        for i in range(len(slots)):
+            if i != best and not (i == _SPARE and slots[i][2] == REASON_MISSING):
                 reason = slots[i][2] if slots[i][2] is not None else REASON_OLDER
                 self.last_skipped.append((self.paths[i], reason))
         if best < 0:
@@ -265,48 +300,87 @@ class CalStore:
         self.path = self.paths[best]
         return slots[best][1]
 
+    def _targets(self, slots, best):
+        # The slots save() may write, best first: never the current record's; a slot that
+        # failed (unreadable, or a write this session) last; the spare after a and b; with no
+        # current record, spare an intact one (another sensor, range or version), the oldest
+        # of them going first.
+        order = []
+        for i in range(len(slots)):
+            if i == best:
+                continue
+            rank = 0
+            if slots[i][2] == REASON_IO_ERROR or self._write_failed[i]:
+                rank += 4
+            if i == _SPARE:
+                rank += 2
+            if best < 0 and slots[i][3] is not None:
+                rank += 1
+            order.append((rank * 4 + i, i))  # the index breaks ties: MicroPython's sort
+        order.sort(key=lambda r: r[0])         # is not stable
+        for j in range(len(order) - 1):  # equal ranks of intact records: the older first
+            (r1, i1), (r2, i2) = order[j], order[j + 1]
+            if r1 >> 2 == r2 >> 2 and r1 & 4 and _newer(slots[i1][3], slots[i2][3]):
+                order[j], order[j + 1] = order[j + 1], order[j]
+        return [i for _, i in order]
+
     def save(self, payload):
         """Store payload as the newest record, power-safely; returns its sequence number.
 
         Raises ValueError for an oversized payload, OSError from the filesystem (full, read
-        only), StoreError('verify_failed') if the record read back is not the one written.
+        only, EIO while writing), StoreError('verify_failed') if the record read back is not
+        the one written. A slot that cannot be opened is passed over for the next one; when
+        none opens, the last OSError is raised (StoreError('no_slot') if there was none to
+        try: no slot but the current record's).
         """
         slots = self._scan()
         best = self._current(slots)
-        a = slots[0][3]
-        b = slots[1][3]
-        if best >= 0:
-            target = 1 - best       # never touch the record load() returns now
-        elif a is None:
-            target = 0              # nothing usable: spare an intact record of another
-        elif b is None:             # sensor, range or version if there is one
-            target = 1
-        else:
-            target = 1 if _newer(a, b) else 0
         top = None
+        unread = 0
         for s in slots:
             if s[3] is not None and (top is None or _newer(s[3], top)):
                 top = s[3]
-        seq = 1 if top is None else (top + 1) & 0xFFFFFFFF
+            if s[2] == REASON_IO_ERROR:
+                unread += 1
+        if top is None:
+            top = 0
+        # An unreadable slot may hold the newest record, numbered at most one past the
+        # others per such slot: number past that too, so it cannot win if it comes back -
+        # unless this object wrote the newest visible record, already numbered past them.
+        if top != self._written:
+            top += unread
+        seq = (top + 1) & 0xFFFFFFFF
         record = encode_record(payload, self.sensor, self.range_code, seq)
-        path = self.paths[target]
-        f = self.fs.open(path, "wb")
-        try:
-            f.write(record)
-        finally:
-            f.close()
-        back = self._read(path)
-        if back is None or bytes(back) != record:
-            raise StoreError(REASON_VERIFY_FAILED, "%s read back %s bytes of %d"
-                             % (path, "no" if back is None else len(back), len(record)))
-        return seq
+        err = None
+        for target in self._targets(slots, best):
+            path = self.paths[target]
+            try:
+                f = self.fs.open(path, "wb")
+            except OSError as e:  # a directory in its place, a read-only file: try the next
+                self._write_failed[target] = True
+                err = e
+                continue
+            self._write_failed[target] = True  # until the record is read back intact
+            try:
+                f.write(record)
+            finally:
+                f.close()
+            back = self._read(path)
+            if back is None or bytes(back) != record:
+                raise StoreError(REASON_VERIFY_FAILED, "%s read back %s bytes of %d"
+                                 % (path, "no" if back is None else len(back), len(record)))
+            self._write_failed[target] = False
+            self._written = seq
+            return seq
+        if err is not None:
+            raise err  # every spare slot refused: the filesystem's own error says why
+        raise StoreError(REASON_NO_SLOT, "only the current record's slot is left")
 
     def erase(self):
-        """Remove both slots, older first, so a cut in between still leaves the newer one."""
+        """Remove every slot, the current record's last, so a cut in between leaves it."""
         slots = self._scan()
         best = self._current(slots)
-        order = (1 - best, best) if best >= 0 else (0, 1)
-        for i in order:
+        for i in [j for j in range(len(slots)) if j != best] + ([best] if best >= 0 else []):
             try:
                 self.fs.remove(self.paths[i])
             except OSError as e:

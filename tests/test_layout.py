@@ -13,7 +13,7 @@ ROOT = mp.ROOT
 FW = os.path.join(ROOT, "firmware")
 PIPELINE = ["compat", "errors", "fixedpoint", "i2cdevice", "detect", "qmc5883l", "hmc5883l",
             "qmc5883p", "mpu6050", "axes", "samples", "accum", "solve", "calibration",
-            "acceptance", "calibrator", "kang_tables", "trig", "compass", "store", "app", "fast"]
+            "acceptance", "calibrator", "kang_tables", "trig", "compass", "store", "history", "app", "fast"]
 CALIBRATION_MACHINERY = {"firmware.calibrator", "firmware.solve", "firmware.accum",
                          "firmware.samples", "firmware.acceptance"}
 
@@ -98,6 +98,7 @@ def test_a_board_booted_from_a_stored_calibration_loads_no_calibration_machinery
     assert not first[3]
     loaded = set(first[1])
     assert not loaded & CALIBRATION_MACHINERY, sorted(loaded)
+    assert "firmware.history" not in loaded  # imported when a calibration is accepted
     assert {"firmware.app", "firmware.calibration", "firmware.compass", "firmware.store",
             "firmware.qmc5883l"} <= loaded
     # collecting imports it, lazily, and the heading goes on

@@ -72,15 +72,35 @@ class PowerCut(OSError):
 class MemFs:
     """A filesystem for CalStore in memory. budget: bytes that may still be written before
     the power fails (None: never); a cut write keeps the bytes written so far (as FAT does)
-    and raises PowerCut (an OSError, EIO)."""
+    and raises PowerCut (an OSError, EIO).
+
+    Faults per path, in .bad (path -> kind): "eio" (open raises OSError 5), "dir" (a
+    directory where the file should be: open for reading works and read() raises OSError
+    21, as MicroPython's unix port does; open for writing raises 21), "write_eio" (reads
+    work, every write raises OSError 5 and leaves the file empty). .nomem: writes that may
+    still go through before one raises MemoryError (None: never)."""
 
     def __init__(self):
         self.files = {}
         self.budget = None
         self.cuts = 0
+        self.bad = {}
+        self.nomem = None
 
     def open(self, path, mode):
+        kind = self.bad.get(path)
+        if kind == "eio" or kind == "dir" and "w" in mode:
+            raise OSError(5 if kind == "eio" else 21, kind)
+        if kind == "dir":
+            return _Reader(None)
         if "w" in mode:
+            if self.nomem is not None:
+                if self.nomem == 0:
+                    raise MemoryError("no memory for a file buffer")
+                self.nomem -= 1
+            if kind == "write_eio":
+                self.files[path] = b""
+                return _Reader(None)
             self.files[path] = b""
             return _Writer(self, path)
         if path not in self.files:
@@ -98,7 +118,12 @@ class _Reader:
         self.data = data
 
     def read(self, n=-1):
+        if self.data is None:
+            raise OSError(21, "EISDIR")
         return self.data if n < 0 else self.data[:n]
+
+    def write(self, data):
+        raise OSError(5, "EIO")
 
     def close(self):
         pass
