@@ -53,6 +53,9 @@ class Calibrator:
     counts_per_gauss: the sensor's sensitivity, enabling the 10 .. 90 uT field check.
     current: the calibration in force (e.g. loaded from storage); new fits must beat it.
     max_fit_error: hundredths of a percent.
+    .expected_field: the field model's |B| in raw counts where the board is (set by
+      firmware/location.py), or None; when set, a fit whose B is off by more than
+      acceptance.FIELD_MATCH_PCT is refused (field_mismatch).
     """
 
     def __init__(self, model=10, capacity=DEFAULT_CAPACITY, separation=None,
@@ -79,6 +82,7 @@ class Calibrator:
         self._fresh = True  # no raw sample since construction or clear()
         self._ext = array("h", (0, 0, 0, 0, 0, 0))  # raw extremes: lo x, y, z, then hi
         self.slice_group = DEFAULT_SLICE_GROUP
+        self.expected_field = None
 
     @property
     def count(self):
@@ -351,6 +355,8 @@ class Calibrator:
         yield
         acceptance.check_soft_iron(r[0], field_out)
         acceptance.check_field(field, self.counts_per_gauss)
+        if self.expected_field:
+            acceptance.check_expected_field(field, self.expected_field)
         acceptance.check_fit_error(fe, self.max_fit_error)
         if self.current.model is not None:
             acceptance.check_better(model, fe, cov, self.current, self.aged_fit_error())
