@@ -361,7 +361,7 @@ class CompassApp:
         if self.location is not None:
             self.location.apply(self)
 
-    def quick_calibrate(self, true_heading_cdeg, refine=False, samples=16):
+    def quick_calibrate(self, true_heading_cdeg, refine=False, samples=32):
         """Hard iron from this pose and its known true heading (centidegrees, 0..35999,
         clockwise from true north) with the field model's field: reads `samples` samples
         (the board held still; tilt from the accelerometer, or level without one), puts the
@@ -378,8 +378,8 @@ class CompassApp:
         if not 0 <= true_heading_cdeg < 36000:
             raise ValueError("true_heading_cdeg=%d: expected 0..35999 hundredths of a degree"
                              % true_heading_cdeg)
-        if type(samples) is not int or not 1 <= samples <= 64:
-            raise ValueError("samples=%r: expected an int in 1..64 (samples averaged)"
+        if type(samples) is not int or not 1 <= samples <= 128:
+            raise ValueError("samples=%r: expected an int in 1..128 (samples averaged)"
                              % (samples,))
         qc = self.quick
         if not refine or qc is None or qc.location is not self.location:
