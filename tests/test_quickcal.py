@@ -172,3 +172,11 @@ def test_calibration_record_of_a_quick_cal_is_valid():
     qc.add((300 * 8, -200 * 8, 100 * 8), (0, 0, 16384 * 8), 8, 0)
     cal = qc.result()
     assert Calibration.from_bytes(cal.to_bytes()).offset == cal.offset
+
+
+def test_cpython_and_micropython_agree():
+    from tests import mp
+    out = dict(mp.json_lines(mp.parity(["tests/scenarios/location_parity.py"]))[0])
+    assert out["errors"] == ["TypeError", "ValueError", "ValueError"]
+    assert out["no_location"] == "no_location" and out["status"] == "ok"
+    assert out["accuracy_before"] == 0 and out["accuracy"] == 2 and "(quick)" in out["line"]
