@@ -20,6 +20,11 @@ CalibrationRejected(REASON_*, detail) with the numbers in the detail:
                     diagonal scalings outside 0.2 .. 5 for the same reason).
   field_out_of_range  B outside 10 .. 90 uT (NXP) when counts_per_gauss is known; else B below
                     _MIN_FIELD_COUNTS counts (too coarse to correct).
+  field_mismatch    when the location is known (CompassApp.set_location): B differs from the
+                    field model's |B| in counts by more than FIELD_MATCH_PCT (20 %) - the
+                    sensor is not at the gain or range the driver reports, or a magnet was near
+                    during the fit. ArduPilot's radius check is the same idea, looser: it bounds
+                    the scale correction expected / fitted to 1/1.5 .. 1.5.
   fit_error_high    fit error above max_fit_error (hundredths of a percent).
   not_better        the current calibration's fit error, aged, is lower ("sour grapes", Judd);
                     a higher-order model gets through at <= 3.5 % (NXP), and a fit covering
@@ -37,6 +42,7 @@ REASON_LOW_COVERAGE = "low_coverage"
 REASON_OFFSET_OUT_OF_RANGE = "offset_out_of_range"
 REASON_SOFT_IRON_OUT_OF_RANGE = "soft_iron_out_of_range"
 REASON_FIELD_OUT_OF_RANGE = "field_out_of_range"
+REASON_FIELD_MISMATCH = "field_mismatch"
 REASON_FIT_ERROR_HIGH = "fit_error_high"
 REASON_NOT_BETTER = "not_better"
 
@@ -60,6 +66,10 @@ _MAX_SOFT_IRON_COND_X100 = const(500)  # W^-1 eigenvalues within 5:1 (ArduPilot:
 _MIN_FIELD_UT = const(10)           # NXP: plausible geomagnetic field 10 .. 90 uT
 _MAX_FIELD_UT = const(90)
 _MIN_FIELD_COUNTS = const(16)       # unknown sensitivity: 1 count is then >= 6 % of B
+# |B_fit - B_model| / B_model limit, %: a gain step of the HMC5883L (1370 / 1090 = 1.26) or a
+# wrong range (x4) is refused; a few % of sensitivity error, WMM's crustal-field omission and
+# a building's steel pass.
+FIELD_MATCH_PCT = const(20)
 # NXP's 15 %: the definition is NXP's, so its limit carries over. It refuses a sphere fit to a
 # 2:1 ellipsoid (~20 %); real 10-element fits here give 0.6-3.7 %, 9.5 % on a noisy QMC log.
 DEFAULT_MAX_FIT_ERROR = const(1500)  # hundredths of a percent
@@ -143,6 +153,22 @@ def check_field(field, counts_per_gauss):
                        counts_per_gauss, _MIN_FIELD_UT, _MAX_FIELD_UT))
     reject(REASON_FIELD_OUT_OF_RANGE, "B = %d counts < %d: too coarse to calibrate"
            % (field, _MIN_FIELD_COUNTS))
+
+
+def field_matches(field, expected):
+    """True when B (counts) is within FIELD_MATCH_PCT of the expected |B| (counts, > 0)."""
+    d = field - expected
+    return -expected * FIELD_MATCH_PCT <= d * 100 <= expected * FIELD_MATCH_PCT
+
+
+def check_expected_field(field, expected):
+    """field_mismatch unless B (counts) is within FIELD_MATCH_PCT of the field model's |B|
+    in the same counts (firmware/location.py converts nT with the driver's counts_per_gauss)."""
+    if field_matches(field, expected):
+        return
+    reject(REASON_FIELD_MISMATCH, "B = %d counts is %d %% of the %d counts the field model "
+           "expects here (limit +-%d %%): wrong gain or range, or a magnet near"
+           % (field, rdiv(field * 100, expected), expected, FIELD_MATCH_PCT))
 
 
 def check_fit_error(fe, max_fit_error):

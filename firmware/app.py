@@ -161,7 +161,11 @@ class CompassApp:
     """See the module docstring. Attributes after each step(): heading_kang, compass, raw,
     body, gravity, status, calibration, calibrator (None until collecting), collector,
     last_reason, last_detail, accepted, refused, worst_stall_us, errors, stored,
-    save_errors, load_reason, reinits, relearning, fast, pending, change, history_errors."""
+    save_errors, load_reason, reinits, relearning, fast, pending, change, history_errors,
+    location, quick, accuracy."""
+
+    location = None  # a firmware.location.Location after set_location()
+    quick = None     # the firmware.quickcal.QuickCal of the last quick_calibrate()
 
     def __init__(self, i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z",
                  model=10, declination_cdeg=0, store=None, delay_us=None, ticks_us=None,
@@ -353,6 +357,7 @@ class CompassApp:
         elif tol > _FIELD_TOL_MAX_PCT:
             tol = _FIELD_TOL_MAX_PCT
         self.compass.set_field(cal.field_out if cal.model is not None else 0, tol)
+        self._locate()
 
     def calibrate(self):
         """Start collecting samples for a new calibration (imports the calibration machinery);
@@ -363,7 +368,94 @@ class CompassApp:
                                        counts_per_gauss=self.mag.counts_per_gauss,
                                        current=self.calibration, solve_every=self.solve_every,
                                        fallback=self.fallback)
+            self._locate()
         return self.collector
+
+    # --- where the board is (firmware/location.py, firmware/quickcal.py) ----------------
+    def set_location(self, lat_e7, lon_e7, year_e3=None, table=None):
+        """The board's place (1e-7 deg, north and east positive) and date (decimal year *
+        1000, firmware.field.decimal_year_e3; None: unknown). With a usable field model the
+        declination becomes the model's, a new fit's B is checked against the model's |B|
+        (field_mismatch) and the interference window and dip come from the model
+        (firmware/location.py). Returns the location's status: "ok", "no date", "caution
+        zone", "blackout zone", or why the model cannot be used ("no field model: ...",
+        "outside model validity") - then the declination given to the constructor stays.
+        TypeError / ValueError name a bad argument and its unit. `table`: the table file
+        (None: wmm2025.bin next to firmware/field.py)."""
+        from firmware.location import Location
+        loc = Location(lat_e7, lon_e7, year_e3, table)
+        prev = self.location
+        loc.manual_declination_kang = (prev.manual_declination_kang if prev is not None
+                                       else self.compass.declination_kang)
+        self.location = loc
+        self._use(self.calibration)  # the window afresh, then the location applied
+        return loc.status
+
+    def _locate(self):
+        if self.location is not None:
+            self.location.apply(self)
+
+    def quick_calibrate(self, true_heading_cdeg, refine=False, samples=32):
+        """Hard iron from this pose and its known true heading (centidegrees, 0..35999,
+        clockwise from true north) with the field model's field: reads `samples` samples
+        (the board held still; tilt from the accelerometer, or level without one), puts the
+        result in force and saves it (firmware/quickcal.py). refine=True adds this pose to
+        those of the previous quick_calibrate() calls and averages them (poses at opposite
+        headings cancel most soft-iron error). Returns the Calibration; raises
+        CalibrationRejected (.reason: no_location, blackout_zone, no_samples,
+        offset_out_of_range, field_mismatch) and keeps the calibration in force; TypeError
+        / ValueError for bad arguments. Needs set_location() first."""
+        from firmware.quickcal import QuickCal
+        if type(true_heading_cdeg) is not int:
+            raise TypeError("true_heading_cdeg=%r: expected an int in hundredths of a degree "
+                            "(e.g. 9000 for east)" % (true_heading_cdeg,))
+        if not 0 <= true_heading_cdeg < 36000:
+            raise ValueError("true_heading_cdeg=%d: expected 0..35999 hundredths of a degree"
+                             % true_heading_cdeg)
+        if type(samples) is not int or not 1 <= samples <= 128:
+            raise ValueError("samples=%r: expected an int in 1..128 (samples averaged)"
+                             % (samples,))
+        qc = self.quick
+        if not refine or qc is None or qc.location is not self.location:
+            qc = QuickCal(self.location, self.mag.counts_per_gauss, self._mag_map)
+        n, raw, g = self._still_samples(samples)
+        qc.add(raw, g, n, cdeg_to_kang(true_heading_cdeg))
+        cal = qc.result()
+        self.quick = qc
+        self._use(cal)
+        if self.collector is not None:
+            self.collector.calibrator.current = cal  # a later full fit must beat it
+        self._save()
+        return cal
+
+    def _still_samples(self, n):
+        """Sum of n good raw samples (chip axes) and of their body gravity (None without an
+        accelerometer), read through step(); at most 4n tries."""
+        raw = [0, 0, 0]
+        g = [0, 0, 0] if self.accel is not None else None
+        k = 0
+        tries = 0
+        while k < n and tries < 4 * n:
+            tries += 1
+            if not self.step():
+                continue
+            k += 1
+            for i in range(3):
+                raw[i] += self.raw[i]
+                if g is not None:
+                    g[i] += self.gravity[i]
+        return k, raw, g
+
+    @property
+    def accuracy(self):
+        """Accuracy level 0..3, Android's meaning (firmware/accuracy.py has the table)."""
+        from firmware.accuracy import assess
+        return assess(self)[0]
+
+    def accuracy_reason(self):
+        """Why the accuracy level is what it is (a reason of firmware/accuracy.py's table)."""
+        from firmware.accuracy import assess
+        return assess(self)[1]
 
     # --- the loop ---------------------------------------------------------------------
     def step(self):
@@ -730,4 +822,13 @@ def status_line(app):
     if app.change is not None:
         parts.append("jump: %s %d outside %d..%d, accept_change() or discard_change()"
                      % app.change)
+    from firmware.accuracy import NAMES, assess
+    lvl, why = assess(app)
+    parts.append("accuracy %d %s (%s)" % (lvl, NAMES[lvl], why))
+    loc = app.location
+    if loc is not None:
+        parts.append("decl %s deg (model)" % kang_to_str(loc.declination_kang, True)
+                     if loc.usable else "decl manual")
+        if loc.status != "ok":
+            parts.append("location: %s" % loc.status)
     return " | ".join(parts)

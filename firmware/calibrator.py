@@ -64,6 +64,9 @@ class Calibrator:
     counts_per_gauss: the sensor's sensitivity, enabling the 10 .. 90 uT field check.
     current: the calibration in force (e.g. loaded from storage); new fits must beat it.
     max_fit_error: hundredths of a percent.
+    .expected_field: the field model's |B| in raw counts where the board is (set by
+      firmware/location.py), or None; when set, a fit whose B is off by more than
+      acceptance.FIELD_MATCH_PCT is refused (field_mismatch).
     """
 
     def __init__(self, model=10, capacity=DEFAULT_CAPACITY, separation=None,
@@ -92,6 +95,7 @@ class Calibrator:
         self.slice_group = DEFAULT_SLICE_GROUP
         self._strict = True
         self.overridden = []  # refusals a solve(checks=False) went past: (reason, detail)
+        self.expected_field = None
 
     @property
     def count(self):
@@ -368,6 +372,8 @@ class Calibrator:
             reject(REASON_SINGULAR, "W^-1 maps the fitted ellipsoid to a zero field")
         self._verify(acceptance.check_soft_iron, r[0], field_out)
         self._verify(acceptance.check_field, field, self.counts_per_gauss)
+        if self.expected_field:
+            self._verify(acceptance.check_expected_field, field, self.expected_field)
         self._verify(acceptance.check_fit_error, fe, self.max_fit_error)
         if self.current.model is not None:
             self._verify(acceptance.check_better, model, fe, cov, self.current,

@@ -23,9 +23,11 @@ same signatures, same bits): use_kernels() picks at import, use_kernels(False) f
 plain ones, KERNELS says which set is in use.
 
 Flags (Compass.flags bits; the booleans mirror the first three):
-  FLAG_INTERFERENCE  .interference: |b| is outside field * (1 +- field_tol_pct %). A magnet,
-                     a motor or a steel table adds to Earth's field (the heading guide, docs/references.md); the heading is
-                     suspect. Off when no reference field is set (field=0).
+  FLAG_INTERFERENCE  .interference: |b| is outside field * (1 +- field_tol_pct %) (or the
+                     window set_window() gave), or the dip is outside the window set_dip() gave.
+                     A magnet, a motor or a steel table adds to Earth's field (the heading
+                     guide, docs/references.md); the heading is suspect. Off when no reference
+                     field is set (field=0); the dip window is off until set_dip().
   FLAG_DIP_HIGH      .dip_high: |dip| > 75 deg. The horizontal field is < 26 % of B and the
                      heading noise grows by 1/cos(dip) (the heading guide: use another heading source).
   FLAG_GIMBAL        .gimbal: |pitch| > 80 deg. Roll comes from Gy, Gz ~ g cos(pitch), so its
@@ -210,6 +212,8 @@ class Compass:
         self.field_tol_pct = field_tol_pct
         self._lo = 0
         self._hi = _NO_LIMIT
+        self._dip_lo = -_KANG_90  # the dip window: off (every dip is within +-90 deg)
+        self._dip_hi = _KANG_90
         self.set_field(field, field_tol_pct)
 
     def set_field(self, field, field_tol_pct=None):
@@ -233,6 +237,29 @@ class Compass:
     def pitch_kang(self):
         return self.st[_PITCH]
 
+    def set_window(self, lo, hi):
+        """Interference window on |b| given by its ends (b's units), e.g. one spanning the field
+        model's |B| and the calibration's (firmware/location.py); set_field() replaces it."""
+        if not 0 <= lo <= hi:
+            raise ValueError("field window %d..%d: need 0 <= lo <= hi" % (lo, hi))
+        self._lo = lo
+        self._hi = hi
+
+    def set_dip(self, dip_kang=None, tol_kang=0):
+        """Expected dip (inclination, KANG, down positive) and its tolerance: a measured dip
+        outside it raises the interference flag (PX4's EKF2 checks inclination the same way).
+        None turns the check off. Only meaningful with a gravity vector: the level-board path
+        assumes pitch = roll = 0."""
+        if dip_kang is None:
+            self._dip_lo = -_KANG_90
+            self._dip_hi = _KANG_90
+            return
+        if not -_KANG_90 <= dip_kang <= _KANG_90 or not 0 <= tol_kang <= _KANG_90:
+            raise ValueError("dip %d +- %d KANG: need |dip| <= 16384 and 0 <= tol <= 16384"
+                             % (dip_kang, tol_kang))
+        self._dip_lo = dip_kang - tol_kang
+        self._dip_hi = dip_kang + tol_kang
+
     def update(self, b, g=None):
         h = _orient(self.st, b, g)
         if h < 0:
@@ -251,6 +278,9 @@ class Compass:
 
     def _check_dip(self, x):
         self.dip_kang = x
+        if x < self._dip_lo or x > self._dip_hi:
+            self.interference = True
+            self.flags |= FLAG_INTERFERENCE
         self.dip_high = x > _DIP_LIMIT_KANG or x < -_DIP_LIMIT_KANG
         x = self.st[_PITCH]
         self.gimbal = x > _GIMBAL_PITCH_KANG or x < -_GIMBAL_PITCH_KANG

@@ -51,7 +51,10 @@ def _graph(lazy=True):
 
 
 def test_firmware_reads_as_the_pipeline_one_module_per_job():
-    assert set(_modules(FW)) - {"field", "motioncal"} == set(PIPELINE)
+    # beside the pipeline: the field model, where the board is (location, quick calibration),
+    # the accuracy level, and the MotionCal codec
+    assert set(_modules(FW)) - {"field", "motioncal", "location", "quickcal",
+                                "accuracy"} == set(PIPELINE)
 
 
 def test_no_import_cycles_in_firmware():
@@ -101,9 +104,25 @@ def test_a_board_booted_from_a_stored_calibration_loads_no_calibration_machinery
     assert "firmware.history" not in loaded  # imported when a calibration is accepted
     assert {"firmware.app", "firmware.calibration", "firmware.compass", "firmware.store",
             "firmware.qmc5883l"} <= loaded
+    # the field model and what uses it load only with set_location() / quick_calibrate()
+    assert not loaded & {"firmware.field", "firmware.location", "firmware.quickcal"}
     # collecting imports it, lazily, and the heading goes on
     assert second[3] and second[2] == 100
     assert CALIBRATION_MACHINERY <= set(second[1])
+
+
+def test_the_field_model_is_imported_by_set_location_only():
+    g = _graph(lazy=False)
+    seen = set()
+    todo = ["app", "compass", "calibration", "store", "calibrator", "accuracy"]
+    while todo:
+        m = todo.pop()
+        if m not in seen:
+            seen.add(m)
+            todo.extend(g[m])
+    assert not seen & {"field", "location", "quickcal"}, sorted(seen)
+    lazy = _graph(lazy=True)
+    assert "location" in lazy["app"] and "field" in lazy["location"]
 
 
 def _code_lines(path):
