@@ -136,23 +136,25 @@ def check_soft_iron(cond_x100, field_out):
                % (cond_x100, _MAX_SOFT_IRON_COND_X100))
 
 
-def field_ok(field, counts_per_gauss):
-    """True when B (counts) is a plausible geomagnetic field for this sensitivity."""
+def field_ok(field, counts_per_gauss, scale=1):
+    """True when B (counts x `scale`) is a plausible geomagnetic field for this sensitivity."""
     if counts_per_gauss:
-        # B [uT] = field * 100 / counts_per_gauss
-        return _MIN_FIELD_UT * counts_per_gauss <= field * 100 <= _MAX_FIELD_UT * counts_per_gauss
-    return field >= _MIN_FIELD_COUNTS
+        # B [uT] = field * 100 / (cpg * scale)
+        cs = counts_per_gauss * scale
+        return _MIN_FIELD_UT * cs <= field * 100 <= _MAX_FIELD_UT * cs
+    return field >= _MIN_FIELD_COUNTS * scale
 
 
-def check_field(field, counts_per_gauss):
-    if field_ok(field, counts_per_gauss):
+def check_field(field, counts_per_gauss, scale=1):
+    """field_out_of_range unless B (counts x `scale`, e.g. 65536 for Q16) is plausible."""
+    if field_ok(field, counts_per_gauss, scale):
         return
     if counts_per_gauss:
         reject(REASON_FIELD_OUT_OF_RANGE, "B = %d counts = %d uT at %d counts/G, not in %d..%d "
-               "uT" % (field, rdiv(field * 100, counts_per_gauss),
+               "uT" % (rdiv(field, scale), rdiv(field * 100, counts_per_gauss * scale),
                        counts_per_gauss, _MIN_FIELD_UT, _MAX_FIELD_UT))
     reject(REASON_FIELD_OUT_OF_RANGE, "B = %d counts < %d: too coarse to calibrate"
-           % (field, _MIN_FIELD_COUNTS))
+           % (rdiv(field, scale), _MIN_FIELD_COUNTS))
 
 
 def field_matches(field, expected):

@@ -385,7 +385,7 @@ def calibration_fields(packet, counts_per_gauss):
     # the calibrator's own limits (firmware/acceptance.py): W^-1 within 5:1, B 10..90 uT
     acceptance.check_soft_iron(cond, 1)
     bc_q16 = rdiv(b_q16 * cpg, 100)  # B in Q16 counts
-    acceptance.check_field(rdiv(bc_q16, _Q16), cpg)
+    acceptance.check_field(bc_q16, cpg, _Q16)  # in Q16 counts: no rounding at the limits
     offset = [rdiv(v[i] * cpg, 100 * _Q16) for i in range(3)]
     acceptance.check_offset(offset)
     dq = solve.det3([invw[0:3], invw[3:6], invw[6:9]])
