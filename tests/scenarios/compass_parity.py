@@ -7,7 +7,9 @@ from firmware.axes import AxisMap
 from firmware.compass import Compass, heading
 from firmware.trig import atan2, cdeg_to_kang, cos, kang_to_cdeg, kang_to_str, sin
 
-from smallrand import SmallRand  # noqa: E402  (beside this script)
+import sys  # noqa: E402
+sys.path.append("tests/scenarios")  # smallrand, also when the script arrives on stdin (qemu)
+from smallrand import SmallRand  # noqa: E402
 
 _R = SmallRand(12345)
 

@@ -32,7 +32,9 @@ if mode == "import":
 from firmware import motioncal as mc  # noqa: E402
 from firmware.fixedpoint import bit_length  # noqa: E402
 
-from smallrand import SmallRand  # noqa: E402  (beside this script)
+import sys  # noqa: E402
+sys.path.append("tests/scenarios")  # smallrand, also when the script arrives on stdin (qemu)
+from smallrand import SmallRand  # noqa: E402
 
 seed = 2024
 _R = SmallRand(seed)

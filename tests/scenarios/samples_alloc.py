@@ -64,7 +64,9 @@ r, alloc = locked(buf.coverage, 0, 0, 0)
 out["coverage"] = [0 <= r <= 100, alloc]
 # many offers under one lock: a random walk, every path taken many times
 x, y, z = 0, 0, 0
-from smallrand import SmallRand  # noqa: E402  (beside this script)
+import sys  # noqa: E402
+sys.path.append("tests/scenarios")  # smallrand, also when the script arrives on stdin (qemu)
+from smallrand import SmallRand  # noqa: E402
 
 seed = 1
 _R = SmallRand(seed)

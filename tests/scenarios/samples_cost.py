@@ -19,7 +19,9 @@ except ImportError:  # CPython: counts only
     def ticks_diff(a, b):
         return 0
 
-from smallrand import SmallRand  # noqa: E402  (beside this script)
+import sys  # noqa: E402
+sys.path.append("tests/scenarios")  # smallrand, also when the script arrives on stdin (qemu)
+from smallrand import SmallRand  # noqa: E402
 
 seed = 7
 _R = SmallRand(seed)

@@ -6,7 +6,9 @@ import json
 from firmware.fixedpoint import isqrt
 from firmware.samples import REPLACED, SampleBuffer, region, separation_for
 
-from smallrand import SmallRand  # noqa: E402  (beside this script)
+import sys  # noqa: E402
+sys.path.append("tests/scenarios")  # smallrand, also when the script arrives on stdin (qemu)
+from smallrand import SmallRand  # noqa: E402
 
 seed = 12345
 _R = SmallRand(seed)
