@@ -1,0 +1,70 @@
+// Drive the browser calibrator (web/) in a real headless Chromium for tests/test_web.py:
+//
+//   node tests/wasm/web_driver.mjs URL SCREENSHOT.png [CHROMIUM]
+//
+// Opens URL (the page, with ?seed=&speed= for the simulated board), waits until the
+// MicroPython port is up, starts the simulated board, waits until MotionCal's Send Cal rule
+// holds, clicks Send Cal, waits for the Cal1/Cal2 confirmation, saves a screenshot and prints
+// one JSON object on stdout: readyMs, wall-clock times, console errors, page errors, and what
+// the page exposes as window.webcal (samples, solve log, current calibration, packet hex...).
+// playwright-core is pinned in tests/wasm/package.json; it downloads no browser: Debian's
+// chromium is used (flags: ../.library machines note "Known to work" for this sandbox).
+import { chromium } from "playwright-core";
+
+const [url, shot, exe = "/usr/bin/chromium"] = process.argv.slice(2);
+if (!url || !shot) {
+    process.stderr.write("usage: node web_driver.mjs URL SCREENSHOT.png [CHROMIUM]\n");
+    process.exit(2);
+}
+const STEP_MS = 25000;   // each wait below; the whole run stays well under a minute
+
+const out = { consoleErrors: [], pageErrors: [], failedRequests: [], times: {} };
+const t0 = Date.now();
+const browser = await chromium.launch({
+    executablePath: exe,
+    headless: true,
+    args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+        "--disable-background-networking", "--disable-component-update", "--disable-sync",
+        "--disable-dev-shm-usage"],
+});
+try {
+    const page = await browser.newPage({ viewport: { width: 1200, height: 900 } });
+    page.on("console", (m) => { if (m.type() === "error") out.consoleErrors.push(m.text()); });
+    page.on("pageerror", (e) => out.pageErrors.push(String(e)));
+    page.on("requestfailed", (r) => out.failedRequests.push(r.url()));
+    const nav = Date.now();
+    await page.goto(url);
+    await page.waitForFunction(() => window.webcal && (window.webcal.ready || window.webcal.error),
+        null, { timeout: STEP_MS });
+    out.times.readyWallMs = Date.now() - nav;
+    out.readyMs = await page.evaluate(() => window.webcal.readyMs);
+    out.bootError = await page.evaluate(() => window.webcal.error);
+    if (!out.bootError) {
+        const s0 = Date.now();
+        await page.click("#sim");
+        await page.waitForFunction(() => window.webcal.lines > 0, null, { timeout: STEP_MS });
+        out.times.firstLineMs = Date.now() - s0;
+        await page.waitForFunction(() => window.webcal.sendEnabled, null, { timeout: STEP_MS });
+        out.times.sendEnabledMs = Date.now() - s0;
+        out.simSecondsAtSend = await page.evaluate(() => window.webcal.samples.length / 100);
+        await page.click("#send");
+        await page.waitForFunction(() => window.webcal.confirmed, null, { timeout: STEP_MS });
+        out.times.confirmedMs = Date.now() - s0;
+        await page.screenshot({ path: shot, fullPage: true });
+    } else {
+        await page.screenshot({ path: shot, fullPage: true });
+    }
+    out.webcal = await page.evaluate(() => {
+        const w = window.webcal;
+        return { samples: w.samples, log: w.log, current: w.current, sentCal: w.sentCal, gauges: w.gauges && {
+            gaps: w.gauges.gaps, variance: w.gauges.variance, wobble: w.gauges.wobble,
+            fit: w.gauges.fit }, packetHex: w.packetHex, sentValues: w.sentValues,
+            confirmed: w.confirmed, echo: w.echo, lines: w.lines, badLines: w.badLines,
+            heading: w.heading, sim: w.sim, error: w.error,
+            status: document.getElementById("status").textContent };
+    });
+} finally {
+    await browser.close();
+}
+out.times.totalMs = Date.now() - t0;
+process.stdout.write(JSON.stringify(out) + "\n");
