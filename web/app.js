@@ -9,6 +9,7 @@
 const SEND_RULE = { gaps: 15, variance: 4.5, wobble: 4, fit: 5 };  // MotionCal gui.cpp, notes 3
 const BATCH = 400;          // samples fed to the calibrator per processing tick (UI stays live)
 const CLOUD_MAX = 3000;     // points drawn in the raw view
+const RECENT = 500;         // Raw records kept whole (accel and truth too) for headingError()
 const SIM_RATE = 100;       // Hz: the rate MotionCal's fusion assumes (notes 1)
 const params = new URLSearchParams(location.search);
 
@@ -19,7 +20,7 @@ const W = window.webcal = {
     samples: [],            // every magnetometer sample fed to the calibrator, 0.1 uT, in order
     log: [],                // every solve: {n: samples fed before it, cal | reason}
     current: null,          // the calibration in force (integers, see webcal.cal_dict)
-    held: [], gauges: null, heading: null,
+    held: [], gauges: null, heading: null, recent: [],
     sentCal: null, packetHex: null, sentValues: null, confirmed: false, echo: { cal1: null, cal2: null },
     sim: null,
 };
@@ -76,27 +77,31 @@ const int16 = (n) => ((n + 32768) % 65536 + 65536) % 65536 - 32768;  // MotionCa
 let pending = [];
 let textTail = "";
 
-function onText(text) {
+// truths: the simulated board's true heading of each Raw line in text (degrees), else null
+function onText(text, truths = null) {
     // CR ends a record (MotionCal); LF alone is accepted here too, for terminals' sake
     const parts = (textTail + text).split(/\r\n|\r|\n/);
     textTail = parts.pop();
-    for (const line of parts) onLine(line);
+    let k = 0;
+    for (const line of parts) if (onLine(line, truths ? truths[k] : null)) k++;
 }
 
-function onLine(line) {
+function onLine(line, truth) {
     let i = line.indexOf("Raw:");
     if (i >= 0) {
         const body = line.slice(i + 4);
         if (!RAW_RE.test(body)) { W.badLines++; return; }
         const v = body.split(",").map((s) => int16(s === "" || s === "-" ? 0 : parseInt(s, 10)));
         W.lines++;
+        v.truth = truth;
         pending.push(v);
-        return;
+        return true;
     }
     for (const k of ["Cal1:", "Cal2:"]) {
         i = line.indexOf(k);
         if (i >= 0) onEcho(k, line.slice(i + 5).split(",").map(Number));
     }
+    return false;
 }
 
 // ---- the packet (notes 4) and its confirmation (notes 5) -------------------------------
@@ -261,9 +266,9 @@ class SimBoard {
         const t = this.t;
         this.t += 1 / SIM_RATE;
         const p = this.phase;
-        const yaw = 2 * Math.PI * 0.09 * t + p[0];
-        const pitch = 1.25 * Math.sin(2 * Math.PI * 0.061 * t + p[1]);
-        const roll = 2.7 * Math.sin(2 * Math.PI * 0.037 * t + p[2]);
+        const yaw = 2 * Math.PI * 0.3 * t + p[0];
+        const pitch = 1.25 * Math.sin(2 * Math.PI * 0.19 * t + p[1]);
+        const roll = 2.7 * Math.sin(2 * Math.PI * 0.12 * t + p[2]);
         const [cy, sy, cp, sp, cr, sr] = [Math.cos(yaw), Math.sin(yaw), Math.cos(pitch),
             Math.sin(pitch), Math.cos(roll), Math.sin(roll)];
         // body -> earth R = Rz(yaw) Ry(pitch) Rx(roll); earth -> body is R transposed
@@ -288,9 +293,9 @@ class SimBoard {
             const n = Math.min(Math.floor(this.carry), 2000);
             this.carry -= Math.floor(this.carry);
             let text = "";
-            for (let i = 0; i < n; i++) text += this.sample();
-            if (text) onText(text);
-            W.sim.truth = this.truth;
+            const truths = [];
+            for (let i = 0; i < n; i++) { text += this.sample(); truths.push(this.truth); }
+            if (text) onText(text, truths);
         }, 20);
     }
     stop() { clearInterval(this.timer); }
@@ -311,7 +316,7 @@ function startSim() {
     const seed = parseInt(params.get("seed") || "1", 10);
     const speed = Math.max(0.1, Math.min(50, parseFloat(params.get("speed") || "1")));
     const sim = new SimBoard(seed, speed);
-    W.sim = { seed, speed, truth: null, V: sim.V, M: sim.M, field: sim.field };
+    W.sim = { seed, speed, V: sim.V, M: sim.M, field: sim.field };
     source = { name: "sim", write: async (b) => sim.write(b), stop: () => sim.stop() };
     W.source = "sim";
     sim.start();
@@ -322,7 +327,7 @@ function clearAll() {
     mp.runPython("webcal.reset()");
     pending = [];
     Object.assign(W, { samples: [], log: [], current: null, held: [], gauges: null,
-        packetHex: null, sentValues: null, confirmed: false, lines: 0, badLines: 0 });
+        packetHex: null, sentValues: null, confirmed: false, lines: 0, badLines: 0, recent: [] });
     confirmNeeded = 0;
     $("s-echo").textContent = "–";
     $("calib").textContent = "none yet";
@@ -432,8 +437,8 @@ function process() {
             heldStale = false;
         }
         const last = batch[batch.length - 1];
-        W.heading = JSON.parse(py(`webcal.headings(${JSON.stringify(last.slice(6, 9))}, `
-            + `${JSON.stringify(last.slice(0, 3))})`));
+        W.heading = headingOf(last);
+        W.recent = W.recent.concat(batch).slice(-RECENT);
     } catch (e) {
         fail("calibrator error: " + e.message);
         throw e;
@@ -443,6 +448,27 @@ function process() {
     W.gauges = quality(pts, c ? c.fit_error / 100 : 100);
     dirty = true;
     updatePanels();
+}
+
+// our heading (firmware/compass.py) of a Raw record, before and after the calibration, KANG;
+// truth: the simulated board's, degrees (null for a real board)
+function headingOf(v) {
+    const h = JSON.parse(py(`webcal.headings(${JSON.stringify(v.slice(6, 9))}, `
+        + `${JSON.stringify(v.slice(0, 3))})`));
+    h.truth = v.truth === undefined ? null : v.truth;
+    return h;
+}
+
+// RMS heading error (degrees) after the calibration over the recent simulated records
+function headingError() {
+    let s = 0, n = 0;
+    for (const v of W.recent) {
+        const h = headingOf(v);
+        if (h.after === null || h.truth === null) continue;
+        const d = ((h.after * 360 / 65536 - h.truth) % 360 + 540) % 360 - 180;
+        s += d * d; n++;
+    }
+    return n ? { rms: Math.sqrt(s / n), n } : null;
 }
 
 const fmtPct = (x) => (x >= 100 ? "100" : x.toFixed(1)) + " %";
@@ -489,7 +515,7 @@ function updatePanels() {
     const h = W.heading || {};
     $("h-before").textContent = deg(h.before);
     $("h-after").textContent = deg(h.after);
-    $("h-truth").textContent = W.sim && W.sim.truth !== null ? W.sim.truth.toFixed(1) + "°" : "–";
+    $("h-truth").textContent = h.truth !== null && h.truth !== undefined ? h.truth.toFixed(1) + "°" : "–";
 }
 
 // ---- drawing: orthographic projection, drag to rotate ------------------------------------
@@ -592,7 +618,7 @@ $("clear").addEventListener("click", clearAll);
 $("send").addEventListener("click", sendCal);
 rotateWithMouse($("raw"));
 rotateWithMouse($("cal"));
-W.api = { buildPacket, packetValues, crc16, region };
+W.api = { buildPacket, packetValues, crc16, region, headingError };
 boot().then(() => {
     setInterval(process, 50);
     requestAnimationFrame(draw);

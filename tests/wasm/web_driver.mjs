@@ -54,6 +54,7 @@ try {
     } else {
         await page.screenshot({ path: shot, fullPage: true });
     }
+    if (!out.bootError) out.headingError = await page.evaluate(() => window.webcal.api.headingError());
     out.webcal = await page.evaluate(() => {
         const w = window.webcal;
         return { samples: w.samples, log: w.log, current: w.current, sentCal: w.sentCal, gauges: w.gauges && {
