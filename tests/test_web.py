@@ -89,6 +89,15 @@ def test_simulated_board_streams(run):
     assert all(len(s) == 3 and all(-32768 <= v <= 32767 for v in s) for s in w["samples"])
 
 
+def test_web_serial_reader_with_a_stand_in_port(run):
+    # MotionCal's rules (notes section 1): CR or CR LF ends a record, text outside records is
+    # skipped, a record may start mid-line, 8 fields or a space refuse the record
+    s = run["serial"]
+    assert s["source"] == "serial"
+    assert s["samples"] == [[200, -30, 400], [201, -31, 401], [202, -32, 402]]
+    assert s["lines"] == 3 and s["badLines"] == 2
+
+
 def _replay(samples):
     # web/webcal.py's policy on CPython: a solve after every SOLVE_EVERY kept samples
     cal = Calibrator(model=10, counts_per_gauss=COUNTS_PER_GAUSS)

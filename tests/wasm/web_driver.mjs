@@ -64,6 +64,31 @@ try {
             heading: w.heading, sim: w.sim, error: w.error,
             status: document.getElementById("status").textContent };
     });
+    // The Web Serial path with a stand-in port (no board here): the page's reader loop and
+    // line parser on a stream split at awkward places, CR-only and CR LF records, a banner,
+    // a record mid-line and two records MotionCal refuses (8 fields; a space).
+    const page2 = await browser.newPage();
+    page2.on("console", (m) => { if (m.type() === "error") out.consoleErrors.push(m.text()); });
+    page2.on("pageerror", (e) => out.pageErrors.push(String(e)));
+    await page2.addInitScript(() => {
+        const chunks = ["boot banner\r\n", "Raw:0,0,8192,0,0,0,200,-30,400\r", "Raw:0,0,8192,0,0,0,2",
+            "01,-31,401\r\n", "heading 12.3 Raw:0,0,8192,0,0,0,202,-32,402\r",
+            "Raw:1,2,3,4,5,6,7,8\r", "Raw:1, 2,3,4,5,6,7,8,9\r\n"];
+        const enc = new TextEncoder();
+        const port = {
+            open: async () => {}, close: async () => {},
+            readable: new ReadableStream({ start(c) { for (const t of chunks) c.enqueue(enc.encode(t)); } }),
+            writable: new WritableStream({ write() {} }),
+        };
+        Object.defineProperty(navigator, "serial", { value: { requestPort: async () => port } });
+    });
+    await page2.goto(url);
+    await page2.waitForFunction(() => window.webcal && window.webcal.ready, null, { timeout: STEP_MS });
+    await page2.click("#connect");
+    await page2.waitForFunction(() => window.webcal.samples.length >= 3, null, { timeout: STEP_MS });
+    out.serial = await page2.evaluate(() => ({ source: window.webcal.source,
+        lines: window.webcal.lines, badLines: window.webcal.badLines,
+        samples: window.webcal.samples }));
 } finally {
     await browser.close();
 }
