@@ -10,7 +10,7 @@ BOARD  ?= rp2040
 PORT   ?= /dev/ttyACM0
 BUILD  := build/$(BOARD)
 
-.PHONY: run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm wasm test-arm
+.PHONY: run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm wasm test-arm web
 
 venv: $(STAMP)
 
@@ -23,7 +23,7 @@ $(STAMP): requirements.txt
 run: $(STAMP)
 	$(PY) -m host_sim run
 
-test: $(STAMP) wasm
+test: $(STAMP) wasm web
 	$(PY) -m pytest -q
 
 # --- 32-bit test tiers (tests/mp.py) -------------------------------------------------------
@@ -39,6 +39,18 @@ wasm:
 	  if npm ci --prefix $(WASM_DIR) --no-audit --no-fund --loglevel=error; then touch $(WASM_STAMP); \
 	  else echo "wasm tier skipped: npm ci failed (tests/wasm/node_modules not installed)"; fi; \
 	fi
+
+# web: the browser calibrator (docs/web.md): vendors the WebAssembly port into web/vendor/
+# (git-ignored) and, as root, installs Debian's chromium for tests/test_web.py when missing.
+web: $(STAMP) wasm
+	@if [ ! -x /usr/bin/chromium ]; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null) \
+	      || echo "browser tier will skip: apt-get install chromium failed"; \
+	  else echo "browser tier will skip: /usr/bin/chromium missing (as root: apt-get install -y chromium)"; fi; \
+	fi
+	@if [ -d $(WASM_DIR)/node_modules/@micropython ]; then $(PY) -m host_sim web --vendor; \
+	else echo "web/vendor not made: tests/wasm/node_modules missing (make wasm needs node and npm)"; fi
 
 # arm: the parity scenarios on the Cortex-M qemu firmware in ../shared/tools (minutes; not in
 # `make test`). Installs qemu-system-arm from Debian when missing and run as root.

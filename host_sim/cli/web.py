@@ -1,0 +1,169 @@
+"""`python -m host_sim web [--port N] [--vendor]`: the browser calibrator (docs/web.md).
+
+Serves the repository's web/ (the page) and firmware/ (the Python files the page loads into
+the MicroPython WebAssembly port) on 127.0.0.1 with the standard library's http.server, and
+nothing else of the repository. `/` redirects to `/web/`. The page uses relative URLs only
+(`vendor/...`, `../firmware/...`), so any static host that serves the repository's root (or
+at least web/ and firmware/ side by side) works the same.
+
+--vendor (what `make web` runs) copies the WebAssembly port (micropython.mjs and
+micropython.wasm of npm @micropython/micropython-webassembly-pyscript, pinned in
+tests/wasm/package.json and installed into tests/wasm/node_modules by `make wasm`) into
+web/vendor/ and writes web/vendor/manifest.json, the list of firmware/*.py files the page
+fetches (a static host cannot list a folder). web/vendor/ is generated, not committed
+(.gitignore). Serving refreshes the manifest and vendors first when web/vendor/ is missing.
+
+Exit status: 0 done (Ctrl-C ends serving); 2 bad usage, the port in use, or the port files
+missing (one line on stderr).
+"""
+import http.server
+import json
+import os
+import shutil
+import sys
+
+from host_sim.cli.args import STATUS_OK, STATUS_USAGE, Parser, UsageError
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+PKG_DIR = os.path.join("tests", "wasm", "node_modules", "@micropython",
+                       "micropython-webassembly-pyscript")
+PORT_FILES = ("micropython.mjs", "micropython.wasm")
+SERVED = ("web", "firmware")   # the only top-level folders served
+DEFAULT_PORT = 8014
+MIME = {".mjs": "text/javascript", ".js": "text/javascript", ".wasm": "application/wasm",
+        ".py": "text/plain; charset=utf-8", ".json": "application/json", ".css": "text/css",
+        ".html": "text/html; charset=utf-8", ".png": "image/png", ".svg": "image/svg+xml"}
+
+
+def firmware_files(root=ROOT):
+    """The firmware/*.py names the page loads (sorted)."""
+    d = os.path.join(root, "firmware")
+    return sorted(f for f in os.listdir(d) if f.endswith(".py"))
+
+
+def write_manifest(root=ROOT):
+    vendor = os.path.join(root, "web", "vendor")
+    os.makedirs(vendor, exist_ok=True)
+    text = json.dumps({"firmware": firmware_files(root)}, indent=1) + "\n"
+    path = os.path.join(vendor, "manifest.json")
+    try:
+        with open(path) as f:
+            if f.read() == text:
+                return path
+    except OSError:
+        pass
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def vendor(root=ROOT):
+    """Copy the port's files into web/vendor/ and write the manifest; UsageError when the npm
+    package is not installed. Returns the vendor folder."""
+    src = os.path.join(root, PKG_DIR)
+    dst = os.path.join(root, "web", "vendor")
+    missing = [f for f in PORT_FILES if not os.path.isfile(os.path.join(src, f))]
+    if missing:
+        raise UsageError("%s not found in %s: run `make wasm` (npm ci in tests/wasm) first"
+                         % (", ".join(missing), src))
+    os.makedirs(dst, exist_ok=True)
+    for f in PORT_FILES:
+        shutil.copyfile(os.path.join(src, f), os.path.join(dst, f))
+    write_manifest(root)
+    return dst
+
+
+def vendored(root=ROOT):
+    d = os.path.join(root, "web", "vendor")
+    return all(os.path.isfile(os.path.join(d, f)) for f in PORT_FILES)
+
+
+class Handler(http.server.SimpleHTTPRequestHandler):
+    """Static files of web/ and firmware/ only; quiet unless verbose."""
+    verbose = False
+
+    def __init__(self, request, client_address, server):
+        super().__init__(request, client_address, server, directory=server.root)
+
+    def guess_type(self, path):
+        ext = os.path.splitext(path)[1].lower()
+        return MIME.get(ext) or super().guess_type(path)
+
+    def end_headers(self):
+        self.send_header("Cache-Control", "no-store")  # firmware edits show on reload
+        super().end_headers()
+
+    def _allowed(self):
+        p = self.path.split("?", 1)[0].split("#", 1)[0]
+        top = p.lstrip("/").split("/", 1)[0]
+        return top in SERVED
+
+    def do_GET(self):
+        if self.path in ("/", ""):
+            self.send_response(302)
+            self.send_header("Location", "/web/")
+            self.end_headers()
+            return
+        if not self._allowed():
+            self.send_error(404, "only /web/ and /firmware/ are served")
+            return
+        super().do_GET()
+
+    def do_HEAD(self):
+        if not self._allowed():
+            self.send_error(404)
+            return
+        super().do_HEAD()
+
+    def log_message(self, fmt, *args):
+        if self.verbose:
+            super().log_message(fmt, *args)
+
+
+class Server(http.server.ThreadingHTTPServer):
+    daemon_threads = True
+
+
+def make_server(port=DEFAULT_PORT, root=ROOT, host="127.0.0.1"):
+    """A Server on host:port (0: any free port; .server_address[1] tells) serving root's
+    web/ and firmware/. OSError when the port is taken."""
+    srv = Server((host, port), type("WebHandler", (Handler,), {}))
+    srv.root = root
+    return srv
+
+
+def _body(opts):
+    if opts["vendor"]:
+        d = vendor()
+        print("vendored %s into %s" % (", ".join(PORT_FILES), os.path.relpath(d, os.getcwd())))
+        return STATUS_OK
+    if not vendored():
+        vendor()
+    write_manifest()
+    try:
+        srv = make_server(opts["port"])
+    except OSError as e:
+        raise UsageError("--port %d: cannot listen on 127.0.0.1 (%s)"
+                         % (opts["port"], e.strerror or e))
+    srv.RequestHandlerClass.verbose = opts["verbose"]
+    print("serving the browser calibrator at http://127.0.0.1:%d/web/  (Ctrl-C stops)"
+          % srv.server_address[1])
+    sys.stdout.flush()
+    try:
+        srv.serve_forever()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        srv.server_close()
+    return STATUS_OK
+
+
+def main(argv):
+    p = Parser("web", "[--port N] [--vendor] [--verbose]",
+               "Serve the browser calibrator (web/ and firmware/) on 127.0.0.1 (docs/web.md).")
+    p.option("--port", "int", default=DEFAULT_PORT, lo=0, hi=65535, metavar="N",
+             help="TCP port (default %d; 0 picks a free one)" % DEFAULT_PORT)
+    p.option("--vendor", "flag", help="only copy the WebAssembly port into web/vendor/ "
+             "(make web) and exit")
+    p.option("--verbose", "flag", help="log every request on stderr")
+    return p.main(argv, _body)
