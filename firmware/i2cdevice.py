@@ -66,10 +66,14 @@ def option_code(chip, name, value, table):
 def int16x3_into(d, buf, msb):
     """buf[0..2] = the three int16 of d[0..5], LSB first (msb=0: QMC5883L, QMC5883P data
     blocks) or MSB first (msb=1: MPU6050), sign-extended by hand: struct.unpack would
-    allocate a tuple."""
-    for i in range(3):
-        v = d[2 * i + 1 - msb] << 8 | d[2 * i + msb]
-        buf[i] = v - 0x10000 if v & 0x8000 else v
+    allocate a tuple. Written out per axis: a loop costs a third more on the per-sample path."""
+    h = 1 - msb  # offset of the high byte in each pair
+    v = d[h] << 8 | d[msb]
+    buf[0] = v - 0x10000 if v & 0x8000 else v
+    v = d[2 + h] << 8 | d[2 + msb]
+    buf[1] = v - 0x10000 if v & 0x8000 else v
+    v = d[4 + h] << 8 | d[4 + msb]
+    buf[2] = v - 0x10000 if v & 0x8000 else v
 
 
 class BusGuard:
