@@ -763,14 +763,38 @@ def summary(res, derived):
                     _get(res, "solver", "micropython", "sliced_10_app", "longest_us"),
                     (_get(res, "solver", "micropython", "sliced_10_app", "longest_us") or 0)
                     * rp.get("scale_int", 0) / 1000))
-    fb = _get(res, "memory", "py", "firmware_bytes") or {}
-    if fb:
-        out.append(
-            "Memory: loading the firmware as .py or .mpy puts its bytecode on the heap "
-            "(%s on this 64-bit port), more than the 32 KB budget on any port; frozen into "
-            "the board's flash (manifest.py) the heap holds only the app's state, estimated "
-            "for a 32-bit board in the table." % _kb(fb.get("imports")))
+    m32 = res.get("memory32") or {}
+    fits = deployments(m32)
+    if fits:
+        out.append(fits)
     return " ".join(out)
+
+
+BOARD_HEAP = (("ESP32 (no PSRAM)", 110 * 1024), ("RP2040 (Pico)", 190 * 1024))
+
+
+def deployments(m32):
+    """Which deployment fits which board, from the smallest heaps measured on x86-32 (the
+    recorded session's bytes, and the ROMFS image's, subtracted)."""
+    sb = m32.get("session_bytes") or 0
+    need = {}
+    for kind in ("py", "mpy", "romfs"):
+        kb = (m32.get("min_heap_" + kind) or {}).get("kb")
+        if kb:
+            need[kind] = kb * 1024 - sb - ((m32.get("romfs_bytes") or 0) if kind == "romfs"
+                                           else 0)
+    if not need:
+        return ""
+    names = {"py": ".py source", "mpy": ".mpy files", "romfs": "frozen or ROMFS .mpy"}
+    parts = []
+    for board, heap in BOARD_HEAP:
+        ok = [names[k] for k in ("py", "mpy", "romfs") if k in need and need[k] <= heap]
+        parts.append("%s (about %d KB free heap): %s" % (
+            board, heap // 1024, ", ".join(ok) if ok else "none of the measured deployments"))
+    return ("Memory on a 32-bit MicroPython: import + a complete calibration + 1000 headings "
+            "needs %s; so %s." % (", ".join("%s from %s" % (_kb(need[k]), names[k])
+                                            for k in ("py", "mpy", "romfs") if k in need),
+                                  "; ".join(parts)))
 
 
 def readme_section(R, m, derived, res=None):
