@@ -10,9 +10,13 @@ BOARD  ?= rp2040
 PORT   ?= /dev/ttyACM0
 BUILD  := build/$(BOARD)
 
-.PHONY: run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm wasm test-arm web
+.PHONY: help run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm wasm test-arm web
 
-venv: $(STAMP)
+# make help: every target with one line (the `##` comment after its name)
+help:  ## list the targets
+	@sed -n 's/^\([a-z0-9-]*\):.*## \(.*\)/  \1\t\2/p' $(MAKEFILE_LIST) | expand -t 16
+
+venv: $(STAMP)  ## create .venv from requirements.txt (every target does it)
 
 $(STAMP): requirements.txt
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -20,10 +24,10 @@ $(STAMP): requirements.txt
 	@rm -f $(VENV)/.installed-*
 	@touch $@
 
-run: $(STAMP)
+run: $(STAMP)  ## the compass on the simulated board; writes build/calibration.png
 	$(PY) -m host_sim run
 
-test: $(STAMP) wasm web
+test: $(STAMP) wasm web  ## the whole test suite on CPython and MicroPython
 	$(PY) -m pytest -q
 
 # --- 32-bit test tiers (tests/mp.py) -------------------------------------------------------
@@ -32,7 +36,7 @@ test: $(STAMP) wasm web
 WASM_DIR   := tests/wasm
 WASM_STAMP := $(WASM_DIR)/node_modules/.installed-$(shell cksum < $(WASM_DIR)/package-lock.json | cut -d' ' -f1)
 
-wasm:
+wasm:  ## install the WebAssembly test tier from npm (skips without node)
 	@if ! command -v node >/dev/null 2>&1; then echo "wasm tier skipped: node not found on PATH"; \
 	elif ! command -v npm >/dev/null 2>&1; then echo "wasm tier skipped: npm not found on PATH"; \
 	elif [ ! -f $(WASM_STAMP) ]; then \
@@ -42,7 +46,7 @@ wasm:
 
 # web: the browser calibrator (docs/web.md): vendors the WebAssembly port into web/vendor/
 # (git-ignored) and, as root, installs Debian's chromium for tests/test_web.py when missing.
-web: $(STAMP) wasm
+web: $(STAMP) wasm  ## vendor the WebAssembly port into web/ for the browser calibrator; chromium for its test
 	@if [ ! -x /usr/bin/chromium ]; then \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
 	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null) \
@@ -54,7 +58,7 @@ web: $(STAMP) wasm
 
 # arm: the parity scenarios on the Cortex-M qemu firmware in ../shared/tools (minutes; not in
 # `make test`). Installs qemu-system-arm from Debian when missing and run as root.
-test-arm: $(STAMP)
+test-arm: $(STAMP)  ## parity scenarios on the qemu Cortex-M tier (minutes)
 	@if ! command -v qemu-system-arm >/dev/null 2>&1; then \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
 	    apt-get update -qq && apt-get install -y -qq qemu-system-arm >/dev/null || exit 1; \
@@ -62,19 +66,19 @@ test-arm: $(STAMP)
 	fi; \
 	ARM_TIER=1 $(PY) -m pytest -q -p no:randomly tests/test_tiers.py -k arm
 
-fuzz: $(STAMP)
+fuzz: $(STAMP)  ## hypothesis properties with many more examples
 	HYPOTHESIS_PROFILE=fuzz $(PY) -m pytest -q tests
 
-bench: $(STAMP)
+bench: $(STAMP)  ## speed, memory, accuracy; writes docs/benchmarks.md
 	$(PY) -m host_sim bench
 
-bench-smoke: $(STAMP)
+bench-smoke: $(STAMP)  ## a quick run of the benchmarks
 	$(PY) -m host_sim bench --smoke
 
 # `host_sim quality` on a throwaway PostgreSQL server (docs/quality.md); installs Debian's
 # postgresql first when its binaries are missing and we are root. make test skips that test
 # without them.
-quality-pg: $(STAMP)
+quality-pg: $(STAMP)  ## the quality database test on a throwaway PostgreSQL
 	@ls /usr/lib/postgresql/*/bin/initdb >/dev/null 2>&1 || { test "$$(id -u)" = 0 && \
 	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq postgresql; }
 	$(PY) -m pytest -q -rs tests/test_quality.py -k postgresql
@@ -86,7 +90,7 @@ ARCH_esp32  := xtensawin
 ARCH        := $(ARCH_$(BOARD))
 MPREMOTE    := $(VENV)/bin/mpremote connect $(PORT)
 
-mpy: $(STAMP)
+mpy: $(STAMP)  ## compile firmware/ to .mpy for BOARD=rp2040|esp32 into build/
 	@test -n "$(ARCH)" || { echo "unknown BOARD=$(BOARD): use rp2040 or esp32"; exit 2; }
 	rm -rf $(BUILD) && mkdir -p $(BUILD)/lib/firmware
 	for f in firmware/*.py; do \
@@ -95,7 +99,7 @@ mpy: $(STAMP)
 	cp firmware/*.bin $(BUILD)/lib/firmware/
 	cp boards/$(BOARD)/board.py boards/main.py $(BUILD)/
 
-deploy: mpy
+deploy: mpy  ## copy firmware, board.py, main.py to the board at PORT
 	$(MPREMOTE) fs mkdir :lib || true
 	$(MPREMOTE) fs cp -r $(BUILD)/lib/firmware :lib/
 	$(MPREMOTE) fs cp $(BUILD)/board.py :board.py
@@ -103,11 +107,11 @@ deploy: mpy
 	$(MPREMOTE) reset
 
 # the board's World Magnetic Model table (committed; docs/field_model.md)
-wmm: $(STAMP)
+wmm: $(STAMP)  ## regenerate firmware/wmm2025.bin
 	$(PY) -m host_sim wmm
 
-package-json: $(STAMP)
+package-json: $(STAMP)  ## regenerate package.json (mip install)
 	$(PY) -m host_sim.cli.packaging > package.json
 
-clean:
+clean:  ## remove build/ and test caches
 	rm -rf build .pytest_cache .hypothesis

@@ -1,5 +1,6 @@
 """eCompass: runs at boot (main.py). Prints a status line every 0.5 s; calibrates as you move.
 
+At boot a calibration file CAL_FILE (calibration.json) is imported into the store, once.
 First run: no stored calibration, so the heading is raw until you turn the board through a
 figure-8 (every direction: over and around); the line shows coverage and samples grow, then
 "model 4" or "model 10" once a calibration is accepted - it is saved and used at every boot.
@@ -8,17 +9,29 @@ import time
 
 import board
 from firmware.app import CompassApp, status_line
+from firmware.calimport import import_calibration
+from firmware.detect import detect
 from firmware.store import CalStore
 
+# A calibration fitted on the desktop (python -m host_sim calibrate LOG --sensor ... --out
+# calibration.json) copied here is imported once at boot (docs/calibration.md).
+CAL_FILE = getattr(board, "CALIBRATION_FILE", None) or (
+    board.STORE_DIR.rstrip("/") + "/calibration.json")
+
 i2c = board.make_i2c()
+# None on a real board (time.sleep_us, time.ticks_us); the simulated board (boards/host)
+# brings its own clock
+delay_us = getattr(board, "delay_us", None)
 while True:
     try:
-        app = CompassApp(i2c, mag_axes=board.MAG_AXES, accel_axes=board.ACCEL_AXES,
+        mag = detect(i2c, delay_us=delay_us) if delay_us else detect(i2c)
+        store = CalStore(board.STORE_DIR)
+        imported = import_calibration(CAL_FILE, store, mag)
+        if imported is not None:
+            print("eCompass: %s" % imported[1])
+        app = CompassApp(i2c, mag=mag, mag_axes=board.MAG_AXES, accel_axes=board.ACCEL_AXES,
                          declination_cdeg=board.DECLINATION_CDEG,
-                         store=CalStore(board.STORE_DIR),
-                         # None on a real board (time.sleep_us, time.ticks_us); the
-                         # simulated board (boards/host) brings its own clock
-                         delay_us=getattr(board, "delay_us", None),
+                         store=store, delay_us=delay_us,
                          ticks_us=getattr(board, "ticks_us", None))
         break
     except OSError as e:  # SensorNotFound, BusError: wiring or power; say so and retry

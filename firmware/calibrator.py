@@ -27,7 +27,8 @@ from firmware.calibration import MINMAX, MODELS, UNCALIBRATED, Calibration
 from firmware.compat import const
 from firmware.errors import CalibrationRejected
 from firmware.fixedpoint import rdiv
-from firmware.samples import REJECTED, REPLACED, SampleBuffer, separation_for
+from firmware.samples import (NOT_INT, REJECTED, REPLACED, SampleBuffer, bad_sample,
+                              separation_for)
 
 DEFAULT_CAPACITY = const(300)   # samples (ArduPilot keeps 300, NXP 340): 1.8 KB of int16
 # Separation: a whole sphere saturates the buffer at 3/4 of its capacity (samples.py's
@@ -54,6 +55,14 @@ def _widen(e, i, v):
     return False
 
 
+def _check_int(name, v, lo, unit):
+    # constructor arguments: an int >= lo in the stated unit (a float such as 1.5 is ambiguous)
+    if type(v) is not int:
+        raise TypeError("%s=%r: expected an int in %s" % (name, v, unit))
+    if v < lo:
+        raise ValueError("%s=%d: expected >= %d, in %s" % (name, v, lo, unit))
+
+
 class Calibrator:
     """Collects samples and solves for a Calibration (see the module docstring).
 
@@ -63,7 +72,7 @@ class Calibrator:
       (a 50 uT field) or, without it, from the running half-ranges of the raw data.
     counts_per_gauss: the sensor's sensitivity, enabling the 10 .. 90 uT field check.
     current: the calibration in force (e.g. loaded from storage); new fits must beat it.
-    max_fit_error: hundredths of a percent.
+    max_fit_error: hundredths of a percent (an int: 150 = 1.5 %); TypeError otherwise.
     .expected_field: the field model's |B| in raw counts where the board is (set by
       firmware/location.py), or None; when set, a fit whose B is off by more than
       acceptance.FIELD_MATCH_PCT is refused (field_mismatch).
@@ -73,6 +82,10 @@ class Calibrator:
                  counts_per_gauss=None, current=None, max_fit_error=DEFAULT_MAX_FIT_ERROR):
         if model not in MODELS and model != "auto":
             raise ValueError("model %r: expected 'minmax', 4, 7, 10 or 'auto'" % (model,))
+        _check_int("max_fit_error", max_fit_error, 1,
+                   "hundredths of a percent, e.g. 150 for 1.5 %")
+        if counts_per_gauss is not None:
+            _check_int("counts_per_gauss", counts_per_gauss, 1, "counts per gauss, e.g. 12000")
         self.model = model
         self.counts_per_gauss = counts_per_gauss
         self.max_fit_error = max_fit_error
@@ -122,12 +135,14 @@ class Calibrator:
 
         A rejected sample (the usual case) allocates nothing, not even a call frame: each
         step below keeps its arguments, locals and stack within the 11 words MicroPython
-        keeps on the C stack. Raises ValueError for a value outside int16 (from
-        SampleBuffer.offer) before anything changes."""
+        keeps on the C stack. Raises ValueError for a value outside int16 and TypeError
+        naming x, y or z when one is not an int, before anything changes."""
         r = self.buffer.offer(x, y, z)
         if r != REJECTED:
             if r == REPLACED:
                 self._evict()
+            elif r == NOT_INT:  # checked off the common (rejected) path
+                raise bad_sample(x, y, z)
             self.moments.add(x, y, z)
         if self._fresh:
             self._first(x, y, z)

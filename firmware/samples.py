@@ -39,6 +39,8 @@ from firmware.compat import const
 REJECTED = const(0)  # offer(): too close to a held sample, or its cell is taken
 KEPT = const(1)      # offer(): stored in a free slot
 REPLACED = const(2)  # offer(): stored over the oldest sample, now in .evicted
+NOT_INT = const(3)   # offer(): x, y or z is not an int within 32 bits; nothing changed
+                     # (bad_sample() says which)
 
 MAX_CAPACITY = const(16383)     # table entries are uint16 slot+1; the table is 3-6x capacity
 MAX_SEPARATION = const(16384)   # counts: keeps 3*s**2 < 2**30 (small int on 32-bit boards)
@@ -169,6 +171,15 @@ def region(dx, dy, dz):
     return first + lo
 
 
+def bad_sample(x, y, z):
+    """The error for a sample offer() called NOT_INT: TypeError naming the argument that is not
+    an int, or ValueError for an int outside int16 (CPython refuses one beyond 32 bits)."""
+    for name, v in (("x", x), ("y", y), ("z", z)):
+        if not isinstance(v, int) or isinstance(v, bool):
+            return TypeError("sample %s = %r: expected an int (raw int16 counts)" % (name, v))
+    return ValueError("sample (%d, %d, %d) is not int16" % (x, y, z))
+
+
 class SampleBuffer:
     """Bounded, distance-separated buffer of raw int16 magnetometer samples (see module doc).
 
@@ -238,18 +249,22 @@ class SampleBuffer:
         return k - self.capacity if k >= self.capacity else k
 
     def offer(self, x, y, z):
-        """Offer one raw sample (int16 counts); returns REJECTED, KEPT or REPLACED.
+        """Offer one raw sample (int16 counts); returns REJECTED, KEPT or REPLACED, or NOT_INT
+        (nothing changed) when x, y or z is not an int within 32 bits. ValueError for an int
+        outside int16.
 
         As named steps, each small enough that its frame stays on the C stack (11 words,
         MicroPython's py/objfun.c): nothing is allocated for a rejected sample."""
+        try:  # the int array refuses a float or a str (CPython: also an int beyond 32 bits)
+            self._q[0] = x
+            self._q[1] = y
+            self._q[2] = z
+        except:  # noqa: E722 - a matching class or a call here would put the frame on the heap
+            return NOT_INT
         if not (-32768 <= x <= 32767 and -32768 <= y <= 32767 and -32768 <= z <= 32767):
-            raise ValueError("sample (%d, %d, %d) is not int16" % (x, y, z))
+            raise bad_sample(x, y, z)
         self.last_cells = 0
         self.last_probes = 0
-        q = self._q
-        q[0] = x
-        q[1] = y
-        q[2] = z
         # The newest sample is the usual reason to reject at 50 Hz: test it before hashing.
         if self._last >= 0 and self._near(3 * self._last):
             return REJECTED

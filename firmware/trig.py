@@ -100,6 +100,8 @@ def kang_to_str(angle_kang, signed=False):
     d = rdiv(a * 225, 4096)  # decidegrees: 3600 / 65536 = 225 / 4096
     if d == 3600:  # 359.95 deg and up round to a full turn
         d = 0
+    elif d == 1800 and signed:  # 179.95 deg and up: the signed range ends at 179.9
+        d = -1800
     if d < 0:
         return "-%d.%d" % (-d // 10, -d % 10)
     return "%d.%d" % (d // 10, d % 10)

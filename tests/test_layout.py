@@ -52,9 +52,9 @@ def _graph(lazy=True):
 
 def test_firmware_reads_as_the_pipeline_one_module_per_job():
     # beside the pipeline: the field model, where the board is (location, quick calibration),
-    # the accuracy level, and the MotionCal codec
+    # the accuracy level, the MotionCal codec, importing a calibration file at boot
     assert set(_modules(FW)) - {"field", "motioncal", "location", "quickcal",
-                                "accuracy"} == set(PIPELINE)
+                                "accuracy", "calimport"} == set(PIPELINE)
 
 
 def test_no_import_cycles_in_firmware():

@@ -27,3 +27,79 @@ def test_make_deploy_prints_mpy_cross_and_mpremote_commands():
     esp = subprocess.run(["make", "-n", "deploy", "BOARD=esp32", "PORT=/dev/ttyUSB0"],
                          cwd=ROOT, capture_output=True, text=True)
     assert "mpy-cross -march=xtensawin" in esp.stdout
+
+
+def test_package_json_lists_every_firmware_file_and_each_entry_exists():
+    with open(os.path.join(ROOT, "package.json")) as f:
+        urls = json.load(f)["urls"]
+    on_disk = sorted("firmware/" + n for n in os.listdir(os.path.join(ROOT, "firmware"))
+                     if n.endswith((".py", ".bin")))
+    assert "firmware/wmm2025.bin" in on_disk
+    assert sorted(u[0] for u in urls) == on_disk
+    for target, url in urls:
+        assert not url.startswith(("github:", "http", "/")), url  # relative to package.json
+        assert os.path.isfile(os.path.join(ROOT, url)), url
+
+
+class _FakeBoard:
+    """mpremote's transport as mip uses it: a board filesystem in a dict."""
+
+    def __init__(self):
+        self.files = {}
+
+    def fs_exists(self, path):
+        return any(p == path or p.startswith(path + "/") for p in self.files)
+
+    def fs_mkdir(self, path):
+        pass
+
+    def fs_writefile(self, path, data, progress_callback=None):
+        self.files[path] = data
+
+
+def _expected_files():
+    with open(os.path.join(ROOT, "package.json")) as f:
+        urls = json.load(f)["urls"]
+    return {"/lib/" + t: open(os.path.join(ROOT, u), "rb").read() for t, u in urls}
+
+
+def test_mip_installs_from_the_local_package_json(monkeypatch):
+    # the pinned mpremote's own installer: `mpremote mip install ./package.json` from a clone
+    from mpremote import mip
+    board = _FakeBoard()
+    monkeypatch.chdir(ROOT)
+    mip._install_package(board, "./package.json", mip._PACKAGE_INDEX, "/lib", None, False)
+    assert board.files == _expected_files()
+
+
+def test_mip_installs_from_github_urls_relative_to_the_package(monkeypatch):
+    # `mpremote mip install github:OWNER/REPO`: every file is fetched from the same repository
+    import io
+    from mpremote import mip
+    prefix = "https://raw.githubusercontent.com/someone/ecompass/HEAD/"
+    fetched = []
+
+    def urlopen(url):
+        assert url.startswith(prefix), url
+        fetched.append(url)
+        return io.BytesIO(open(os.path.join(ROOT, url[len(prefix):]), "rb").read())
+
+    monkeypatch.setattr(mip.urllib.request, "urlopen", urlopen)
+    board = _FakeBoard()
+    mip._install_package(board, "github:someone/ecompass", mip._PACKAGE_INDEX, "/lib", None,
+                         False)
+    assert fetched[0] == prefix + "package.json"
+    assert board.files == _expected_files()
+
+
+def test_make_help_lists_every_target_with_one_line():
+    import subprocess
+    out = subprocess.run(["make", "-s", "help"], cwd=ROOT, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    listed = [line.split()[0] for line in out.stdout.splitlines() if line.strip()]
+    src = open(os.path.join(ROOT, "Makefile")).read()
+    phony = re.search(r"^\.PHONY:(.*)$", src, re.M).group(1).split()
+    targets = re.findall(r"^([a-z][a-z0-9-]*):(?!=)", src, re.M)
+    assert sorted(listed) == sorted(set(targets)) == sorted(phony)
+    for line in out.stdout.splitlines():
+        assert len(line.split(None, 1)) == 2, "no description: %r" % line

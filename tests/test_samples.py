@@ -203,12 +203,23 @@ def test_reject_then_clear_then_keep():
         buf.sample(1, out)
 
 
-@pytest.mark.parametrize("p", [(32768, 0, 0), (0, -32769, 0), (0, 0, 1 << 40)])
+@pytest.mark.parametrize("p", [(32768, 0, 0), (0, -32769, 0), (0, 0, -(1 << 31))])
 def test_offer_refuses_values_outside_int16(p):
     buf = SampleBuffer(capacity=4, separation=50)
     with pytest.raises(ValueError):
         buf.offer(*p)
     assert buf.count == 0
+
+
+@pytest.mark.parametrize("p", [(1.5, 0, 0), (0, "7", 0), (0, 0, 1 << 40), (0, None, 0)])
+def test_offer_says_not_int_for_floats_text_and_ints_beyond_32_bits(p):
+    # the int array refuses them before anything changes; Calibrator.add turns the code into
+    # the exception (tests/test_api_inputs.py)
+    buf = SampleBuffer(capacity=4, separation=50)
+    assert buf.offer(*p) == samples.NOT_INT
+    assert buf.count == 0
+    err = samples.bad_sample(*p)
+    assert isinstance(err, ValueError if p[2] == 1 << 40 else TypeError)
 
 
 @pytest.mark.parametrize("cap,sep", [(0, 50), (samples.MAX_CAPACITY + 1, 50), (10, 0),

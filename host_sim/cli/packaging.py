@@ -1,4 +1,10 @@
-"""Print the mip package.json for `mpremote mip install github:ORG/REPO`.
+"""Print the mip package.json: URLs relative to itself, so both installs work with mpremote
+1.29 (mpremote/mip.py resolves a relative URL against the package.json's own location):
+
+    mpremote mip install github:OWNER/REPO          # whoever publishes the repository
+    mpremote mip install ./package.json             # from a clone, files read locally
+
+Each lands in the board's lib folder as lib/firmware/NAME.
 
 `make package-json` writes it; tests/test_packaging.py checks the committed file is current,
 so a module added to firmware/ cannot be left out of the installable package.
