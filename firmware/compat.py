@@ -4,9 +4,11 @@
 
 const(x)          micropython.const on MicroPython (the constant costs no RAM); the identity
                   elsewhere (CPython, or a port built without it).
-ticks_us()        time.ticks_us where the port has it, else None (CPython: the simulator
-                  passes its own clock). ticks_diff(a, b) likewise: the wrapping difference.
-sleep_us(us)      time.sleep_us where it exists, else a no-op (the simulator passes its own).
+ticks_us()        time.ticks_us where the port has it (CircuitPython: from time.monotonic_ns),
+                  else None (CPython: the simulator passes its own clock). ticks_diff(a, b)
+                  likewise: the wrapping difference.
+sleep_us(us)      time.sleep_us where it exists (CircuitPython: a wait on monotonic_ns), else
+                  a no-op (the simulator passes its own).
 wall_clock()      (now_us, diff) for measuring real time: ticks_us / ticks_diff on MicroPython,
                   perf_counter_ns on CPython (used only for stall figures, never for logic).
 kernels()         the fast-path module firmware.fast (viper/native code with the same
@@ -34,6 +36,27 @@ def _no_sleep(us):
 
 
 sleep_us = getattr(time, "sleep_us", None) or _no_sleep
+
+# CircuitPython has no ticks_us/sleep_us: its integer monotonic_ns gives both (it never
+# wraps, so the difference is a plain subtraction; the sleep waits on it, no float needed)
+try:
+    import sys
+    _CIRCUITPY = sys.implementation.name == "circuitpython"
+except (ImportError, AttributeError):
+    _CIRCUITPY = False
+if ticks_us is None and _CIRCUITPY:
+    _mono = time.monotonic_ns
+
+    def ticks_us():
+        return _mono() // 1000
+
+    def ticks_diff(a, b):
+        return a - b
+
+    def sleep_us(us):
+        end = _mono() + us * 1000
+        while _mono() < end:
+            pass
 
 
 def _sub(a, b):

@@ -54,7 +54,7 @@ def test_firmware_reads_as_the_pipeline_one_module_per_job():
     # beside the pipeline: the field model, where the board is (location, quick calibration),
     # the accuracy level, the MotionCal codec, importing a calibration file at boot
     assert set(_modules(FW)) - {"field", "motioncal", "location", "quickcal",
-                                "accuracy", "calimport"} == set(PIPELINE)
+                                "accuracy", "calimport", "busio_i2c"} == set(PIPELINE)
 
 
 def test_no_import_cycles_in_firmware():
