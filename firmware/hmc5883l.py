@@ -10,6 +10,7 @@ HMC5883L(i2c, address=0x1E, *, gain=1, rate=15, averaging=8, delay_us=None, time
   averaging  samples averaged per output: 1, 2, 4, 8
 read() -> (x, y, z) raw counts in the chip's axes (the chip sends X, Z, Y; this reorders);
 read_into(buf) fills buf[0..2] without allocating. set_gain(gain) changes the range.
+config_ok(): the control registers read back (still configured as this driver wrote them?).
 self_test() -> (passed, (x, y, z)): the datasheet's positive-bias test at gain 5.
 .KIND 'hmc5883l', .range_code (GN), .counts_per_gauss.
 
@@ -112,6 +113,16 @@ class HMC5883L(Device):
         with self.guard:
             self._set_gain_code(gn)
             self._settle(self.period_us)
+
+    def config_ok(self):
+        """True when CRA and CRB still hold this driver's configuration (one 2-byte read):
+        False after a brown-out (defaults 0x10, 0x20) or a glitch write. MODE is not read: the
+        datasheet sets LOCK on a MODE read, which would cost a measurement; a chip that fell
+        back to single mode stops raising RDY and the reads time out instead."""
+        b = self._buf
+        with self.guard:
+            self._read_into(_CRA, self._b2)
+        return b[0] == self._cra and b[1] == self.range_code << 5
 
     def read_into(self, buf):
         """Wait for RDY, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
