@@ -112,7 +112,7 @@ _FIELD_TOL_PCT = const(10)    # interference window floor, % (firmware.compass's
 _FIELD_TOL_MAX_PCT = const(50)
 _FIT_SIGMAS = const(3)        # window >= 3 x the fit's RMS radial error
 _US_PER_S = const(1000000)
-_CONFIG_EVERY = const(32)     # samples between configuration read-backs (and after anomalies)
+CONFIG_EVERY = const(1)       # samples between configuration read-backs (docs/faults.md)
 _EVIDENCE_PERIODS = const(4)  # a step counts as at most 4 sample periods of evidence
 _ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
 _ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
@@ -222,6 +222,7 @@ class CompassApp:
         self._tilt_bad = 0
         self._since_cfg = 0
         self._cfg_due = True        # the first good sample reads the configuration back
+        self.verify_every = CONFIG_EVERY
         self._accel_wait_us = 0
         self.accel_retries = 0
         self._ok = False
@@ -490,12 +491,13 @@ class CompassApp:
         h = self.health
         if h.saturated(self.raw):
             return STATUS_OVERFLOW
-        if h.mag_stale(self.raw):
+        if h.mag_stale(self.raw, getattr(self.mag, "suspect", False)):
             return STATUS_STALE
         if self.accel is not None:
             self._tilt_check()
         self._since_cfg += 1
-        if self._cfg_due or self._since_cfg >= _CONFIG_EVERY:
+        if (self._cfg_due or self._since_cfg >= self.verify_every
+                or self.collector is not None):
             return self._verify()
         return STATUS_OK
 
@@ -564,9 +566,9 @@ class CompassApp:
         return False
 
     def _select(self):
-        # a sample reaches the fit only once the chip's configuration is read back unchanged
-        # after it: no sample taken at another gain or range is ever fed
-        if self.collector is not None and self._verify() == STATUS_OK:
+        # while collecting, _vet read the configuration back after every sample: no sample
+        # taken at another gain or range reaches the fit
+        if self.collector is not None:
             self.collector.feed(self.raw)
 
     def _failed(self, st):
@@ -626,8 +628,7 @@ class CompassApp:
             self.reinits += 1
         else:
             self.reinit_failures += 1
-        self.health.reset()
-        self._cfg_due = True
+        self._cfg_due = True  # (the runs of repeats go on: a cured chip ends them itself)
         return ok
 
     # --- background solve -------------------------------------------------------------

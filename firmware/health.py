@@ -21,6 +21,8 @@ What each check catches (docs/faults.md has the fault campaign's figures):
   3000 (sigma 6), 8 at 1090 (HMC5883L default; sigma ~0.8 with 8-sample averaging, a
   repeat of all three ~4 %), each run below 1e-10 on a still board. Below 1000 counts/G
   the noise is under a count and a still board repeats legitimately: 32 repeats there.
+  When the chip's status already hints at old data - QMC5883L DOR (a set was skipped),
+  HMC5883L LOCK still set when RDY rises - one exact repeat is stale data.
 - tilt_ok: the accelerometer must read about 1 g (a hand-held or vehicle compass moves
   slowly; AN4248's tilt formulas assume gravity is the only specific force). Outside
   0.75..1.25 g - free fall, a sensor asleep since a reset (zeros), 0xFF bytes read as
@@ -91,7 +93,9 @@ class Health:
     def _sat(self, v):
         return v == _SAT_HI or v == _SAT_LO or v == self.overflow
 
-    def mag_stale(self, raw):
+    def mag_stale(self, raw, suspect=False):
+        """suspect: the chip's status hinted at old data (QMC5883L DOR, HMC5883L LOCK): then
+        one exact repeat is enough."""
         p = self.last
         if raw[0] != p[0] or raw[1] != p[1] or raw[2] != p[2]:
             p[0] = raw[0]
@@ -101,7 +105,7 @@ class Health:
             return False
         if self.same < _RUN_CAP:
             self.same += 1
-        return self.same >= self.repeats
+        return suspect or self.same >= self.repeats
 
     def _g2(self, a):
         x = a[0] >> _G_SHIFT

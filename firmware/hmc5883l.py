@@ -10,6 +10,7 @@ HMC5883L(i2c, address=0x1E, *, gain=1, rate=15, averaging=8, delay_us=None, time
   averaging  samples averaged per output: 1, 2, 4, 8
 read() -> (x, y, z) raw counts in the chip's axes (the chip sends X, Z, Y; this reorders);
 read_into(buf) fills buf[0..2] without allocating. set_gain(gain) changes the range.
+.suspect: LOCK was set with RDY on the last read (the sample may be an old one).
 config_ok(): the control registers read back (still configured as this driver wrote them?).
 self_test() -> (passed, (x, y, z)): the datasheet's positive-bias test at gain 5.
 .KIND 'hmc5883l', .range_code (GN), .counts_per_gauss.
@@ -39,6 +40,7 @@ _ID_A = const(0x0A)        # 'H', '4', '3' in 0x0A..0x0C
 _MS_NORMAL = const(0x00)   # CRA[1:0] measurement mode (01 would be positive bias)
 _MODE_CONTINUOUS = const(0x00)  # MODE[1:0]; bit7 (high-speed I2C) stays 0
 _RDY = const(0x01)         # STATUS bit0
+_LOCK = const(0x02)        # STATUS bit1: data output locked (a partial read), new sets lost
 _OVERFLOW = const(-4096)   # data register value on ADC overflow (datasheet, data output registers)
 
 _GAINS = (0, 1, 2, 3, 4, 5, 6, 7)                                # GN[7:5] codes
@@ -71,6 +73,7 @@ class HMC5883L(Device):
         self._probe_id()
         self._cra = ma << 5 | _RATE_DO[ri] << 2 | _MS_NORMAL
         self.range_code = gn
+        self.suspect = False  # the last sample's status said its data may be old (LOCK)
         self.configure()
 
     def configure(self):
@@ -130,7 +133,8 @@ class HMC5883L(Device):
             self._sample_into(buf)
 
     def _sample_into(self, buf):
-        self.wait(_STATUS, _RDY)
+        # LOCK still set when RDY rises: the data registers hold an old set (hardware.md)
+        self.suspect = self.wait(_STATUS, _RDY) & _LOCK != 0
         d = self._buf
         self._read_into(_DATA, d)  # all six bytes in one transaction (a partial read sets LOCK)
         x = d[0] << 8 | d[1]       # int16 MSB first, in the order X, Z, Y

@@ -67,6 +67,7 @@ class QMC5883L(Device):
         self.range_code = rng
         self.counts_per_gauss = _COUNTS_PER_GAUSS[rng]
         self.skipped = 0
+        self.suspect = False  # DOR was set on the last read (see health.py: stale data)
 
         chip_id = self._probe_u8(_CHIP_ID, "QMC5883L")
         if chip_id != _ID_VALUE:
@@ -113,6 +114,7 @@ class QMC5883L(Device):
         status = self.wait(_STATUS, _DRDY)
         d = self._buf
         self._read_into(_XOUT_L, d)  # all six bytes in one transaction: releases the data lock
+        self.suspect = status & _DOR != 0  # a set was skipped: this one may be old too
         if status & _DOR:
             self.skipped += 1
         if status & _OVL:

@@ -36,9 +36,9 @@ Behaviour modelled (lazily, on the next transaction):
   MS = 11 (reserved) measures normally.
 - Noise: the datasheet's noise floor is 2 mG (standard deviation of 100 readings, GN = 0,
   no averaging); the model adds 2 mG RMS per axis divided by sqrt(averages), then rounds.
-- Field faults (fault hooks): freeze() - LOCK held for good, as after a partial read that
-  never completes (hardware.md: new measurements are lost) while RDY keeps being raised
-  each period: the data registers repeat the old sample; constant(x, y, z) - every
+- Field faults (fault hooks): freeze() - LOCK held for good (status bit1 stays set), as
+  after a partial read that never completes (hardware.md: new measurements are lost) while
+  RDY keeps being raised each period: the data registers repeat the old sample; constant(x, y, z) - every
   measurement reads these counts; brown_out() - power-on defaults (single mode, no
   measurement running, gain 1); glitch(reg, value) - a write the driver never made (e.g.
   CRB to another gain). A write to MODE (the driver's re-initialisation) clears freeze and
@@ -200,6 +200,7 @@ class HMC5883LSim(RegisterDevice):
             self.lost += 1
             self._advance_gain()
             self.rdy = True
+            self.lock = True
             return
         if self.lock:
             self.lost += 1
@@ -256,7 +257,7 @@ class HMC5883LSim(RegisterDevice):
             self._read_mask |= 1 << idx
             if self._read_mask == 0x3F:
                 self._read_mask = 0
-                self.lock = False
+                self.lock = self.fault == "freeze"   # a frozen lock does not release
                 self.rdy = False
             else:
                 self.lock = True
