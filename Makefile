@@ -10,7 +10,7 @@ BOARD  ?= rp2040
 PORT   ?= /dev/ttyACM0
 BUILD  := build/$(BOARD)
 
-.PHONY: run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm
+.PHONY: run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm soak
 
 venv: $(STAMP)
 
@@ -31,6 +31,10 @@ fuzz: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) -m host_sim bench
+
+# the seeded fault campaign (docs/faults.md): a few minutes
+soak: $(STAMP)
+	$(PY) -m host_sim soak --sessions 600 --seconds 60 --seed 1
 
 bench-smoke: $(STAMP)
 	$(PY) -m host_sim bench --smoke

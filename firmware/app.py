@@ -251,6 +251,7 @@ class CompassApp:
         self._reinit_level = 0
         self._t_last = self._ticks()
         self._dt = 0                # us since the previous step, capped: evidence, not time
+        self._stalled = False
         self._dt_cap = _EVIDENCE_PERIODS * getattr(self.mag, "period_us", _DEFAULT_PERIOD_US)
         self._age_us = 0
         self._interf_us = 0
@@ -404,7 +405,8 @@ class CompassApp:
             self._reinit_level = 0
             if self._check():
                 self._select()
-            if not self.tilt and self.accel is not None and self.status == STATUS_OK:
+            if not self.tilt and (self.accel is not None or self._accel_auto) \
+                    and self.status == STATUS_OK:
                 self._flag(STATUS_TILT)
         c = self.collector
         if c is not None and (c.job is not None or c.due()):
@@ -435,7 +437,8 @@ class CompassApp:
             self._retry_save(dt)
         if self.accel is None and self._accel_auto:
             self._look_for_accel(dt)
-        if dt > self._dt_cap:
+        self._stalled = dt > self._dt_cap
+        if self._stalled:
             dt = self._dt_cap  # a stalled loop saw nothing: time without samples is no evidence
         self._dt = dt
         a = self._age_us + dt
@@ -493,6 +496,8 @@ class CompassApp:
             return STATUS_OVERFLOW
         if h.mag_stale(self.raw, getattr(self.mag, "suspect", False)):
             return STATUS_STALE
+        if self._stalled and getattr(self.mag, "suspect", False):
+            return STATUS_STALE  # after a stall a QMC5883L still holds the set after the last read
         if self.accel is not None:
             self._tilt_check()
         self._since_cfg += 1

@@ -5,10 +5,11 @@ Commands: run (the compass on the simulated board), calibrate (offline calibrati
 log), demo (the end-to-end story, JSON with --json), bench (make bench), quality (the
 calibration quality database, docs/quality.md; CPython only), wmm (write the board's
 field-model table: make wmm), field (the board's field model at given points).
+soak (a seeded fault campaign, make soak; docs/faults.md).
 """
 import sys
 
-_COMMANDS = ("run", "calibrate", "demo", "bench", "quality", "wmm", "field")
+_COMMANDS = ("run", "calibrate", "demo", "bench", "quality", "wmm", "field", "soak")
 
 
 def main(argv):
