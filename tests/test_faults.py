@@ -195,8 +195,8 @@ def test_a_stalled_loop_under_interference_does_not_make_the_calibration_stale(g
     b.world.add_magnet((0.0, 0.0, 40.0), t, t + 1000, ramp_s=0.0)
     for _ in range(10):                # 10 steps, each after the loop blocked for 20 s
         b.clock.advance(20000000)
-        app.step()
-        assert app.status == "interference"
+        app.step()  # the first set after a stall is old (DOR): stale data, or interference
+        assert app.status in ("interference", "stale data")
     assert not app.relearning and app.calibration == good_qmc.cal
     # the same 200 s with samples flowing is evidence: the calibration goes stale
     W.run_until(app, b, b.clock.now_us / 1e6 + 35)
