@@ -10,7 +10,7 @@ BOARD  ?= rp2040
 PORT   ?= /dev/ttyACM0
 BUILD  := build/$(BOARD)
 
-.PHONY: help run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm wasm test-arm web
+.PHONY: help run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm wasm test-arm web soak
 
 # make help: every target with one line (the `##` comment after its name)
 help:  ## list the targets
@@ -71,6 +71,9 @@ fuzz: $(STAMP)  ## hypothesis properties with many more examples
 
 bench: $(STAMP)  ## speed, memory, accuracy; writes docs/benchmarks.md
 	$(PY) -m host_sim bench
+
+soak: $(STAMP)  ## the seeded fault campaign (docs/faults.md): a few minutes
+	$(PY) -m host_sim soak --sessions 600 --seconds 60 --seed 1
 
 bench-smoke: $(STAMP)  ## a quick run of the benchmarks
 	$(PY) -m host_sim bench --smoke

@@ -89,6 +89,7 @@ from firmware import compass
 from firmware.compass import FLAG_NO_GRAVITY, Compass
 from firmware.compat import const, kernels, ticks_diff, ticks_us, sleep_us, wall_clock
 from firmware.errors import SensorNotFound, SensorOverflow, StoreError, DataReadyTimeout
+from firmware.health import Health
 from firmware.trig import cdeg_to_kang, kang_to_str
 
 STATUS_OK = "ok"
@@ -100,6 +101,11 @@ STATUS_NO_FIELD = "no_field"          # corrected field (0, 0, 0): no heading
 STATUS_NO_GRAVITY = "no_gravity"      # accelerometer (0, 0, 0): asleep after a reset, or free fall
 STATUS_STARTING = "starting"          # before the first step
 STATUS_CHANGED = "hardware changed?"  # a new fit jumped outside its history's limits: pending
+# field faults (firmware/health.py, docs/faults.md): user words, never "ok" while they last
+STATUS_STALE = "stale data"           # the magnetometer repeats its last sample: no new data
+STATUS_RESET = "sensor reset"         # its control registers no longer hold our configuration
+STATUS_TILT = "tilt unavailable"      # the accelerometer is implausible: level-board heading
+STATUS_INTERNAL = "internal error"    # step() caught an unexpected exception (e.g. MemoryError)
 
 LOAD_BAD_PAYLOAD = "bad_payload"      # .load_reason: the record is intact, its payload is not
 LOAD_IO_ERROR = "io_error"            # .load_reason: the filesystem raised OSError
@@ -122,11 +128,33 @@ _FIELD_TOL_PCT = const(10)    # interference window floor, % (firmware.compass's
 _FIELD_TOL_MAX_PCT = const(50)
 _FIT_SIGMAS = const(3)        # window >= 3 x the fit's RMS radial error
 _US_PER_S = const(1000000)
+CONFIG_EVERY = const(1)       # samples between configuration read-backs (docs/faults.md)
+_EVIDENCE_PERIODS = const(4)  # a step counts as at most 4 sample periods of evidence
+_ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
+_ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
+_HMC_OVERFLOW = const(-4096)
 _DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
 REPORT_EVERY = const(25)      # run(): steps between reports (0.5 s at 50 Hz)
 
 
 _READ_ERRORS = (OSError, SensorOverflow)  # a module constant: a literal tuple is built per call
+
+
+class _StepGuard:
+    """`with` block around a whole step: any exception (MemoryError included) is kept and
+    becomes the status "internal error"; step() never raises. Same frame rule as below."""
+
+    def __init__(self):
+        self.error = None
+
+    def __enter__(self):
+        self.error = None
+
+    def __exit__(self, kind, value, tb):
+        if value is None or not isinstance(value, Exception):
+            return False
+        self.error = value
+        return True
 
 
 class _ReadGuard:
@@ -204,6 +232,21 @@ class CompassApp:
         self._acc = array("h", (0, 0, 0))
         self.gravity = array("h", (0, 0, 0))   # body frame, AN4248 sign (+1 g down, level)
         self._guard = _ReadGuard()
+        self._step_guard = _StepGuard()
+        self._accel_auto = accel is None    # detected: look again later when absent
+        self.health = Health(self.mag.counts_per_gauss,
+                             _HMC_OVERFLOW if self.mag.KIND == "hmc5883l" else -32768,
+                             self.accel.counts_per_g if self.accel is not None else 16384)
+        self._mag_cfg = getattr(self.mag, "config_ok", None)
+        self.tilt = self.accel is not None  # False: the level formula (no or implausible accel)
+        self._tilt_bad = 0
+        self._since_cfg = 0
+        self._cfg_due = True        # the first good sample reads the configuration back
+        self.verify_every = CONFIG_EVERY
+        self._accel_wait_us = 0
+        self.accel_retries = 0
+        self._ok = False
+        self._cfg_ok = True
         self.heading_kang = -1
         self.status = STATUS_STARTING
         self.errors = {}
@@ -233,7 +276,9 @@ class CompassApp:
         self._fails = 0             # failed reads in a row
         self._reinit_level = 0
         self._t_last = self._ticks()
-        self._dt = 0                # us since the previous step
+        self._dt = 0                # us since the previous step, capped: evidence, not time
+        self._stalled = False
+        self._dt_cap = _EVIDENCE_PERIODS * getattr(self.mag, "period_us", _DEFAULT_PERIOD_US)
         self._age_us = 0
         self._interf_us = 0
         self._clean_us = 0
@@ -459,28 +504,53 @@ class CompassApp:
 
     # --- the loop ---------------------------------------------------------------------
     def step(self):
-        """One sample and a bounded slice of background work; True if a heading came out."""
+        """One sample and a bounded slice of background work; True if a heading came out.
+        Never raises: an unexpected exception becomes the status "internal error"."""
         self.steps = (self.steps + 1) & 0x3FFFFFFF  # a small int for years at 200 Hz
+        g = self._step_guard
+        with g:
+            self._step()
+        if g.error is not None:
+            self._internal(g.error)
+        return self._ok
+
+    def _step(self):
+        self._ok = False
         self._clock()
         st = self._read()
+        if st == STATUS_OK:
+            st = self._vet()
         if st == STATUS_OK:
             st = self._heading()
         if st != STATUS_OK:
             self._failed(st)
-            ok = False
         else:
-            ok = True
+            self._ok = True
             self._fails = 0
             self._reinit_level = 0
             if self._check():
                 self._select()
+            if not self.tilt and (self.accel is not None or self._accel_auto) \
+                    and self.status == STATUS_OK:
+                self._flag(STATUS_TILT)
         c = self.collector
         if c is not None and (c.job is not None or c.due()):
             self._solve()
         if self.pending is not None and (self.status == STATUS_OK
                                          or self.status == STATUS_INTERFERENCE):
             self.status = STATUS_CHANGED  # the likely cause of the interference, too
-        return ok
+
+    def _internal(self, e):
+        self._ok = False
+        self.last_error = e
+        self._flag(STATUS_INTERNAL)
+        c = self.collector
+        if c is not None and c.job is not None:
+            c.job = None  # a solve that raised is abandoned (the next one starts afresh)
+
+    def _flag(self, st):
+        self.status = st
+        self.errors[st] = self.errors.get(st, 0) + 1
 
     def _clock(self):
         now = self._ticks()
@@ -491,6 +561,13 @@ class CompassApp:
         self._t_last = now
         if dt < 0:
             dt = 0
+        if self._unsaved:
+            self._retry_save(dt)
+        if self.accel is None and self._accel_auto:
+            self._look_for_accel(dt)
+        self._stalled = dt > self._dt_cap
+        if self._stalled:
+            dt = self._dt_cap  # a stalled loop saw nothing: time without samples is no evidence
         self._dt = dt
         a = self._age_us + dt
         if a >= _US_PER_S:
@@ -499,8 +576,6 @@ class CompassApp:
             self._age_us = a
         if self.collector is not None:
             self.collector.tick(dt)
-        if self._unsaved:
-            self._retry_save(dt)
 
     def _age(self, a):
         s = a // _US_PER_S
@@ -514,6 +589,22 @@ class CompassApp:
             self._save()
             self._save_wait_us = 0
 
+    def _look_for_accel(self, dt):
+        self._accel_wait_us += dt
+        if self._accel_wait_us < _ACCEL_RETRY_US:
+            return
+        self._accel_wait_us = 0
+        self.accel_retries += 1
+        try:
+            from firmware import detect
+            acc = detect.detect_accel(self.i2c)
+        except OSError:
+            acc = None
+        if acc is not None:
+            self.accel = acc
+            self.health.set_accel(acc.counts_per_g)
+            self.tilt = False  # until its first plausible sample
+
     def _read(self):
         g = self._guard
         with g:
@@ -525,10 +616,63 @@ class CompassApp:
         self.last_error = g.error
         return _status_of(g.error)
 
+    def _vet(self):
+        """The sample's plausibility (firmware/health.py) and, every _CONFIG_EVERY samples or
+        after an anomaly, the chip's configuration read back."""
+        h = self.health
+        if h.saturated(self.raw):
+            return STATUS_OVERFLOW
+        if h.mag_stale(self.raw, getattr(self.mag, "suspect", False)):
+            return STATUS_STALE
+        if self._stalled and getattr(self.mag, "suspect", False):
+            return STATUS_STALE  # after a stall a QMC5883L still holds the set after the last read
+        if self.accel is not None:
+            self._tilt_check()
+        self._since_cfg += 1
+        if (self._cfg_due or self._since_cfg >= self.verify_every
+                or self.collector is not None):
+            return self._verify()
+        return STATUS_OK
+
+    def _verify(self):
+        self._since_cfg = 0
+        self._cfg_due = False
+        if self._mag_cfg is None:
+            return STATUS_OK
+        self._read_config()
+        e = self._guard.error
+        if e is not None:
+            self.last_error = e
+            return _status_of(e)
+        return STATUS_OK if self._cfg_ok else STATUS_RESET
+
+    def _read_config(self):
+        self._cfg_ok = True
+        with self._guard:
+            self._cfg_ok = self._mag_cfg()
+
+    def _tilt_check(self):
+        if self.health.tilt_ok(self._acc):
+            self.tilt = True
+            self._tilt_bad = 0
+            return
+        self.tilt = False
+        self._tilt_bad += 1
+        if self._tilt_bad % _ACCEL_REINIT_EVERY == 1:
+            self._wake_accel()
+
+    def _wake_accel(self):
+        # an MPU6050 asleep since a reset or a glitch write: its configure() wakes it
+        g = self._guard
+        with g:
+            if not self.accel.config_ok():
+                self.accel.configure()
+                self.reinits += 1
+
     def _heading(self):
         self._correct(self.calibration.k, self.raw, self._cor)
         self._apply(self._mag_map.m, self._cor, self.body)
-        if self.accel is None:
+        if self.accel is None or not self.tilt:
             h = self.compass.update(self.body)
         else:
             self._apply(self._acc_map.m, self._acc, self.gravity)
@@ -544,8 +688,8 @@ class CompassApp:
             self.status = STATUS_OK
             self._clean()
             return True
-        self.status = STATUS_INTERFERENCE
-        self.errors[STATUS_INTERFERENCE] = self.errors.get(STATUS_INTERFERENCE, 0) + 1
+        self._flag(STATUS_INTERFERENCE)
+        self._cfg_due = True
         self._clean_us = 0
         if self.relearning:
             return True  # the calibration in force is the one that does not fit
@@ -555,14 +699,18 @@ class CompassApp:
         return False
 
     def _select(self):
+        # while collecting, _vet read the configuration back after every sample: no sample
+        # taken at another gain or range reaches the fit
         if self.collector is not None:
             self.collector.feed(self.raw)
 
     def _failed(self, st):
-        self.status = st
-        self.errors[st] = self.errors.get(st, 0) + 1
+        self._flag(st)
+        self._cfg_due = True  # any anomaly: read the configuration back at the next sample
         if st == STATUS_OVERFLOW:
             return  # the chip answered; re-initialising would not move the magnet
+        if st == STATUS_RESET:
+            self._fails = self.reinit_after << self._reinit_level  # re-initialise now
         if st == STATUS_BUS_ERROR:
             self._delay(_ERROR_BACKOFF_US)
         self._fails += 1
@@ -613,6 +761,7 @@ class CompassApp:
             self.reinits += 1
         else:
             self.reinit_failures += 1
+        self._cfg_due = True  # (the runs of repeats go on: a cured chip ends them itself)
         return ok
 
     # --- background solve -------------------------------------------------------------

@@ -10,6 +10,8 @@ HMC5883L(i2c, address=0x1E, *, gain=1, rate=15, averaging=8, delay_us=None, time
   averaging  samples averaged per output: 1, 2, 4, 8
 read() -> (x, y, z) raw counts in the chip's axes (the chip sends X, Z, Y; this reorders);
 read_into(buf) fills buf[0..2] without allocating. set_gain(gain) changes the range.
+.suspect: LOCK was set with RDY on the last read (the sample may be an old one).
+config_ok(): the control registers read back (still configured as this driver wrote them?).
 self_test() -> (passed, (x, y, z)): the datasheet's positive-bias test at gain 5.
 .KIND 'hmc5883l', .range_code (GN), .counts_per_gauss.
 
@@ -38,6 +40,7 @@ _ID_A = const(0x0A)        # 'H', '4', '3' in 0x0A..0x0C
 _MS_NORMAL = const(0x00)   # CRA[1:0] measurement mode (01 would be positive bias)
 _MODE_CONTINUOUS = const(0x00)  # MODE[1:0]; bit7 (high-speed I2C) stays 0
 _RDY = const(0x01)         # STATUS bit0
+_LOCK = const(0x02)        # STATUS bit1: data output locked (a partial read), new sets lost
 _OVERFLOW = const(-4096)   # data register value on ADC overflow (datasheet, data output registers)
 
 _GAINS = (0, 1, 2, 3, 4, 5, 6, 7)                                # GN[7:5] codes
@@ -70,6 +73,7 @@ class HMC5883L(Device):
         self._probe_id()
         self._cra = ma << 5 | _RATE_DO[ri] << 2 | _MS_NORMAL
         self.range_code = gn
+        self.suspect = False  # the last sample's status said its data may be old (LOCK)
         self.configure()
 
     def configure(self):
@@ -113,13 +117,24 @@ class HMC5883L(Device):
             self._set_gain_code(gn)
             self._settle(self.period_us)
 
+    def config_ok(self):
+        """True when CRA and CRB still hold this driver's configuration (one 2-byte read):
+        False after a brown-out (defaults 0x10, 0x20) or a glitch write. MODE is not read: the
+        datasheet sets LOCK on a MODE read, which would cost a measurement; a chip that fell
+        back to single mode stops raising RDY and the reads time out instead."""
+        b = self._buf
+        with self.guard:
+            self._read_into(_CRA, self._b2)
+        return b[0] == self._cra and b[1] == self.range_code << 5
+
     def read_into(self, buf):
         """Wait for RDY, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
         with self.guard:
             self._sample_into(buf)
 
     def _sample_into(self, buf):
-        self.wait(_STATUS, _RDY)
+        # LOCK still set when RDY rises: the data registers hold an old set (hardware.md)
+        self.suspect = self.wait(_STATUS, _RDY) & _LOCK != 0
         d = self._buf
         self._read_into(_DATA, d)  # all six bytes in one transaction (a partial read sets LOCK)
         x = d[0] << 8 | d[1]       # int16 MSB first, in the order X, Z, Y

@@ -103,6 +103,8 @@ class Device:
         self.register = None            # the register of the transfer under way (for errors)
         self._buf = bytearray(6)        # the one scratch buffer: data block, status, config byte
         self._b1 = memoryview(self._buf)[0:1]
+        self._b2 = memoryview(self._buf)[0:2]   # config_ok() read-backs of 2 or 3 registers
+        self._b3 = memoryview(self._buf)[0:3]
         self.guard = BusGuard(self)
         self._set_timing(period_us, delay_us, timeout_us)
 

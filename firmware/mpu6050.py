@@ -11,6 +11,7 @@ MPU6050(i2c, address=0x68, *, accel_range=2, dlpf=21)  accel_range in g: 2, 4, 8
     of ~8 ms, nothing for a hand-held compass.
 read_accel() -> (x, y, z) raw counts in the chip's axes (specific force: +1 g on an axis that
 points up); read_accel_into(buf) fills buf[0..2] without allocating. .counts_per_g.
+config_ok() reads PWR_MGMT_1 and ACCEL_CONFIG back (awake, this range?).
 enable_bypass() connects the auxiliary I2C bus to the main one (GY-87/GY-86: the magnetometer
 sits there). The constructor wakes the chip and sets the range; it leaves the bypass alone.
 Errors: SensorNotFound (WHO_AM_I is not 0x68), BusError.
@@ -65,6 +66,14 @@ class MPU6050(Device):
             self._write_u8(_PWR_MGMT_1, _WAKE_PLL_X)
             self._write_u8(_ACCEL_CONFIG, self._afs << 3)
             self._write_u8(_CONFIG, self._dlpf_cfg)
+
+    def config_ok(self):
+        """True when the chip is awake with this driver's range (PWR_MGMT_1, ACCEL_CONFIG read
+        back): False after a reset (power-on value 0x40, asleep) or a glitch write."""
+        with self.guard:
+            if self._read_u8(_PWR_MGMT_1) != _WAKE_PLL_X:
+                return False
+            return self._read_u8(_ACCEL_CONFIG) == self._afs << 3
 
     def enable_bypass(self):
         """Clear I2C_MST_EN, set I2C_BYPASS_EN: the aux-bus chips appear on the main bus."""

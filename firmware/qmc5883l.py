@@ -10,7 +10,7 @@ QMC5883L(i2c, address=0x0D, *, range=2, odr=50, osr=512, delay_us=None, timeout_
   delay_us, timeout_us: the bounded data-ready wait (see firmware.i2cdevice)
 read() -> (x, y, z) raw counts in the chip's axes; read_into(buf) fills buf[0..2] without
 allocating (a list or array('h'/'i')). .KIND 'qmc5883l', .range_code (RNG field, 0/1),
-.counts_per_gauss, .skipped (reads that found DOR set: at least one sample set was lost each).
+.counts_per_gauss, config_ok() (CTRL1 read back: still configured?), .skipped (reads that found DOR set: at least one sample set was lost each).
 
 Identification: the ID register 0x0D reads 0xFF, which is also what a bus with nothing driving
 SDA returns, so 0xFF alone proves little. The probe also soft-resets the chip and requires CTRL1
@@ -67,6 +67,7 @@ class QMC5883L(Device):
         self.range_code = rng
         self.counts_per_gauss = _COUNTS_PER_GAUSS[rng]
         self.skipped = 0
+        self.suspect = False  # DOR was set on the last read (see health.py: stale data)
 
         chip_id = self._probe_u8(_CHIP_ID, "QMC5883L")
         if chip_id != _ID_VALUE:
@@ -98,6 +99,12 @@ class QMC5883L(Device):
             raise SensorNotFound("no QMC5883L at 0x%02X: CTRL1 written 0x%02X reads back 0x%02X"
                                  % (address, cfg, back), address=address)
 
+    def config_ok(self):
+        """True when CTRL1 still holds this driver's configuration (one byte read): False after
+        a brown-out or soft reset (standby, CTRL1 0) or a glitch write (another range)."""
+        with self.guard:
+            return self._read_u8(_CTRL1) == self._ctrl1
+
     def read_into(self, buf):
         """Wait for DRDY, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
         with self.guard:
@@ -107,6 +114,7 @@ class QMC5883L(Device):
         status = self.wait(_STATUS, _DRDY)
         d = self._buf
         self._read_into(_XOUT_L, d)  # all six bytes in one transaction: releases the data lock
+        self.suspect = status & _DOR != 0  # a set was skipped: this one may be old too
         if status & _DOR:
             self.skipped += 1
         if status & _OVL:

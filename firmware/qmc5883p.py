@@ -90,6 +90,12 @@ class QMC5883P(Device):
                                      "reads back 0x%02X" % (address, reg, want, got),
                                      address=address)
 
+    def config_ok(self):
+        """True when CTRL1 and CTRL2 still hold this driver's configuration (a 2-byte read)."""
+        with self.guard:
+            self._read_into(_CTRL1, self._b2)
+            return self._buf[0] == self._ctrl1 and self._buf[1] == self._ctrl2
+
     def read_into(self, buf):
         """Wait for DRDY, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
         with self.guard:

@@ -5,11 +5,11 @@ Commands: run (the compass on the simulated board), calibrate (offline calibrati
 log), demo (the end-to-end story, JSON with --json), bench (make bench), quality (the
 calibration quality database, docs/quality.md; CPython only), wmm (write the board's
 field-model table: make wmm), field (the board's field model at given points), web (serve the browser
-calibrator, docs/web.md).
+calibrator, docs/web.md), soak (a seeded fault campaign, make soak; docs/faults.md).
 """
 import sys
 
-_COMMANDS = ("run", "calibrate", "demo", "bench", "quality", "wmm", "field", "web")
+_COMMANDS = ("run", "calibrate", "demo", "bench", "quality", "wmm", "field", "web", "soak")
 
 
 def main(argv):

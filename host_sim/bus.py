@@ -20,6 +20,8 @@ readfrom_into/writeto/writevto; `.transactions` counts them (faulted ones includ
   one) raise OSError(errno) without reaching the device (an address NACK).
 - inject_eio(after=N, count=K): the same with OSError(5) (EIO), a burst of K.
 - kill(addr): the device stops answering (OSError(19), absent from scan) until revive(addr).
+- stuck_high(addr, on=True): the device's data line reads all ones (SDA held high by a
+  browned-out slave or a broken pull-down): transactions succeed, every byte read is 0xFF.
 An address with no device, or whose gate is closed, raises OSError(19) (ENODEV), as
 MicroPython's machine.I2C does on an address NACK. The errors carry the number in both
 e.errno and e.args[0] on both interpreters.
@@ -137,6 +139,7 @@ class SimI2C:
         self._devices = {}
         self._gates = {}
         self._dead = {}
+        self._high = {}    # addresses whose reads return 0xFF (stuck_high)
         self._faults = []  # [first_index, last_index_exclusive, errno]
         self._bit_rem = 0
 
@@ -187,6 +190,17 @@ class SimI2C:
 
     def revive(self, addr):
         self._dead.pop(addr, None)
+
+    def stuck_high(self, addr, on=True):
+        if on:
+            self._high[addr] = True
+        else:
+            self._high.pop(addr, None)
+
+    def _ff(self, addr, buf):
+        if self._high and addr in self._high:
+            for i in range(len(buf)):
+                buf[i] = 0xFF
 
     # --- time -------------------------------------------------------------------------
     def sleep_us(self, us):
@@ -255,6 +269,8 @@ class SimI2C:
         mem = self._mem_bytes(memaddr, addrsize)
         dev.write(mem)
         data = dev.read(nbytes)
+        if self._high and addr in self._high:
+            data = b"\xff" * nbytes
         self._charge(2 + len(mem) + nbytes, 3)
         self._log("rm", addr, memaddr, data)
         return data
@@ -268,6 +284,7 @@ class SimI2C:
         dev = self._open(addr)
         dev.select(memaddr)
         dev.read_into(buf)
+        self._ff(addr, buf)
         self._charge(3 + len(buf), 3)
 
     def writeto_mem(self, addr, memaddr, buf, *, addrsize=8):

@@ -36,6 +36,13 @@ Behaviour modelled (lazily, on the next transaction):
   MS = 11 (reserved) measures normally.
 - Noise: the datasheet's noise floor is 2 mG (standard deviation of 100 readings, GN = 0,
   no averaging); the model adds 2 mG RMS per axis divided by sqrt(averages), then rounds.
+- Field faults (fault hooks): freeze() - LOCK held for good (status bit1 stays set), as
+  after a partial read that never completes (hardware.md: new measurements are lost) while
+  RDY keeps being raised each period: the data registers repeat the old sample; constant(x, y, z) - every
+  measurement reads these counts; brown_out() - power-on defaults (single mode, no
+  measurement running, gain 1); glitch(reg, value) - a write the driver never made (e.g.
+  CRB to another gain). A write to MODE (the driver's re-initialisation) clears freeze and
+  constant unless sticky=True.
 - inject_raw(x, y, z): forces the raw counts of the next measurement (queued, one per call);
   counts outside -2048...2047 read -4096.
 """
@@ -96,6 +103,9 @@ class HMC5883LSim(RegisterDevice):
         self.injected = []
         self.measurements = 0   # sets placed in the output registers
         self.lost = 0           # sets dropped because LOCK held
+        self.fault = None       # None, 'freeze' or 'constant'
+        self.fault_value = (0, 0, 0)
+        self.sticky = False
         self.power_on()
 
     def power_on(self):
@@ -136,6 +146,28 @@ class HMC5883LSim(RegisterDevice):
             self._t0 = self.now_us
             self._k = 0
 
+    # --- fault hooks (see the module docstring) ---------------------------------------
+    def freeze(self, sticky=False):
+        self.fault = "freeze"
+        self.sticky = sticky
+
+    def constant(self, x=0, y=0, z=0, sticky=False):
+        self.fault = "constant"
+        self.fault_value = (int(x), int(y), int(z))
+        self.sticky = sticky
+
+    def clear_fault(self):
+        self.fault = None
+        self.sticky = False
+
+    def brown_out(self):
+        self.power_on()
+        if not self.sticky:
+            self.fault = None
+
+    def glitch(self, reg, value):
+        self.write_reg(reg, value)
+
     # --- lazy time --------------------------------------------------------------------
     def update(self, now_us):
         if self._single_due is not None and now_us >= self._single_due:
@@ -164,6 +196,12 @@ class HMC5883LSim(RegisterDevice):
         self.gain_code = self._gain_next
 
     def _deliver(self, t_us):
+        if self.fault == "freeze":
+            self.lost += 1
+            self._advance_gain()
+            self.rdy = True
+            self.lock = True
+            return
         if self.lock:
             self.lost += 1
             self._advance_gain()
@@ -179,6 +217,8 @@ class HMC5883LSim(RegisterDevice):
     def _measure(self, t_us):
         cpg = _COUNTS_PER_G[self.gain_code]
         self._advance_gain()   # the first measurement after a gain change used the old gain
+        if self.fault == "constant":
+            return self.fault_value
         if self.injected:
             return self.injected.pop(0)
         ms = self.cra & 0x03
@@ -217,7 +257,7 @@ class HMC5883LSim(RegisterDevice):
             self._read_mask |= 1 << idx
             if self._read_mask == 0x3F:
                 self._read_mask = 0
-                self.lock = False
+                self.lock = self.fault == "freeze"   # a frozen lock does not release
                 self.rdy = False
             else:
                 self.lock = True
@@ -245,6 +285,8 @@ class HMC5883LSim(RegisterDevice):
             self._unlock()
             self._restart_continuous()
         elif reg == _REG_MODE:
+            if not self.sticky:
+                self.fault = None
             self.mode_reg = value & 0x83
             self._unlock()
             md = value & 0x03

@@ -30,6 +30,12 @@ Behaviour modelled (lazily, on the next transaction):
 - Temperature: TEMP_OUT = (T - 36.53) * 340 (register map: T = TEMP_OUT / 340 + 36.53).
 - Gyroscope: the board's rotation rate is not modelled; the gyro registers read noise
   around 0 (0.05 deg/s RMS, datasheet total RMS noise) at 131/65.5/32.8/16.4 counts per deg/s.
+- Field faults (fault hooks): doze() - SLEEP set behind the driver's back (a glitch write
+  or a partial reset): the outputs freeze at their last values, a frozen tilt; free_fall =
+  True - the board falls, the accelerometer reads ~0 g (noise only); brown_out() -
+  power-on defaults (asleep, data 0, bypass closed: a GY-87's magnetometer disappears);
+  glitch(reg, value) - a write the driver never made. Reads of 0xFF bytes are a bus fault
+  (SimI2C.stuck_high); absence is SimI2C.kill/revive.
 - GY-87 bypass: bypass_open() is True when USER_CTRL.I2C_MST_EN = 0 and
   INT_PIN_CFG.I2C_BYPASS_EN = 1 (both 0 at power-on: the auxiliary chip is hidden). The
   MPU's own I2C master (slave 0-4, EXT_SENS_DATA) is not modelled; the FIFO reads 0.
@@ -100,6 +106,7 @@ class MPU6050Sim(RegisterDevice):
         self.noise = noise
         self.bias_g = (float(bias_g[0]), float(bias_g[1]), float(bias_g[2]))
         self.samples = 0
+        self.free_fall = False
         self.power_on()
 
     def power_on(self):
@@ -130,6 +137,16 @@ class MPU6050Sim(RegisterDevice):
         dlpf = self.regs[_REG_CONFIG] & 0x07
         return 8000 if dlpf == 0 or dlpf == 7 else 1000
 
+    # --- fault hooks (see the module docstring) ---------------------------------------
+    def doze(self):
+        self.write_reg(_REG_PWR_MGMT_1, self.regs[_REG_PWR_MGMT_1] | _PWR_SLEEP)
+
+    def brown_out(self):
+        self.power_on()
+
+    def glitch(self, reg, value):
+        self.write_reg(reg, value)
+
     # --- lazy time --------------------------------------------------------------------
     def update(self, now_us):
         if self._t0 is None:
@@ -149,7 +166,10 @@ class MPU6050Sim(RegisterDevice):
 
     def _sample(self, t_us):
         cpg = self.counts_per_g()
-        if self.world is None:
+        if self.free_fall:
+            f = (0.0, 0.0, 0.0)
+            tc = 25.0
+        elif self.world is None:
             f = (0.0, 0.0, 1.0)
             tc = 25.0
         else:

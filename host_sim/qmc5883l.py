@@ -31,6 +31,14 @@ Behaviour modelled (lazily: nothing is computed until a transaction reaches the 
   model adds Gaussian noise of 2 mG RMS per axis at OSR 512 (24 counts at +-2 G), scaled by
   sqrt(512 / OSR) for the smaller oversampling ratios (a modelling assumption: averaging
   fewer conversions), then rounds to the nearest count and saturates.
+- Field faults (fault hooks; a reset cures them unless sticky=True):
+  freeze(): the output registers stop taking new sets while conversions go on: each
+    completed set raises DRDY and DOR (data-skip semantics: the set was skipped) and the
+    registers keep the old sample - stale data that looks fresh to a driver polling DRDY.
+  constant(x, y, z): every latched set carries these counts (e.g. zeros after a bad reset).
+  brown_out(): the supply dipped: power-on defaults (standby, CTRL 0, data 0, DRDY 0).
+  glitch(reg, value): a write the driver never made (a bus glitch), e.g. RNG flipped to +-8 G.
+  SOFT_RST (and brown_out) clear freeze/constant unless they were made sticky.
 - inject_raw(x, y, z): forces the raw counts of the next set latched into the registers
   (queued, one set per call); values outside int16 saturate and set OVL like real data.
 """
@@ -100,6 +108,9 @@ class QMC5883LSim(RegisterDevice):
         self.injected = []
         self.latched = 0   # sets that reached the output registers
         self.skipped = 0   # sets lost to the data lock (each one sets DOR)
+        self.fault = None  # None, 'freeze' or 'constant' (fault hooks below)
+        self.fault_value = (0, 0, 0)
+        self.sticky = False
         self.power_on()
 
     # --- state ------------------------------------------------------------------------
@@ -146,6 +157,31 @@ class QMC5883LSim(RegisterDevice):
         else:
             self.injected.append((int(x), int(y), int(z)))
 
+    # --- fault hooks (see the module docstring) ---------------------------------------
+    def freeze(self, sticky=False):
+        self.fault = "freeze"
+        self.sticky = sticky
+
+    def constant(self, x=0, y=0, z=0, sticky=False):
+        self.fault = "constant"
+        self.fault_value = (int(x), int(y), int(z))
+        self.sticky = sticky
+
+    def clear_fault(self):
+        self.fault = None
+        self.sticky = False
+
+    def _reset_cures(self):
+        if not self.sticky:
+            self.fault = None
+
+    def brown_out(self):
+        self.power_on()
+        self._reset_cures()
+
+    def glitch(self, reg, value):
+        self.write_reg(reg, value)
+
     # --- lazy time --------------------------------------------------------------------
     def update(self, now_us):
         if self._t0 is None:
@@ -157,9 +193,11 @@ class QMC5883LSim(RegisterDevice):
         n = k - self._k
         first = self._k + 1
         self._k = k
-        if self.locked:
+        if self.locked or self.fault == "freeze":
             self.skipped += n
             self.dor = True
+            if self.fault == "freeze":
+                self.drdy = True
             return
         self._place(self._measure(self._t0 + first * period))
         if n > 1:
@@ -167,6 +205,8 @@ class QMC5883LSim(RegisterDevice):
             self.dor = True
 
     def _measure(self, t_us):
+        if self.fault == "constant":
+            return self.fault_value
         if self.injected:
             return self.injected.pop(0)
         cpg = self.counts_per_gauss()
@@ -234,6 +274,7 @@ class QMC5883LSim(RegisterDevice):
         elif reg == _REG_CTRL2:
             if value & _CTRL2_SOFT_RST:
                 self.power_on()
+                self._reset_cures()
             else:
                 self.ctrl2 = value & (_CTRL2_INT_ENB | _CTRL2_ROL_PNT)
         elif reg == _REG_SETRESET:

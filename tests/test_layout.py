@@ -13,7 +13,8 @@ ROOT = mp.ROOT
 FW = os.path.join(ROOT, "firmware")
 PIPELINE = ["compat", "errors", "fixedpoint", "i2cdevice", "detect", "qmc5883l", "hmc5883l",
             "qmc5883p", "mpu6050", "axes", "samples", "accum", "solve", "calibration",
-            "acceptance", "calibrator", "kang_tables", "trig", "compass", "store", "history", "app", "fast"]
+            "acceptance", "calibrator", "kang_tables", "trig", "compass", "store", "history",
+            "health", "app", "fast"]
 CALIBRATION_MACHINERY = {"firmware.calibrator", "firmware.solve", "firmware.accum",
                          "firmware.samples", "firmware.acceptance"}
 

@@ -7,7 +7,9 @@ sys.path.insert(0, "boards/host")
 import board  # noqa: E402
 
 
-class StopRun(Exception):
+class StopRun(BaseException):
+    # not an Exception: CompassApp.step() turns every Exception into the status "internal
+    # error" and goes on, but lets BaseException (KeyboardInterrupt, this) end the loop
     pass
 
 

@@ -1,0 +1,132 @@
+"""Is this sample believable? Per-sample plausibility checks of the sensors' outputs, for the app.
+
+    from firmware.health import Health
+    h = Health(counts_per_gauss=12000, overflow=-32768, counts_per_g=16384)
+    h.saturated(raw)   # True: an axis at the output limit: not a measurement
+    h.mag_stale(raw)   # True: the same sample again, more times than noise allows
+    h.tilt_ok(acc)     # False: |g| outside 0.75..1.25 g, or the same reading again
+
+What each check catches (docs/faults.md has the fault campaign's figures):
+- saturated: an axis at +32767 / -32768 (QMC5883L, QMC5883P saturate there, hardware.md) or
+  at the HMC5883L's ADC overflow code -4096. Such a value is a bound, not the field: it must
+  neither give a heading nor reach a calibration fit.
+- mag_stale: stale output registers that still look fresh (a QMC5883L whose data registers
+  stopped taking new sets while DRDY/DOR keep rising, an HMC5883L held by its data-output
+  LOCK, a chip returning zeros or any constant). A live magnetometer's noise - about 2 mG
+  RMS per axis (QMC5883L datasheet 2 mG resolution; HMC5883L noise floor 2 mG) - makes an
+  exact repeat of all three axes rare, so a run of repeats is the chip's fault, not the
+  board holding still. The run that counts as stale depends on the noise in counts,
+  sigma ~ counts_per_gauss / 500: a repeat of all three axes has a probability of about
+  (1 / (3.5 sigma))^3 for sigma >= 1, so 2 repeats at 12000 counts/G (sigma 24), 3 at
+  3000 (sigma 6), 8 at 1090 (HMC5883L default; sigma ~0.8 with 8-sample averaging, a
+  repeat of all three ~4 %), each run below 1e-10 on a still board. Below 1000 counts/G
+  the noise is under a count and a still board repeats legitimately: 32 repeats there.
+  When the chip's status already hints at old data - QMC5883L DOR (a set was skipped),
+  HMC5883L LOCK still set when RDY rises - one exact repeat is stale data.
+- tilt_ok: the accelerometer must read about 1 g (a hand-held or vehicle compass moves
+  slowly; AN4248's tilt formulas assume gravity is the only specific force). Outside
+  0.75..1.25 g - free fall, a sensor asleep since a reset (zeros), 0xFF bytes read as
+  (-1, -1, -1), a range changed behind the driver's back - no tilt is derived. An MPU6050
+  that went to sleep keeps its last sample in the output registers, which is plausible
+  but frozen: its noise, ~1.8 mg RMS = 30 counts at +-2 g and 21 Hz bandwidth (firmware/
+  mpu6050.py), makes 3 exact repeats in a row (~1e-13) a frozen sensor.
+
+Allocation-free (tests/scenarios/app_alloc.py): every method keeps its frame within the 11
+words MicroPython holds on the C stack, and all intermediates are small ints: |a| is
+computed on a >> 4, so the squared norm stays below 3 * 2**22.
+"""
+from array import array
+
+from firmware.compat import const
+
+_SAT_HI = const(32767)
+_SAT_LO = const(-32768)
+_G_SHIFT = const(4)          # |a|^2 on a >> 4: int16 input -> < 3 * 2**22
+_G_LO_PCT = const(75)        # |g| window, percent of 1 g
+_G_HI_PCT = const(125)
+_ACCEL_REPEATS = const(3)    # exact repeats of all three axes that mean a frozen accelerometer
+_RUN_CAP = const(0x3FFF)
+
+
+def mag_repeats(counts_per_gauss):
+    """The run of exact repeats that marks a magnetometer's output as stale (module doc)."""
+    c = counts_per_gauss or 0
+    if c >= 6000:
+        return 2
+    if c >= 2000:
+        return 3
+    if c >= 1000:
+        return 8
+    return 32
+
+
+class Health:
+    """The state of the per-sample checks (see the module docstring). overflow: the chip's
+    overflow code besides the int16 limits (HMC5883L -4096; else -32768)."""
+
+    def __init__(self, counts_per_gauss=None, overflow=_SAT_LO, counts_per_g=16384):
+        self.last = array("h", (0, 0, 0))    # the previous magnetometer sample
+        self.same = 0                        # exact repeats of it in a row
+        self.repeats = mag_repeats(counts_per_gauss)
+        self.overflow = overflow
+        self.alast = array("h", (0, 0, 0))   # the previous accelerometer sample
+        self.asame = 0
+        self.g_lo = 0
+        self.g_hi = 0
+        self.set_accel(counts_per_g)
+
+    def set_accel(self, counts_per_g):
+        c = counts_per_g >> _G_SHIFT
+        lo = c * _G_LO_PCT // 100
+        hi = c * _G_HI_PCT // 100
+        self.g_lo = lo * lo
+        self.g_hi = hi * hi
+
+    def reset(self):
+        """Forget the runs (after a re-initialisation)."""
+        self.same = 0
+        self.asame = 0
+
+    def saturated(self, raw):
+        return self._sat(raw[0]) or self._sat(raw[1]) or self._sat(raw[2])
+
+    def _sat(self, v):
+        return v == _SAT_HI or v == _SAT_LO or v == self.overflow
+
+    def mag_stale(self, raw, suspect=False):
+        """suspect: the chip's status hinted at old data (QMC5883L DOR, HMC5883L LOCK): then
+        one exact repeat is enough."""
+        p = self.last
+        if raw[0] != p[0] or raw[1] != p[1] or raw[2] != p[2]:
+            p[0] = raw[0]
+            p[1] = raw[1]
+            p[2] = raw[2]
+            self.same = 0
+            return False
+        if self.same < _RUN_CAP:
+            self.same += 1
+        return suspect or self.same >= self.repeats
+
+    def _g2(self, a):
+        x = a[0] >> _G_SHIFT
+        y = a[1] >> _G_SHIFT
+        z = a[2] >> _G_SHIFT
+        return x * x + y * y + z * z
+
+    def _frozen(self, a):
+        p = self.alast
+        if a[0] != p[0] or a[1] != p[1] or a[2] != p[2]:
+            p[0] = a[0]
+            p[1] = a[1]
+            p[2] = a[2]
+            self.asame = 0
+            return False
+        if self.asame < _RUN_CAP:
+            self.asame += 1
+        return self.asame >= _ACCEL_REPEATS
+
+    def tilt_ok(self, a):
+        n = self._g2(a)
+        if self._frozen(a):
+            return False
+        return self.g_lo <= n <= self.g_hi

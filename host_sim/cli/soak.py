@@ -1,0 +1,313 @@
+"""`python -m host_sim soak`: a seeded fault campaign against the simulated board (make soak).
+
+    python -m host_sim soak [--sessions N] [--seconds S] [--seed K] [--json]
+
+Each session boots CompassApp from a store holding a good calibration (a GY-271 + MPU6050 or
+a GY-87, strong hard and soft iron, the board turning slowly and tilting), and injects
+random field faults from every class below through the simulator's fault hooks, each held
+for a random spell and then cleared; some sessions reboot the app half-way (same board and
+filesystem, sometimes with the accelerometer absent at boot). Printed: steps, faults,
+reboots, exceptions out of step(), calibrations lost (a store that no longer loads a
+calibration at least as good as the good one), "wrong-but-ok" samples - status "ok", a
+calibration in force, and a heading error above ACCURACY_DEG - and, per fault class, the
+median and worst time from injection to the first non-ok status (docs/faults.md).
+
+Fault classes: stale (output registers frozen), zeros (the chip returns 0 0 0), mag_reset
+(brown-out), range (a glitch write to the range/gain register), accel_sleep (MPU6050 asleep:
+frozen tilt), accel_ff (0xFF reads), free_fall, stall (the main loop blocked 2-60 s), magnet
+(interference near the board), nack (a burst of bus errors), accel_absent (missing at the
+next boot, back later).
+"""
+import json
+import math
+import sys
+
+from host_sim import motion
+from host_sim.boards import make_board
+from host_sim.prng import Prng
+from host_sim.world import World
+
+from firmware.app import CompassApp
+from firmware.calibration import Calibration
+from firmware.store import CalStore
+
+ACCURACY_DEG = 5.0      # documented accuracy of a calibrated "ok" heading (docs/faults.md)
+HARD_IRON_UT = (45.0, -35.0, 30.0)
+SOFT_IRON = ((1.18, 0.09, -0.06), (0.09, 0.88, 0.07), (-0.06, 0.07, 1.04))
+SETUPS = (("gy271", True), ("gy87", None))
+CLASSES = ("stale", "zeros", "mag_reset", "range", "accel_sleep", "accel_ff", "free_fall",
+           "stall", "magnet", "nack", "accel_absent")
+MAG_AXES = "x,-y,-z"
+ACCEL_AXES = "-x,y,z"
+
+
+class UsageError(Exception):
+    pass
+
+
+class Turning:
+    """Yaw turning at `rate` deg/s, pitch and roll waving by up to 20 / 15 deg."""
+
+    def __init__(self, yaw0, rate, phase):
+        self.yaw0 = yaw0
+        self.rate = rate
+        self.phase = phase
+        self.duration_us = None
+
+    def at(self, t_us):
+        t = t_us / 1e6
+        return ((self.yaw0 + self.rate * t) % 360.0, 20.0 * math.sin(0.21 * t + self.phase),
+                15.0 * math.sin(0.13 * t + 2 * self.phase))
+
+
+class MemFs:
+    """A filesystem in memory for CalStore."""
+
+    def __init__(self):
+        self.files = {}
+
+    def open(self, path, mode):
+        if "w" in mode:
+            self.files[path] = b""
+            return _W(self, path)
+        if path not in self.files:
+            raise OSError(2, "ENOENT")
+        return _R(self.files[path])
+
+    def remove(self, path):
+        if path not in self.files:
+            raise OSError(2, "ENOENT")
+        del self.files[path]
+
+
+class _R:
+    def __init__(self, d):
+        self.d = d
+
+    def read(self, n=-1):
+        return self.d if n < 0 else self.d[:n]
+
+    def close(self):
+        pass
+
+
+class _W:
+    def __init__(self, fs, path):
+        self.fs = fs
+        self.path = path
+
+    def write(self, data):
+        self.fs.files[self.path] += bytes(data)
+        return len(data)
+
+    def close(self):
+        pass
+
+
+def world(m):
+    return World(field_ut=50.0, inclination_deg=60.0, declination_deg=4.0,
+                 hard_iron_ut=HARD_IRON_UT, soft_iron=SOFT_IRON, motion=m)
+
+
+def app_on(b, store, **kw):
+    return CompassApp(b.bus, mag_axes=MAG_AXES, accel_axes=ACCEL_AXES, declination_cdeg=400,
+                      store=store, delay_us=b.sleep_us, ticks_us=b.clock.ticks_us, **kw)
+
+
+def good_calibration(setup, accel):
+    """A 10-element calibration from a 40 s figure-8 session (the reference of 'lost')."""
+    b = make_board(setup, world=world(motion.figure8()), seed=3, accel=accel)
+    app = app_on(b, None)
+    while b.clock.now_us < 40000000:
+        app.step()
+    if app.calibration.model != 10:
+        raise RuntimeError("soak: no 10-element calibration for %s" % setup)
+    return app.calibration, app.mag.KIND, app.mag.range_code
+
+
+def err_deg(app, b):
+    true = b.world.true_heading_deg(b.clock.now_us)
+    h = app.heading_kang * 360.0 / 65536
+    return abs((h - true + 180.0) % 360.0 - 180.0)
+
+
+def inject(b, cls, g):
+    """Start fault `cls`; returns a function that clears it."""
+    mag, acc, bus = b.mag, b.accel, b.bus
+    if cls == "stale":
+        mag.freeze(sticky=g.randrange(2) == 0)
+        return mag.clear_fault
+    if cls == "zeros":
+        mag.constant(0, 0, 0, sticky=g.randrange(2) == 0)
+        return mag.clear_fault
+    if cls == "mag_reset":
+        mag.brown_out()
+        return lambda: None
+    if cls == "range":
+        if b.mag_address == 0x0D:
+            mag.glitch(0x09, mag.ctrl1 ^ 0x10)
+        else:
+            mag.glitch(0x01, (g.randrange(8) << 5))
+        return lambda: None
+    if cls == "accel_sleep":
+        acc.doze()
+        return lambda: None
+    if cls == "accel_ff":
+        bus.stuck_high(b.accel_address)
+        return lambda: bus.stuck_high(b.accel_address, False)
+    if cls == "free_fall":
+        acc.free_fall = True
+
+        def land():
+            acc.free_fall = False
+        return land
+    if cls == "magnet":
+        t = b.clock.now_us / 1e6
+        f = [(g.uniform() - 0.5) * 120.0 for _ in range(3)]
+        b.world.add_magnet(f, t, t + 1 + g.randrange(20), ramp_s=0.2, frame="sensor")
+        return lambda: None
+    if cls == "nack":
+        bus.inject_eio(after=0, count=1 + g.randrange(40))
+        return bus.clear_faults
+    return lambda: None
+
+
+def session(k, seed, seconds, goods, stats):
+    g = Prng(seed, stream=k)
+    si = g.randrange(len(SETUPS))
+    setup, accel = SETUPS[si]
+    cal, kind, rng = goods[si]
+    m = Turning(g.randrange(360), 3.0 + g.randrange(20), g.uniform() * 6.0)
+    b = make_board(setup, world=world(m), seed=1000 + k, accel=accel)
+    fs = MemFs()
+    CalStore("/", sensor=kind, range_code=rng, fs=fs).save(cal.to_bytes())
+    app = app_on(b, CalStore("/", fs=fs))
+    reboot_at = seconds * 1e6 / 2 if g.randrange(3) == 0 else None
+    end = seconds * 1e6
+    next_fault = 2e6 + g.randrange(8) * 1e6
+    clear = None
+    clear_at = 0
+    pending = None          # (class, injected at us) awaiting detection
+    last = "none"           # the class of the last fault (wrong-but-ok samples are charged to it)
+    while b.clock.now_us < end:
+        now = b.clock.now_us
+        if clear is None and now >= next_fault:
+            cls = CLASSES[g.randrange(len(CLASSES))]
+            last = cls
+            stats["faults"][cls] = stats["faults"].get(cls, 0) + 1
+            if cls == "stall":
+                b.clock.advance(2000000 + g.randrange(58) * 1000000)
+            elif cls == "accel_absent" and b.accel is not None and setup == "gy271":
+                b.bus.kill(b.accel_address)
+                app = reboot(app, b, fs, stats)
+                revive_at = b.clock.now_us + 1e6 * (1 + g.randrange(10))
+                clear = lambda: b.bus.revive(b.accel_address)  # noqa: E731
+                clear_at = revive_at
+            else:
+                clear = inject(b, cls, g)
+                clear_at = now + 1e6 * (1 + g.randrange(15))
+                pending = (cls, now)
+            if clear is None:
+                next_fault = b.clock.now_us + 1e6 * (3 + g.randrange(15))
+        elif clear is not None and now >= clear_at:
+            clear()
+            clear = None
+            pending = None
+            next_fault = b.clock.now_us + 1e6 * (3 + g.randrange(15))
+        if reboot_at is not None and now >= reboot_at:
+            reboot_at = None
+            app = reboot(app, b, fs, stats)
+        try:
+            app.step()
+        except Exception as e:  # noqa: BLE001 - counted: step() must never raise
+            stats["exceptions"] += 1
+            stats["last_exception"] = repr(e)
+        stats["steps"] += 1
+        if app.status != "ok":
+            if pending is not None:
+                d = (b.clock.now_us - pending[1]) / 1e3
+                stats["detect_ms"].setdefault(pending[0], []).append(d)
+                pending = None
+        elif app.calibration.model is not None and err_deg(app, b) > ACCURACY_DEG:
+            stats["wrong_but_ok"] += 1
+            stats["wrong_by_class"][last] = stats["wrong_by_class"].get(last, 0) + 1
+    if clear is not None:
+        clear()
+    # lost: the store must still boot a calibration at least as good as the good one
+    try:
+        st = CalStore("/", sensor=kind, range_code=rng, fs=fs)
+        got = Calibration.from_bytes(st.load())
+        if got.model is None or got.fit_error > cal.fit_error:
+            stats["lost"] += 1
+    except Exception:  # noqa: BLE001
+        stats["lost"] += 1
+
+
+def reboot(app, b, fs, stats):
+    stats["reboots"] += 1
+    return app_on(b, CalStore("/", fs=fs))
+
+
+def campaign(sessions, seconds, seed):
+    goods = [good_calibration(s, a) for s, a in SETUPS]
+    stats = {"sessions": sessions, "seconds_per_session": seconds, "seed": seed, "steps": 0,
+             "faults": {}, "reboots": 0, "exceptions": 0, "lost": 0, "wrong_but_ok": 0,
+             "wrong_by_class": {}, "detect_ms": {}, "accuracy_deg": ACCURACY_DEG}
+    for k in range(sessions):
+        session(k, seed, seconds, goods, stats)
+    det = {}
+    for cls, v in sorted(stats["detect_ms"].items()):
+        v = sorted(v)
+        det[cls] = {"n": len(v), "median_ms": round(v[len(v) // 2], 1), "max_ms": round(v[-1], 1)}
+    stats["detect_ms"] = det
+    stats["total_faults"] = sum(stats["faults"].values())
+    return stats
+
+
+def _int_opt(argv, name, default, lo, hi, unit):
+    if name not in argv:
+        return default
+    i = argv.index(name)
+    if i + 1 >= len(argv):
+        raise UsageError("%s: expected a value (%s)" % (name, unit))
+    try:
+        v = int(argv[i + 1])
+    except ValueError:
+        raise UsageError("%s=%r: expected an integer (%s)" % (name, argv[i + 1], unit))
+    if not lo <= v <= hi:
+        raise UsageError("%s=%d: expected %d..%d (%s)" % (name, v, lo, hi, unit))
+    return v
+
+
+def main(argv):
+    if argv and argv[0] in ("-h", "--help"):
+        print(__doc__)
+        return 0
+    try:
+        for a in argv:
+            if a.startswith("--") and a not in ("--sessions", "--seconds", "--seed", "--json"):
+                raise UsageError("unknown option %s" % a)
+        n = _int_opt(argv, "--sessions", 40, 1, 100000, "sessions")
+        s = _int_opt(argv, "--seconds", 60, 5, 100000, "simulated seconds per session")
+        seed = _int_opt(argv, "--seed", 1, 0, 2 ** 31 - 1, "campaign seed")
+    except UsageError as e:
+        sys.stderr.write("soak: %s\n" % e)
+        return 2
+    st = campaign(n, s, seed)
+    if "--json" in argv:
+        print(json.dumps(st, sort_keys=True))
+        return 0
+    print("soak: %d sessions x %d s, seed %d" % (n, s, seed))
+    print("steps %d  faults %d  reboots %d  exceptions %d  calibrations lost %d  "
+          "wrong-but-ok %d (ok and > %.0f deg)" % (st["steps"], st["total_faults"],
+                                                   st["reboots"], st["exceptions"], st["lost"],
+                                                   st["wrong_but_ok"], ACCURACY_DEG))
+    print("%-13s %7s %9s %10s %10s" % ("fault", "count", "detected", "median ms", "max ms"))
+    for cls in CLASSES:
+        d = st["detect_ms"].get(cls)
+        print("%-13s %7d %9s %10s %10s" % (cls, st["faults"].get(cls, 0),
+                                           d["n"] if d else "-", d["median_ms"] if d else "-",
+                                           d["max_ms"] if d else "-"))
+    if st["wrong_by_class"]:
+        print("wrong-but-ok by class: %s" % st["wrong_by_class"])
+    return 0

@@ -1,0 +1,249 @@
+"""Field faults through the simulator's fault hooks (docs/faults.md): each scenario checks that
+step() never raises, the status names the problem, no heading is presented as "ok" while it is
+wrong by more than the documented accuracy, a good stored calibration is never replaced by a
+worse one, and the board boots again.
+
+Documented accuracy (docs/faults.md): a calibrated heading with status "ok" is within
+ACCURACY_CDEG of the truth. One sample's heading noise is ~0.8 deg RMS here (QMC5883L 2 mG,
+MPU6050 tilt noise at 60 deg dip), so 5 deg is > 6 sigma: a sample beyond it is a fault.
+"""
+import pytest
+
+from tests.test_reliability import Good, settled
+from tests.scenarios import app_world as W
+from host_sim import motion
+
+from firmware.calibration import Calibration
+from firmware.store import CalStore
+
+ACCURACY_CDEG = 500
+
+
+@pytest.fixture(scope="module", params=sorted(W.SETUPS))
+def good(request):
+    return Good(request.param)
+
+
+@pytest.fixture(scope="module")
+def good_qmc():
+    return Good("gy271")
+
+
+def watch(app, b, seconds, turn=None):
+    """Step for `seconds`; (statuses seen, wrong-but-ok samples). turn(t_s) moves the board."""
+    seen = []
+    wrong = 0
+    end = b.clock.now_us + int(seconds * 1e6)
+    while b.clock.now_us < end:
+        if turn is not None:
+            turn(b.clock.now_us / 1e6)
+        app.step()
+        seen.append(app.status)
+        if app.status == "ok" and abs(W.heading_error_cdeg(app, b)) > ACCURACY_CDEG:
+            wrong += 1
+    return seen, wrong
+
+
+def turning(b, rate_dps=30.0, pose=(70.0, 12.0, -18.0)):
+    t0 = b.clock.now_us / 1e6
+
+    def turn(t):
+        W.hold(b, pose[0] + rate_dps * (t - t0), pose[1], pose[2])
+    return turn
+
+
+def reboot(good, fs, b, app):
+    """A new app on the same board and filesystem: it boots with the calibration `app` had in
+    force, which is the good one or one with a lower fit error."""
+    new = W.make_app(b, store=CalStore("/", fs=fs), learn=True)
+    assert new.load_reason is None and new.calibration == app.calibration
+    assert app.calibration.model == 10 and app.calibration.fit_error <= good.cal.fit_error
+    return new
+
+
+# --- 1. stale data -------------------------------------------------------------------------
+def test_frozen_output_registers_say_stale_data_until_fresh_data_flows(good):
+    b, app, fs = good.app()
+    settled(b, app)
+    b.mag.freeze(sticky=True)          # DRDY keeps rising, the registers keep the old sample
+    seen, wrong = watch(app, b, 3, turning(b))
+    assert wrong == 0
+    assert "stale data" in seen and "ok" not in seen[10:]
+    assert app.reinits >= 1            # stale data is an anomaly: re-initialised (in vain)
+    b.mag.clear_fault()
+    seen, wrong = watch(app, b, 3, turning(b))
+    assert wrong == 0 and seen[-1] == "ok"
+    assert app.calibration == good.cal
+    reboot(good, fs, b, app)
+
+
+def test_frozen_registers_are_cured_by_the_re_initialisation(good):
+    b, app, _ = good.app()
+    settled(b, app)
+    r0 = app.reinits
+    b.mag.freeze()                     # cured by a reset (QMC5883L SOFT_RST, HMC5883L MODE)
+    seen, wrong = watch(app, b, 2, turning(b))
+    assert wrong == 0 and "stale data" in seen and app.reinits > r0 and seen[-1] == "ok"
+
+
+def test_a_chip_returning_zeros_is_stale_data_and_re_initialised(good):
+    b, app, _ = good.app()
+    settled(b, app)
+    b.mag.constant(0, 0, 0)            # zeros: cured by the re-initialisation
+    seen, wrong = watch(app, b, 2, turning(b))
+    assert wrong == 0 and "stale data" in seen and seen[-1] == "ok"
+    b.mag.constant(0, 0, 0, sticky=True)  # never cured: never "ok" again
+    seen, wrong = watch(app, b, 3, turning(b))
+    assert wrong == 0 and set(seen) <= {"stale data", "interference"}
+    assert app.calibration == good.cal
+
+
+def test_any_constant_is_stale_within_the_documented_run_of_repeats(good):
+    # a constant that happens to look like a field can only be told from a still board by
+    # its repeats: at most health.repeats samples (docs/faults.md) before "stale data"
+    b, app, _ = good.app()
+    settled(b, app)
+    b.mag.constant(123, -45, 678, sticky=True)
+    seen, wrong = watch(app, b, 2, turning(b))
+    assert wrong <= app.health.repeats and "ok" not in seen[app.health.repeats + 1:]
+
+
+# --- 2. accelerometer plausibility --------------------------------------------------------
+def test_an_accelerometer_gone_to_sleep_is_tilt_unavailable_then_woken(good_qmc):
+    b, app, _ = good_qmc.app()
+    settled(b, app)
+    b.accel.doze()                     # registers freeze at a plausible 1 g
+    seen, wrong = watch(app, b, 1, turning(b))
+    assert wrong == 0 and "tilt unavailable" in seen and seen[-1] == "ok"
+    assert not b.accel.asleep()
+
+
+@pytest.mark.parametrize("fault", ["ff", "free_fall"])
+def test_ff_reads_and_free_fall_give_tilt_unavailable_and_a_level_heading(good_qmc, fault):
+    b, app, _ = good_qmc.app()
+    settled(b, app)
+    if fault == "ff":
+        b.bus.stuck_high(b.accel_address)
+    else:
+        b.accel.free_fall = True
+    seen, wrong = watch(app, b, 1)
+    assert wrong == 0 and seen[2:] == ["tilt unavailable"] * (len(seen) - 2)
+    assert app.heading_kang >= 0 and not app.tilt      # a heading, from the level formula
+    b.bus.stuck_high(b.accel_address, False)
+    b.accel.free_fall = False
+    seen, wrong = watch(app, b, 1)
+    assert wrong == 0 and seen[-1] == "ok" and app.tilt
+
+
+# --- 3. reset / range changed behind the app's back ------------------------------------------
+def glitch_range(b):
+    if b.mag_address == 0x0D:
+        b.mag.glitch(0x09, b.mag.ctrl1 ^ 0x10)    # RNG +-2 G <-> +-8 G
+    else:
+        b.mag.glitch(0x01, 0x60)                  # GN 3: 660 counts/G instead of 1090
+
+
+def test_a_range_changed_by_a_glitch_is_seen_re_initialised_and_never_fed(good):
+    b, app, fs = good.app(m=motion.figure8())
+    settled(b, app)
+    fed = []
+    feed = app.collector.feed
+
+    def spy(raw):
+        fed.append(b.mag.counts_per_gauss())
+        feed(raw)
+    app.collector.feed = spy
+    cpg = b.mag.counts_per_gauss()
+    for _ in range(5):
+        glitch_range(b)
+        seen, wrong = watch(app, b, 2)
+        assert wrong == 0 and "sensor reset" in seen and seen[-1] == "ok"
+    assert set(fed) == {cpg}           # not one sample at the wrong gain reached the fit
+    assert app.calibration == good.cal or app.calibration.fit_error <= good.cal.fit_error
+    reboot(good, fs, b, app)
+
+
+def test_a_brown_out_of_the_magnetometer_is_re_initialised(good):
+    b, app, _ = good.app()
+    settled(b, app)
+    b.mag.brown_out()
+    seen, wrong = watch(app, b, 3, turning(b))
+    assert wrong == 0 and seen[-1] == "ok" and app.reinits >= 1
+    assert set(seen) - {"ok"} <= {"timeout", "sensor reset"}
+
+
+# --- 5. accelerometer absent at boot ----------------------------------------------------------
+def test_an_accelerometer_absent_at_boot_is_looked_for_again(good_qmc):
+    b = W.make_sim("gy271", m=motion.still(70.0, 12.0, -18.0))
+    fs, st = good_qmc.store()
+    b.bus.kill(b.accel_address)
+    app = W.make_app(b, store=st)
+    assert app.accel is None and app.calibration == good_qmc.cal
+    W.run_until(app, b, 2)
+    b.bus.revive(b.accel_address)
+    W.run_until(app, b, 8)             # retried every 5 s of the app's clock
+    assert app.accel is not None and app.tilt and app.status == "ok"
+    assert 1 <= app.accel_retries <= 2
+    settled(b, app)
+
+
+# --- 6. a stalled main loop is no evidence --------------------------------------------------
+def test_a_stalled_loop_under_interference_does_not_make_the_calibration_stale(good_qmc):
+    b, app, fs = good_qmc.app(learn=False)
+    settled(b, app)
+    t = b.clock.now_us / 1e6
+    b.world.add_magnet((0.0, 0.0, 40.0), t, t + 1000, ramp_s=0.0)
+    for _ in range(10):                # 10 steps, each after the loop blocked for 20 s
+        b.clock.advance(20000000)
+        app.step()  # the first set after a stall is old (DOR): stale data, or interference
+        assert app.status in ("interference", "stale data")
+    assert not app.relearning and app.calibration == good_qmc.cal
+    # the same 200 s with samples flowing is evidence: the calibration goes stale
+    W.run_until(app, b, b.clock.now_us / 1e6 + 35)
+    assert app.relearning
+
+
+# --- 7. options survive re-initialisation ---------------------------------------------------
+def test_a_re_initialised_hmc5883l_keeps_the_users_rate():
+    b = W.make_sim("gy87", m=motion.still(70.0, 12.0, -18.0))
+    app = W.make_app(b, mag_options={"rate": 75}, learn=False)
+    assert b.mag.period_us() == 13333
+    W.run_until(app, b, 1)
+    b.mag.brown_out()                  # back to 15 Hz, single mode
+    assert b.mag.period_us() == 66666  # the power-on default, 15 Hz
+    seen, _ = watch(app, b, 2)
+    assert app.reinits >= 1 and seen[-1] == "ok"
+    assert b.mag.period_us() == 13333  # 75 Hz again: configure() re-applied the option
+    assert seen[-50:].count("timeout") == 0
+
+
+# --- 9. saturated samples -------------------------------------------------------------------
+def test_saturated_samples_are_named_and_never_fed(good):
+    b, app, _ = good.app()
+    settled(b, app)
+    fed = []
+    feed = app.collector.feed
+    app.collector.feed = lambda raw: (fed.append(tuple(raw)), feed(raw))
+    # QMC5883L: the int16 limits themselves (no OVL); HMC5883L: beyond 2047 reads -4096
+    limit = 32767 if b.mag_address == 0x0D else 5000
+    for v in ((limit, 10, 10), (10, -limit - 1, 10)):
+        for _ in range(3):
+            b.mag.inject_raw(*v)
+        seen, _ = watch(app, b, 0.3)
+        assert "overflow" in seen
+    assert not [r for r in fed if 32767 in r or -32768 in r or -4096 in r]
+
+
+# --- step() never raises ----------------------------------------------------------------------
+def test_an_unexpected_exception_is_a_status_and_the_loop_goes_on(good_qmc):
+    b, app, _ = good_qmc.app()
+    settled(b, app)
+    real = app.compass.update
+
+    def boom(*a):
+        raise MemoryError("heap exhausted")
+    app.compass.update = boom
+    assert app.step() is False and app.status == "internal error"
+    assert isinstance(app.last_error, MemoryError)
+    app.compass.update = real
+    settled(b, app)
