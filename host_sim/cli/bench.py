@@ -222,7 +222,7 @@ def collect(smoke, log=print):
             log("  %-10s %s x %d" % (name, "micropython" if micro else "cpython", procs))
             res[name]["micropython" if micro else "cpython"] = run_merged(name, micro, args,
                                                                          procs)
-    for name in ("accuracy", "intcount"):
+    for name in ("accuracy", "intcount", "quality"):
         log("  %-10s cpython" % name)
         res[name] = {"cpython": run_script(name, False, args)}
     session = os.path.join(build, "session.bin")
@@ -470,6 +470,26 @@ def _kbf(n):
     return "n/a" if n is None else "%.1f KB" % (n / 1024.0)
 
 
+def rows_quality(res):
+    """The quality database's ingest time (host_sim/cli/benchmarks/quality.py)."""
+    q = _get(res, "quality", "cpython") or {}
+    if not q:
+        return []
+    if "error" in q:
+        return [("7 quality DB ingest", q["error"][:60], "", "", "ERROR")]
+    t = q.get("ingest_s")
+    n = q.get("records")
+    return [("7 quality DB: ingest %s records into SQLite [s]" % n, _f(t, "%.2f"), "",
+             "goal <= 5 s (10,000 records)", verdict(t is not None and t <= 5.0) if n and
+             n >= 10000 else "smoke"),
+            ("7 quality DB: check; fleet flags changed / unchanged devices", _f(
+                q.get("check_s"), "%.2f s"), "", "%s / %s" % (
+                _f(q.get("detection_rate"), "%.3f"), _f(q.get("false_alarm_rate"), "%.4f")),
+             verdict(q.get("detection_rate") is not None and q["detection_rate"] >= 0.95
+                     and q.get("false_alarm_rate") is not None
+                     and q["false_alarm_rate"] <= 0.01))]
+
+
 def rows_32bit(res):
     """The 32-bit rows: app per-sample ratios on both MicroPythons, heap on x86-32."""
     R = []
@@ -693,6 +713,7 @@ def rows(res, derived):
             R.append(("6 %s est.: solve 10 [ms]" % b, "", "%.0f (<= %.0f)" % (
                 s10["estimate_ms"], s10["upper_ms"]), "%d long-int ops" % s10["long_ops"], ""))
     R.extend(rows_32bit(res))
+    R.extend(rows_quality(res))
     return R
 
 
