@@ -134,6 +134,7 @@ _ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked f
 _ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
 _HMC_OVERFLOW = const(-4096)
 _DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
+_QUIET_HINT_US = const(3000000)  # status_line: no new direction for 3 s before "planar"
 REPORT_EVERY = const(25)      # run(): steps between reports (0.5 s at 50 Hz)
 
 
@@ -944,28 +945,62 @@ def _pct(x100):
     return "%d.%02d %%" % (x100 // 100, x100 % 100)
 
 
+# what a refusal asks the user to do (status_line); a reason not here is shown as is
+_HINTS = {"planar": "rotate about another axis, not only around",
+          "too_few_samples": "keep turning",
+          "low_coverage": "turn through more directions",
+          "fit_error_high": "move slowly, away from metal",
+          "field_out_of_range": "field implausible: a magnet near, or the wrong range?",
+          "field_mismatch": "field differs from the model here: wrong range, or a magnet?",
+          "soft_iron_out_of_range": "strong soft iron: move away from steel",
+          "no_memory": "out of memory while solving"}
+
+
+def _story(app, p):
+    """The calibration's stage in words: collecting (coverage), solving, saved (once),
+    calibrated, and why not yet."""
+    out = []
+    model = p["model"]
+    col = app.collector
+    if app.stored != app.__dict__.get("_saved_shown", 0):
+        app._saved_shown = app.stored
+        out.append("saved")  # shown once after each save
+    if col is None:
+        out.append("calibrated: model %s fit %s" % (model, _pct(p["fit_error"]))
+                   if model is not None else "uncalibrated")
+        return out
+    out.append("%s; collecting %d %% (%d samples)" % (
+        "model %s fit %s" % (model, _pct(p["fit_error"])) if model is not None
+        else "uncalibrated", p["coverage"], p["samples"]))
+    if p["solving"]:
+        out.append("solving %s" % (p["solve_model"],))
+    reason = p["last_reason"]
+    # "planar" only once the user has stopped adding new directions (the collector is quiet):
+    # the first samples of a correct figure-8 lie near a plane too
+    if reason == "planar" and col.since_kept_us < _QUIET_HINT_US:
+        reason = "too_few_samples"
+    if reason and reason != "not_better":
+        out.append(_HINTS.get(reason, reason))
+    return out
+
+
 def status_line(app):
-    """One readable line: heading, status and flags, calibration, progress, last refusal."""
+    """One readable line: heading (marked when not tilt-compensated), status and flags, the
+    calibration's stage in words (collecting with its coverage, solving, saved once,
+    calibrated, and what to do when a fit is refused), accuracy, location."""
     p = app.progress()
     h = app.heading_kang
-    parts = ["heading %s deg" % ("---.-" if h < 0 else kang_to_str(h)), app.status]
+    parts = ["heading %s deg%s" % ("---.-" if h < 0 else kang_to_str(h),
+                                   "" if app.accel is not None and app.tilt
+                                   else " (level, no tilt)"), app.status]
     c = app.compass
     flags = [n for n, f in (("interference", c.interference), ("dip>75", c.dip_high),
                             ("pitch>80", c.gimbal)) if f]
     if flags:
         parts.append("flags " + ",".join(flags))
-    if p["model"] is None:
-        parts.append("uncalibrated")
-    else:
-        parts.append("model %s fit %s" % (p["model"], _pct(p["fit_error"])))
-    if p["collecting"]:
-        parts.append("coverage %d %% samples %d" % (p["coverage"], p["samples"]))
-    if p["solving"]:
-        parts.append("solving %s" % (p["solve_model"],))
+    parts.extend(_story(app, p))
     if app.relearning:
         parts.append("relearning")
-    if p["last_reason"]:
-        parts.append("last refusal: %s" % p["last_reason"])
     if app.save_errors:
         parts.append("save failed: %s" % app.save_reason)
     if app.change is not None:
@@ -973,7 +1008,8 @@ def status_line(app):
                      % app.change)
     from firmware.accuracy import NAMES, assess
     lvl, why = assess(app)
-    parts.append("accuracy %d %s (%s)" % (lvl, NAMES[lvl], why))
+    parts.append("accuracy %d %s%s" % (lvl, NAMES[lvl], "" if why == NAMES[lvl]
+                                       else " (%s)" % why))
     loc = app.location
     if loc is not None:
         parts.append("decl %s deg (model)" % kang_to_str(loc.declination_kang, True)

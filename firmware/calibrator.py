@@ -446,6 +446,7 @@ class Collector:
         self.kept = 0              # samples kept since the last solve started
         self.idle_us = 0
         self.quiet_us = 0          # us since the last kept sample (while kept > 0)
+        self.since_kept_us = 0     # us since the buffer last kept a sample (new direction)
         self.accepted = 0
         self.refused = 0
         self.solves = 0
@@ -460,6 +461,7 @@ class Collector:
         if self.calibrator.add(raw[0], raw[1], raw[2]):
             self.kept += 1
             self.quiet_us = 0
+            self.since_kept_us = 0
             self._cov_dirty = True
 
     def tick(self, dt):
@@ -467,6 +469,8 @@ class Collector:
             self.idle_us += dt
         if self.kept and self.quiet_us < _QUIET_US:
             self.quiet_us += dt
+        if self.since_kept_us < _SOLVE_IDLE_US:
+            self.since_kept_us += dt
 
     def due(self):
         if self.kept >= self.solve_every or self.next_model is not None:

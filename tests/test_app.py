@@ -212,7 +212,7 @@ def test_run_reports_every_n_steps_or_every_interval_and_the_status_line_reads()
     line = status_line(app)
     h = app.heading_kang * 3600 // 65536
     assert ("heading %d." % (h // 10)) in line or ("heading %d." % ((h + 1) // 10)) in line
-    assert "model 10 fit" in line and "coverage" in line and "samples" in line
+    assert "model 10 fit" in line and "collecting" in line and "samples" in line
 
 
 def test_the_app_path_allocates_nothing_and_a_ten_element_solve_is_sliced_on_micropython():

@@ -1,0 +1,58 @@
+"""The status line a user watches tells the story: collecting with coverage, solving, saved
+(once), calibrated, what to do when a fit is refused, and when the heading is not
+tilt-compensated; no "planar" hint early in a correct figure-8."""
+import sys
+
+from host_sim import motion
+
+sys.path.insert(0, "tests/scenarios")
+import app_world as W  # noqa: E402
+
+from firmware.app import status_line  # noqa: E402
+from firmware.store import CalStore  # noqa: E402
+
+PLANAR_HINT = "rotate about another axis"
+
+
+def lines(app, b, seconds, every_s=0.5):
+    out = []
+    t = b.clock.now_us
+    while b.clock.now_us < t + seconds * 1000000:
+        W.run_until(app, b, (b.clock.now_us + every_s * 1000000) / 1e6)
+        out.append(status_line(app))
+    return out
+
+
+def test_a_figure8_reads_collecting_solving_saved_once_then_calibrated_after_reboot():
+    fs = W.MemFs()
+    b = W.make_sim("gy271", m=motion.figure8(), seed=3)
+    app = W.make_app(b, store=CalStore("/", fs=fs))
+    ls = lines(app, b, 40)
+    assert ls[0].split(" | ")[2].startswith("uncalibrated; collecting")
+    assert any("solving" in ln for ln in ls)
+    first_cal = next(i for i, ln in enumerate(ls) if "model 10" in ln or "model 4" in ln)
+    assert not any(PLANAR_HINT in ln for ln in ls[:first_cal])  # a correct figure-8
+    saved = [ln for ln in ls if " | saved | " in ln or ln.endswith(" | saved")]
+    assert 1 <= len(saved) <= app.stored and app.stored >= 1
+    assert "collecting" in ls[-1] and "(level, no tilt)" not in ls[-1]
+    # reboot: the stored calibration is in force, nothing to collect
+    b2 = W.make_sim("gy271", m=motion.still(30.0, 10.0, 0.0), seed=4)
+    app2 = W.make_app(b2, store=CalStore("/", fs=fs))
+    ln = lines(app2, b2, 1)[-1]
+    assert "calibrated: model 10" in ln and "collecting" not in ln and "saved" not in ln
+
+
+def test_a_flat_spin_asks_to_rotate_about_another_axis_once_the_user_stops_adding_directions():
+    b = W.make_sim("gy271", m=motion.flat_spin(period_s=8), seed=3)
+    app = W.make_app(b)
+    ls = lines(app, b, 60)
+    assert any(PLANAR_HINT in ln for ln in ls)
+    assert not any(PLANAR_HINT in ln for ln in ls[:4])  # not in the first two seconds
+    assert all("uncalibrated" in ln for ln in ls)
+
+
+def test_without_an_accelerometer_the_heading_is_marked_as_not_tilt_compensated():
+    b = W.make_sim("gy271", m=motion.figure8(), seed=3)
+    app = W.make_app(b, accel=False)
+    ln = lines(app, b, 2)[-1]
+    assert ln.startswith("heading ") and "(level, no tilt)" in ln.split(" | ")[0]
