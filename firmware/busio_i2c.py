@@ -1,98 +1,132 @@
-"""machine.I2C's transfers on CircuitPython's busio.I2C, so the drivers run unchanged there.
+"""machine.I2C's register transfers over CircuitPython's busio.I2C, so the drivers run there.
 
     import board, busio
     from firmware.busio_i2c import BusioI2C
-    from firmware.detect import detect
-    i2c = BusioI2C(busio.I2C(board.GP5, board.GP4, frequency=400000))
-    mag = detect(i2c)                      # the same drivers, waits and errors as on MicroPython
+    mag = detect(BusioI2C(busio.I2C(board.SCL, board.SDA, frequency=400000)))
 
-BusioI2C(i2c, lock_timeout_us=50000, delay_us=None) offers what the drivers use of
-machine.I2C: readfrom_mem_into(addr, reg, buf), writeto_mem(addr, reg, buf) and scan().
-busio.I2C is shared between tasks: each transfer takes the bus with try_lock(), polled every
-_POLL_US within lock_timeout_us, and always unlocks, also when the transfer raises. A lock
-that cannot be had raises OSError(110) (ETIMEDOUT), which the drivers' bus guard
-(firmware/i2cdevice.py) names as a BusError with the address and register, like a NACK;
-busio's own OSError for a NACK passes through the same way. A register read is one
-writeto_then_readfrom (a repeated start, as readfrom_mem_into does on MicroPython) through a
-one-byte buffer made once: nothing is allocated per read. delay_us: the wait between lock
-attempts (default firmware.compat.sleep_us).
-Tested against a busio-shaped fake of the simulated bus (tests/busio_fake.py) on CPython and
-the MicroPython tiers; no CircuitPython interpreter runs here (docs/design.md).
+BusioI2C(i2c, lock_timeout_us=50000, delay_us=None)
+  i2c              a busio.I2C (anything with try_lock, unlock, writeto, writeto_then_readfrom
+                   and scan, as CircuitPython documents them)
+  lock_timeout_us  how long one transfer waits for the bus lock, 1..2**29 us. The default
+                   covers another user of the bus finishing its own transfer: a 128x64
+                   SSD1306 frame (1 KiB, 9 bits a byte at 400 kHz) holds it for ~23 ms.
+  delay_us         None on a board: firmware.compat's sleep_us between lock polls, the wait
+                   measured with its ticks_us. The simulator passes its bus.sleep_us, and
+                   the waited time is then the sum of the delays asked for (as in Device).
+
+What the drivers use of machine.I2C (firmware/i2cdevice.py, firmware/detect.py):
+  readfrom_mem_into(addr, reg, buf)  writeto_then_readfrom(addr, <reg>, buf): one transaction,
+                                     register byte, repeated START, the data
+  writeto_mem(addr, reg, buf)        writeto(addr, <reg, buf...>): one transaction
+  scan()                             the addresses that answer, as a list
+
+Locking: busio refuses a transfer without the bus lock (RuntimeError), and the lock is
+shared with whatever else uses the bus (a display, another task). Each transfer polls
+try_lock() every _LOCK_POLL_US until lock_timeout_us has passed and releases the lock
+whatever happens: the transfer runs inside `with self._held:`, whose __exit__ unlocks when it
+raises too. A lock not taken in time raises OSError(110) (ETIMEDOUT): Device's BusGuard turns
+it into a BusError naming address and register, as it does a NACK. busio's own errors (OSError
+with errno 19 or 5 for a missing ACK, by CircuitPython's documentation) pass through unchanged.
+
+Allocation: the register byte and a write's bytes go through one preallocated buffer (a
+memoryview of its first byte made once for the reads; writes pass end= instead of a slice),
+and the read's frames stay within MicroPython's C-stack bound: a read allocates nothing
+(tests/scenarios/busio_alloc.py measures it on MicroPython).
+Writes longer than _OUT_MAX - 1 bytes (no driver makes one) build their bytes.
 """
-from firmware.compat import const, sleep_us
+from firmware.compat import const, sleep_us, ticks_diff, ticks_us
 
 _ETIMEDOUT = const(110)
-_LOCK_TIMEOUT_US = const(50000)   # 50 ms: a few transfers of another task at 100 kHz
-_POLL_US = const(100)
+_LOCK_POLL_US = const(100)          # one try_lock() poll every 100 us (a byte at 100 kHz is 90 us)
+_MAX_TIMEOUT_US = const(1 << 29)    # keeps the wait computations small ints on 32-bit ports
+_OUT_MAX = const(8)                 # register byte + up to 7 data bytes without allocating
 
 
 class _Held:
-    """`with` block that unlocks the bus however the transfer ends (a `with` frame stays on
-    MicroPython's C stack where try/finally around the call would not: no allocation)."""
+    """`with adapter._held:` holds the bus lock for one transfer (see the module docstring)."""
 
-    def __init__(self, i2c):
-        self._i2c = i2c
+    def __init__(self, adapter):
+        self._adapter = adapter
 
     def __enter__(self):
+        self._adapter.lock()
         return None
 
     def __exit__(self, kind, value, tb):
-        self._i2c.unlock()
+        self._adapter.bus.unlock()
         return False
 
 
 class BusioI2C:
-    """See the module docstring."""
+    """machine.I2C's readfrom_mem_into / writeto_mem / scan over a busio.I2C."""
 
-    def __init__(self, i2c, lock_timeout_us=_LOCK_TIMEOUT_US, delay_us=None):
-        if type(lock_timeout_us) is not int or lock_timeout_us < 0:
-            raise ValueError("lock_timeout_us=%r: expected an int >= 0 (microseconds)"
-                             % (lock_timeout_us,))
-        self._i2c = i2c
+    def __init__(self, i2c, lock_timeout_us=50000, delay_us=None):
+        if type(lock_timeout_us) is not int or not 0 < lock_timeout_us <= _MAX_TIMEOUT_US:
+            raise ValueError("lock_timeout_us=%r: expected an int of 1..%d microseconds"
+                             % (lock_timeout_us, _MAX_TIMEOUT_US))
+        self.bus = i2c
         self.lock_timeout_us = lock_timeout_us
-        self._delay = delay_us if delay_us is not None else sleep_us
-        self._reg = bytearray(1)
-        self._held = _Held(i2c)
+        if delay_us is None:
+            self._delay = sleep_us
+            self._measured = ticks_us is not None
+        else:
+            self._delay = delay_us
+            self._measured = False
+        self._out = bytearray(_OUT_MAX)
+        self._reg = memoryview(self._out)[0:1]
+        self._write_then_read = i2c.writeto_then_readfrom
         self._addr = 0
-        self._into = None
-        self.lock_waits = 0   # transfers that had to wait for the lock
+        self._in = None
+        self._held = _Held(self)
 
-    def _lock(self):
-        if self._i2c.try_lock():
+    def lock(self):
+        """Take the bus lock within lock_timeout_us, else OSError(110); unlock() releases it."""
+        if self.bus.try_lock():
             return
-        self.lock_waits += 1
+        t0 = ticks_us() if self._measured else 0
         waited = 0
-        while not self._i2c.try_lock():
-            if waited >= self.lock_timeout_us:
-                raise OSError(_ETIMEDOUT)
-            self._delay(_POLL_US)
-            waited += _POLL_US
+        while waited < self.lock_timeout_us:
+            self._delay(_LOCK_POLL_US)
+            if self._measured:
+                waited = ticks_diff(ticks_us(), t0)
+            else:
+                waited += _LOCK_POLL_US
+            if self.bus.try_lock():
+                return
+        raise OSError(_ETIMEDOUT, "I2C bus lock not free after %d us" % waited)
 
     def readfrom_mem_into(self, addr, reg, buf):
-        self._reg[0] = reg
+        self._out[0] = reg
         self._addr = addr
-        self._into = buf
-        self._locked_read()
-
-    def _locked_read(self):
-        # its own frame: with readfrom_mem_into's three arguments the `with` would not fit
-        self._lock()
-        with self._held:
-            self._read()
+        self._in = buf
+        self._read()
 
     def _read(self):
-        self._i2c.writeto_then_readfrom(self._addr, self._reg, self._into)
+        # The transfer's arguments come from the instance and the bound method is made once:
+        # with the `with` block's slots, this frame is then 9 words + the exception-stack
+        # entry, within the 11 MicroPython keeps on the C stack (see firmware/i2cdevice.py).
+        with self._held:
+            self._write_then_read(self._addr, self._reg, self._in)
 
     def writeto_mem(self, addr, reg, buf):
-        # configuration writes only (not per sample): one buffer of register + data
-        data = bytearray(1 + len(buf))
-        data[0] = reg
-        data[1:] = buf
-        self._lock()
+        n = self._stage(reg, buf)
         with self._held:
-            self._i2c.writeto(addr, data)
+            if n:
+                self.bus.writeto(addr, self._out, end=n)
+            else:
+                self.bus.writeto(addr, bytes((reg,)) + bytes(buf))
+
+    def _stage(self, reg, buf):
+        # reg and buf into the preallocated buffer: its used length, or 0 when it is too short
+        n = len(buf)
+        if n >= _OUT_MAX:
+            return 0
+        out = self._out
+        out[0] = reg
+        for i in range(n):
+            out[i + 1] = buf[i]
+        return n + 1
 
     def scan(self):
-        self._lock()
         with self._held:
-            return list(self._i2c.scan())
+            return list(self.bus.scan())

@@ -4,11 +4,14 @@
 
 const(x)          micropython.const on MicroPython (the constant costs no RAM); the identity
                   elsewhere (CPython, or a port built without it).
-ticks_us()        time.ticks_us where the port has it (CircuitPython: from time.monotonic_ns),
-                  else None (CPython: the simulator passes its own clock). ticks_diff(a, b)
-                  likewise: the wrapping difference.
-sleep_us(us)      time.sleep_us where it exists (CircuitPython: a wait on monotonic_ns), else
-                  a no-op (the simulator passes its own).
+ticks_us()        time.ticks_us where the port has it, else None (CPython: the simulator
+                  passes its own clock). ticks_diff(a, b) likewise: the wrapping difference.
+                  CircuitPython (a micropython module, no time.ticks_us): time.monotonic_ns
+                  in microseconds, wrapped to 30 bits as MicroPython's ticks are, with the same
+                  wrapping ticks_diff (its monotonic_ns is a long int: each call allocates).
+sleep_us(us)      time.sleep_us where it exists; on CircuitPython a busy wait on that clock
+                  (its time.sleep takes float seconds); else a no-op (the simulator passes
+                  its own).
 wall_clock()      (now_us, diff) for measuring real time: ticks_us / ticks_diff on MicroPython,
                   perf_counter_ns on CPython (used only for stall figures, never for logic).
 kernels()         the fast-path module firmware.fast (viper/native code with the same
@@ -23,40 +26,44 @@ import time
 
 try:
     from micropython import const
+    _MICRO = True
 except ImportError:  # CPython, or a port without micropython.const
+    _MICRO = False
+
     def const(x):
         return x
 
+_TICKS_MAX = const((1 << 30) - 1)   # MicroPython's ticks wrap at 2**30 (time.ticks_add docs)
+_TICKS_HALF = const(1 << 29)
+
 ticks_us = getattr(time, "ticks_us", None)
 ticks_diff = getattr(time, "ticks_diff", None)
+
+
+def _mono_us():
+    return (time.monotonic_ns() // 1000) & _TICKS_MAX
+
+
+def _mono_diff(a, b):
+    return ((a - b + _TICKS_HALF) & _TICKS_MAX) - _TICKS_HALF
 
 
 def _no_sleep(us):
     pass
 
 
-sleep_us = getattr(time, "sleep_us", None) or _no_sleep
+def _busy_sleep(us):
+    t0 = ticks_us()
+    while ticks_diff(ticks_us(), t0) < us:
+        pass
 
-# CircuitPython has no ticks_us/sleep_us: its integer monotonic_ns gives both (it never
-# wraps, so the difference is a plain subtraction; the sleep waits on it, no float needed)
-try:
-    import sys
-    _CIRCUITPY = sys.implementation.name == "circuitpython"
-except (ImportError, AttributeError):
-    _CIRCUITPY = False
-if ticks_us is None and _CIRCUITPY:
-    _mono = time.monotonic_ns
 
-    def ticks_us():
-        return _mono() // 1000
-
-    def ticks_diff(a, b):
-        return a - b
-
-    def sleep_us(us):
-        end = _mono() + us * 1000
-        while _mono() < end:
-            pass
+sleep_us = getattr(time, "sleep_us", None)
+if ticks_us is None and _MICRO and hasattr(time, "monotonic_ns"):  # CircuitPython
+    ticks_us = _mono_us
+    ticks_diff = _mono_diff
+    sleep_us = sleep_us or _busy_sleep
+sleep_us = sleep_us or _no_sleep
 
 
 def _sub(a, b):
