@@ -4,11 +4,12 @@ The only place, with host_sim/cli/, where the simulator and the firmware meet.
 Commands: run (the compass on the simulated board), calibrate (offline calibration of a CSV
 log), demo (the end-to-end story, JSON with --json), bench (make bench), quality (the
 calibration quality database, docs/quality.md; CPython only), wmm (write the board's
-field-model table: make wmm), field (the board's field model at given points).
+field-model table: make wmm), field (the board's field model at given points), serve (the
+simulated board speaking MotionCal's protocol on stdin/stdout or a pty: docs/motioncal.md).
 """
 import sys
 
-_COMMANDS = ("run", "calibrate", "demo", "bench", "quality", "wmm", "field")
+_COMMANDS = ("run", "calibrate", "demo", "bench", "quality", "wmm", "field", "serve")
 
 
 def main(argv):
