@@ -3,6 +3,9 @@
 First run: no stored calibration, so the heading is raw until you turn the board through a
 figure-8 (every direction: over and around); the line shows coverage and samples grow, then
 "model 4" or "model 10" once a calibration is accepted - it is saved and used at every boot.
+
+board.MODE = "motioncal": stream to PJRC MotionCal instead and take its Send Cal
+(docs/motioncal.md). From the REPL (Ctrl-C stops the compass loop): motioncal().
 """
 import time
 
@@ -10,6 +13,7 @@ import board
 from firmware.app import CompassApp, status_line
 from firmware.store import CalStore
 
+MOTIONCAL = getattr(board, "MODE", "compass") == "motioncal"
 i2c = board.make_i2c()
 while True:
     try:
@@ -19,11 +23,31 @@ while True:
                          # None on a real board (time.sleep_us, time.ticks_us); the
                          # simulated board (boards/host) brings its own clock
                          delay_us=getattr(board, "delay_us", None),
-                         ticks_us=getattr(board, "ticks_us", None))
+                         ticks_us=getattr(board, "ticks_us", None),
+                         # MotionCal mode: its calibration, not the app's own; an HMC5883L
+                         # at 75 Hz for 50 Raw lines/s (the QMC chips ignore "rate")
+                         learn=False if MOTIONCAL else None,
+                         mag_options={"rate": 75} if MOTIONCAL else None)
         break
     except OSError as e:  # SensorNotFound, BusError: wiring or power; say so and retry
         print("eCompass: %s" % e)
         time.sleep(2)
 print("eCompass: %s, accelerometer %s, stored calibration: %s" % (
     app.mag.KIND, "yes" if app.accel else "no", app.load_reason or "loaded"))
-app.run(None, report=lambda a: print(status_line(a)), every_us=500000)
+
+
+def motioncal(rate_hz=50):
+    """MotionCal mode on this app until Ctrl-C (firmware/motioncal_mode.py)."""
+    from firmware.motioncal_mode import MotionCalMode
+    try:
+        from micropython import kbd_intr  # 0x03 in MotionCal's packet is data
+    except ImportError:
+        kbd_intr = None
+    MotionCalMode(app, rate_hz=rate_hz, mag_axes=board.MAG_AXES, kbd_intr=kbd_intr,
+                  ticks_us=getattr(board, "ticks_us", None)).run()
+
+
+if MOTIONCAL:
+    motioncal()
+else:
+    app.run(None, report=lambda a: print(status_line(a)), every_us=500000)

@@ -289,3 +289,13 @@ def test_serve_on_a_pty_like_motioncal_would_open_it():
     finally:
         proc.kill()
         proc.communicate()
+
+
+def test_motioncal_mode_prints_the_same_on_cpython_and_micropython():
+    from tests.mp import json_lines, parity
+    events = json_lines(parity(["tests/scenarios/motioncal_mode_parity.py"]))
+    *steps, summary = events
+    assert [e[1:4] for e in steps] == [["applied", 1, 0], ["bad_crc", 1, 1],
+                                       ["applied", 2, 1]]
+    assert summary[3] is not None and summary[4] == [-1, 3]  # Ctrl-C raised, kbd_intr restored
+    assert summary[10] == 2  # both good packets stored
