@@ -4,6 +4,9 @@ At boot a calibration file CAL_FILE (calibration.json) is imported into the stor
 First run: no stored calibration, so the heading is raw until you turn the board through a
 figure-8 (every direction: over and around); the line shows coverage and samples grow, then
 "model 4" or "model 10" once a calibration is accepted - it is saved and used at every boot.
+
+board.MODE = "motioncal": stream to PJRC MotionCal instead and take its Send Cal
+(docs/motioncal.md). From the REPL (Ctrl-C stops the compass loop): motioncal().
 """
 import time
 
@@ -18,13 +21,16 @@ from firmware.store import CalStore
 CAL_FILE = getattr(board, "CALIBRATION_FILE", None) or (
     board.STORE_DIR.rstrip("/") + "/calibration.json")
 
+MOTIONCAL = getattr(board, "MODE", "compass") == "motioncal"
 i2c = board.make_i2c()
 # None on a real board (time.sleep_us, time.ticks_us); the simulated board (boards/host)
 # brings its own clock
 delay_us = getattr(board, "delay_us", None)
 while True:
     try:
-        mag = detect(i2c, delay_us=delay_us) if delay_us else detect(i2c)
+        # MotionCal mode: an HMC5883L at 75 Hz for 50 Raw lines/s (the QMC chips take no rate)
+        opts = {"rate": 75} if MOTIONCAL else {}
+        mag = detect(i2c, delay_us=delay_us, **opts) if delay_us else detect(i2c, **opts)
         store = CalStore(board.STORE_DIR)
         imported = import_calibration(CAL_FILE, store, mag)
         if imported is not None:
@@ -32,11 +38,29 @@ while True:
         app = CompassApp(i2c, mag=mag, mag_axes=board.MAG_AXES, accel_axes=board.ACCEL_AXES,
                          declination_cdeg=board.DECLINATION_CDEG,
                          store=store, delay_us=delay_us,
-                         ticks_us=getattr(board, "ticks_us", None))
+                         ticks_us=getattr(board, "ticks_us", None),
+                         # MotionCal mode: its calibration, not the app's own
+                         learn=False if MOTIONCAL else None)
         break
     except OSError as e:  # SensorNotFound, BusError: wiring or power; say so and retry
         print("eCompass: %s" % e)
         time.sleep(2)
 print("eCompass: %s, accelerometer %s, stored calibration: %s" % (
     app.mag.KIND, "yes" if app.accel else "no", app.load_reason or "loaded"))
-app.run(None, report=lambda a: print(status_line(a)), every_us=500000)
+
+
+def motioncal(rate_hz=50):
+    """MotionCal mode on this app until Ctrl-C (firmware/motioncal_mode.py)."""
+    from firmware.motioncal_mode import MotionCalMode
+    try:
+        from micropython import kbd_intr  # 0x03 in MotionCal's packet is data
+    except ImportError:
+        kbd_intr = None
+    MotionCalMode(app, rate_hz=rate_hz, mag_axes=board.MAG_AXES, kbd_intr=kbd_intr,
+                  ticks_us=getattr(board, "ticks_us", None)).run()
+
+
+if MOTIONCAL:
+    motioncal()
+else:
+    app.run(None, report=lambda a: print(status_line(a)), every_us=500000)

@@ -405,6 +405,13 @@ class CompassApp:
         self.compass.set_field(cal.field_out if cal.model is not None else 0, tol)
         self._locate()
 
+    def use_calibration(self, cal, save=True):
+        """Put `cal` (a Calibration made outside the app, e.g. from MotionCal's packet by
+        firmware/motioncal_mode.py) in force now, and save it to the store when `save`."""
+        self._use(cal)
+        if save:
+            self._save()
+
     def calibrate(self):
         """Start collecting samples for a new calibration (imports the calibration machinery);
         the calibration in force stays until a better one is accepted."""

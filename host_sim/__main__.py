@@ -5,11 +5,13 @@ Commands: run (the compass on the simulated board), calibrate (offline calibrati
 log), demo (the end-to-end story, JSON with --json), bench (make bench), quality (the
 calibration quality database, docs/quality.md; CPython only), wmm (write the board's
 field-model table: make wmm), field (the board's field model at given points), web (serve the browser
-calibrator, docs/web.md), soak (a seeded fault campaign, make soak; docs/faults.md).
+calibrator, docs/web.md), soak (a seeded fault campaign, make soak; docs/faults.md), serve (the
+simulated board speaking MotionCal's protocol on stdin/stdout or a pty: docs/motioncal.md).
 """
 import sys
 
-_COMMANDS = ("run", "calibrate", "demo", "bench", "quality", "wmm", "field", "web", "soak")
+_COMMANDS = ("run", "calibrate", "demo", "bench", "quality", "wmm", "field", "web", "soak",
+             "serve")
 
 
 def main(argv):

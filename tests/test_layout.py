@@ -53,8 +53,9 @@ def _graph(lazy=True):
 
 def test_firmware_reads_as_the_pipeline_one_module_per_job():
     # beside the pipeline: the field model, where the board is (location, quick calibration),
-    # the accuracy level, the MotionCal codec, importing a calibration file at boot
-    assert set(_modules(FW)) - {"field", "motioncal", "location", "quickcal",
+    # the accuracy level, the MotionCal codec and mode, importing a calibration file at boot,
+    # CircuitPython's bus adapter
+    assert set(_modules(FW)) - {"field", "motioncal", "motioncal_mode", "location", "quickcal",
                                 "accuracy", "calimport", "busio_i2c"} == set(PIPELINE)
 
 

@@ -11,6 +11,8 @@ BREAKOUT = "gy271"          # sensor mounting: see boards/breakouts.py (gy271, g
 MAG_AXES = "x,-y,-z"        # sensor -> body of BREAKOUT's magnetometer (boards/breakouts.py;
 ACCEL_AXES = "-x,y,z"       # a GY-521 MPU6050 lying the same way; tests/test_app.py checks both)
 DECLINATION_CDEG = 0        # local magnetic declination, centidegrees east-positive (NOAA/WMM)
+MODE = "compass"            # "compass": headings, self-calibrating; "motioncal": stream to
+#                             PJRC MotionCal and take its Send Cal (docs/motioncal.md)
 STORE_DIR = "/"             # where the calibration record lives (LittleFS on the internal flash)
 
 
