@@ -5,7 +5,6 @@ Goals (docs/field_model.md): at |lat| <= 60 deg over 2025.0-2030.0, declination 
 and max <= 0.5 deg, inclination max <= 0.3 deg, total field within 0.5 %.
 """
 import json
-import math
 import os
 import random
 import subprocess
@@ -18,16 +17,17 @@ from hypothesis import strategies as st
 from firmware import field
 from firmware.field import FieldModel, FieldTableError, decimal_year_e3
 from host_sim.cli import wmm
+from host_sim.cli.benchmarks import fieldacc
 from tests import intcheck, mp
 
 pygeomag = pytest.importorskip("pygeomag")
 ROOT = mp.ROOT
 TABLE = os.path.join(ROOT, "firmware", "wmm2025.bin")
 
-DECL_RMS_DEG = 0.1
-DECL_MAX_DEG = 0.5
-INCL_MAX_DEG = 0.3
-FIELD_MAX_PCT = 0.5
+DECL_RMS_DEG = fieldacc.GOALS["decl_rms_deg"]
+DECL_MAX_DEG = fieldacc.GOALS["decl_max_deg"]
+INCL_MAX_DEG = fieldacc.GOALS["incl_max_deg"]
+FIELD_MAX_PCT = fieldacc.GOALS["field_max_pct"]
 
 
 @pytest.fixture(scope="module")
@@ -38,63 +38,32 @@ def model():
 
 @pytest.fixture(scope="module")
 def reference():
-    return pygeomag.GeoMag(coefficients_file=wmm.COF)
-
-
-def _errors(model, ref, points):
-    """Per point: (declination, inclination error in deg, field error in %, reference H nT)."""
-    out = []
-    for lat_e7, lon_e7, year_e3 in points:
-        d, i, f, status = model.at(lat_e7, lon_e7, year_e3)
-        r = ref.calculate(glat=lat_e7 / 1e7, glon=lon_e7 / 1e7, alt=0, time=year_e3 / 1000)
-        dd = (d / 100 - r.d + 180) % 360 - 180
-        out.append((dd, i / 100 - r.i, (f - r.f) / r.f * 100, r.h))
-    return out
-
-
-def _points(rng, n, lat_lo, lat_hi):
-    """n points area-uniform in lat_lo <= |lat| <= lat_hi, dates uniform over the model's life."""
-    s0, s1 = math.sin(math.radians(lat_lo)), math.sin(math.radians(lat_hi))
-    pts = []
-    for _ in range(n):
-        lat = math.degrees(math.asin(rng.uniform(s0, s1))) * rng.choice((-1, 1))
-        pts.append((int(round(lat * 1e7)), rng.randint(-1800000000, 1800000000),
-                    rng.randint(2025000, 2030000)))
-    return pts
-
-
-def _summary(errs):
-    dd = [e[0] for e in errs]
-    return {"n": len(errs),
-            "decl_rms": math.sqrt(sum(v * v for v in dd) / len(dd)),
-            "decl_max": max(abs(v) for v in dd),
-            "incl_max": max(abs(e[1]) for e in errs),
-            "field_max_pct": max(abs(e[2]) for e in errs)}
+    return fieldacc.reference()
 
 
 def test_accuracy_against_the_full_model_within_60_deg(model, reference):
-    errs = _errors(model, reference, _points(random.Random(2025), 10000, 0, 60))
-    s = _summary(errs)
+    errs = fieldacc.errors(model, reference, fieldacc.points(random.Random(2025), 10000, 0, 60))
+    s = fieldacc.summary(errs)
     print("\n|lat| <= 60: %s" % json.dumps({k: round(v, 4) for k, v in s.items()}))
-    assert s["decl_rms"] <= DECL_RMS_DEG
-    assert s["decl_max"] <= DECL_MAX_DEG
-    assert s["incl_max"] <= INCL_MAX_DEG
+    assert s["decl_rms_deg"] <= DECL_RMS_DEG
+    assert s["decl_max_deg"] <= DECL_MAX_DEG
+    assert s["incl_max_deg"] <= INCL_MAX_DEG
     assert s["field_max_pct"] <= FIELD_MAX_PCT
 
 
 def test_polar_band_figures(model, reference):
     """|lat| > 60 deg: reported; declination is held to the goals only where WMM itself trusts
     a compass (H >= 6000 nT, outside its caution zone); inclination and field everywhere."""
-    errs = _errors(model, reference, _points(random.Random(2030), 3000, 60, 90))
-    s = _summary(errs)
-    usable = [e for e in errs if e[3] >= 6000]
-    su = _summary(usable)
+    errs = fieldacc.errors(model, reference, fieldacc.points(random.Random(2030), 3000, 60, 90))
+    s = fieldacc.summary(errs)
+    usable = [e for e in errs if e[3] >= fieldacc.H_TRUSTED_NT]
+    su = fieldacc.summary(usable)
     print("\n|lat| > 60: %s" % json.dumps({k: round(v, 4) for k, v in s.items()}))
     print("|lat| > 60, H >= 6000 nT: %s" % json.dumps({k: round(v, 4) for k, v in su.items()}))
-    assert s["incl_max"] <= INCL_MAX_DEG
+    assert s["incl_max_deg"] <= INCL_MAX_DEG
     assert s["field_max_pct"] <= FIELD_MAX_PCT
-    assert su["decl_rms"] <= DECL_RMS_DEG
-    assert su["decl_max"] <= DECL_MAX_DEG
+    assert su["decl_rms_deg"] <= DECL_RMS_DEG
+    assert su["decl_max_deg"] <= DECL_MAX_DEG
 
 
 def test_status_marks_weak_horizontal_field(model, reference):
@@ -109,7 +78,7 @@ def test_status_marks_weak_horizontal_field(model, reference):
 
 def test_components_match_the_reference_in_nt(model, reference):
     rng = random.Random(7)
-    for lat_e7, lon_e7, year_e3 in _points(rng, 200, 0, 60):
+    for lat_e7, lon_e7, year_e3 in fieldacc.points(rng, 200, 0, 60):
         model.at(lat_e7, lon_e7, year_e3)
         r = reference.calculate(glat=lat_e7 / 1e7, glon=lon_e7 / 1e7, alt=0, time=year_e3 / 1000)
         # 0.5 % of the field is >= 110 nT anywhere (F >= 22 uT at sea level)
@@ -268,7 +237,7 @@ def test_interpolation_headroom_is_reported():
 
 
 def test_micropython_heap_per_query_and_import():
-    out = mp.json_lines(mp.run(["tests/scenarios/field_alloc.py"], micro=True))[0]
+    out = mp.json_lines(mp.run(["-m", "host_sim.cli.benchmarks.fieldheap"], micro=True))[0]
     print("\nMicroPython heap: %s" % json.dumps(out))
     assert out["query_bytes"] <= 1024
     assert out["first_bytes"] <= 1024 + 512  # + one-time cost of the first atan2 call

@@ -1,6 +1,7 @@
 """Quick calibration (firmware/quickcal.py, CompassApp.quick_calibrate): the expected field
-vector against the simulator, the heading accuracy it reaches (docs/quick_calibration.md has
-the full measurement: `python -m tests.quickcal_measure`), and its refusals."""
+vector against the simulator, the heading accuracy it reaches (docs/quick_calibration.md; the
+full measurement is in `make bench`: host_sim/cli/benchmarks/quickcal.py), the limit no
+one-pose method can pass, and its refusals."""
 import math
 import random
 
@@ -46,6 +47,49 @@ def test_two_opposite_poses_cancel_soft_iron():
     e2 = _errors(0.03, 2)
     assert max(abs(x) for x in e2) <= TWO_POSE_MAX_DEG
     assert sum(x * x for x in e2) < 0.7 * sum(x * x for x in e1)
+
+
+def _twin_boards(dev, yaw):
+    """Two level boards (the same noise seed) that read the same at heading `yaw`: soft iron I + E and
+    I - E, E = dev (u v^T + v u^T) with u along the horizontal field the chip senses there and
+    v across it (eigenvalues +-dev, 0), hard irons differing by 2 E B0 (AN4246 eq. 8)."""
+    w0 = L.world_at(L.ZURICH)
+    b0 = L.board(w0, "qmc5883l", True)
+    L.hold(b0, yaw)
+    f = w0.sensor_field(b0.clock.now_us, b0.mount)          # uT in the chip's axes, W = I
+    h = math.hypot(f[0], f[1])                              # the chip's z is vertical (level)
+    u, v = (f[0] / h, f[1] / h, 0.0), (-f[1] / h, f[0] / h, 0.0)
+    e = [[dev * (u[i] * v[j] + v[i] * u[j]) for j in range(3)] for i in range(3)]
+    ef = [sum(e[i][j] * f[j] for j in range(3)) for i in range(3)]
+    v1 = (10.0, -20.0, 15.0)
+    v2 = tuple(v1[i] + 2 * ef[i] for i in range(3))
+    out = []
+    for sign, hard in ((1, v1), (-1, v2)):
+        soft = tuple(tuple((i == j) + sign * e[i][j] for j in range(3)) for i in range(3))
+        out.append(L.board(L.world_at(L.ZURICH, hard, soft), "qmc5883l", True, seed=1))
+    return out
+
+
+def test_one_pose_cannot_meet_2_deg_at_3_percent_soft_iron():
+    """Why the one-pose goal holds to +-1.5 % and not +-3 %: the twin boards read alike at the
+    calibration pose, get the same calibration, and at the opposite heading their headings
+    differ by ~4 dev rad; whatever one pose gives, one board is >= 2 dev rad = 3.4 deg off."""
+    yaw = 30.0
+    errs = []
+    cals = []
+    for b in _twin_boards(0.03, yaw):
+        app = L.app_on(b, learn=False)
+        app.set_location(L.ZURICH[0], L.ZURICH[1], L.YEAR_E3)
+        L.hold(b, yaw)
+        W.run_until(app, b, b.clock.now_us / 1e6 + 0.1)
+        cals.append(app.quick_calibrate(L.true_heading_cdeg(b)))
+        L.hold(b, yaw + 180.0)
+        errs.append(L.mean_error_deg(app, b))
+    assert all(abs(cals[0].offset[i] - cals[1].offset[i]) <= 2 for i in range(3)), cals
+    spread = abs(errs[0] - errs[1])
+    assert spread >= math.degrees(4 * 0.03) * 0.9, errs   # 6.9 deg, quantisation aside
+    print("\nopposite heading, twin boards: %.2f and %.2f deg" % tuple(errs))
+    assert max(abs(x) for x in errs) > 2.0 + 1.0, errs
 
 
 def test_level_board_without_accelerometer():

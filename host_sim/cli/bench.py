@@ -222,9 +222,14 @@ def collect(smoke, log=print):
             log("  %-10s %s x %d" % (name, "micropython" if micro else "cpython", procs))
             res[name]["micropython" if micro else "cpython"] = run_merged(name, micro, args,
                                                                          procs)
-    for name in ("accuracy", "intcount", "quality"):
+    for name in ("accuracy", "intcount", "quality", "fieldacc", "quickcal"):
         log("  %-10s cpython" % name)
         res[name] = {"cpython": run_script(name, False, args)}
+    res["fieldheap"] = {}
+    for label, interp in (("micropython", True), ("x86-32", MICROPYTHON_32)):
+        if interp is True or os.path.exists(interp):
+            log("  fieldheap  %s" % label)
+            res["fieldheap"][label] = run_script("fieldheap", interp, args)
     session = os.path.join(build, "session.bin")
     write_session(session, smoke)
     res["memory"] = {}
@@ -490,6 +495,54 @@ def rows_quality(res):
                      and q["false_alarm_rate"] <= 0.01))]
 
 
+def rows_location(res):
+    """The field model against the float WMM2025, its flash and heap, and the quick
+    calibration (host_sim/cli/benchmarks/fieldacc.py, fieldheap.py, quickcal.py)."""
+    from host_sim.cli.benchmarks.fieldacc import GOALS as FG
+    R = []
+    fa = _get(res, "fieldacc", "cpython") or {}
+    if "error" in fa or "skipped" in fa:
+        R.append(("8 field model vs WMM2025", (fa.get("error") or fa.get("skipped"))[:60], "",
+                  "", "ERROR" if "error" in fa else "skipped"))
+    elif fa:
+        for key, label in (("mid", "|lat| <= 60"), ("polar_trusted", "|lat| > 60, H >= 6000 nT"),
+                           ("polar", "|lat| > 60, all")):
+            d = fa[key]
+            ok = (d["decl_rms_deg"] <= FG["decl_rms_deg"] and d["decl_max_deg"] <=
+                  FG["decl_max_deg"] and d["incl_max_deg"] <= FG["incl_max_deg"] and
+                  d["field_max_pct"] <= FG["field_max_pct"])
+            R.append(("8 field model vs WMM2025, %s, %d points: decl RMS / max, incl max [deg], "
+                      "F max [%%]" % (label, d["n"]), "%.3f / %.3f, %.3f, %.3f" % (
+                          d["decl_rms_deg"], d["decl_max_deg"], d["incl_max_deg"],
+                          d["field_max_pct"]), "same integers",
+                      "goal <= 0.1 / 0.5, 0.3, 0.5" if key != "polar" else "reported",
+                      verdict(ok) if key != "polar" else ""))
+        tb = fa.get("table_bytes")
+        R.append(("8 field model table on flash (firmware/wmm2025.bin)", _f(tb, "%.0f B"), "",
+                  "goal <= 16 KB", verdict(tb is not None and tb <= 16 * 1024)))
+    for label in ("micropython", "x86-32"):
+        h = _get(res, "fieldheap", label) or {}
+        if not h:
+            continue
+        if "error" in h:
+            R.append(("8 field model heap, %s" % label, "", h["error"][:60], "", "ERROR"))
+            continue
+        run = max(h["model_bytes"], h["query_bytes"], h["first_bytes"] - 512)
+        R.append(("8 field model heap, %s: open model / per query / import [B]" % label, "",
+                  "%d / %d / %d" % (h["model_bytes"], h["query_bytes"], h["import_bytes"]),
+                  "goal <= 1 KB at run time", verdict(run <= 1024)))
+    q = _get(res, "quickcal", "cpython") or {}
+    if "error" in q:
+        R.append(("9 quick calibration", q["error"][:60], "", "", "ERROR"))
+    for r in q.get("rows", ()):
+        if r["setup"].endswith("level") and r["soft_iron_pct"] in (1.5, 3.0):
+            R.append(("9 quick cal, %s, %d pose%s, soft iron +-%.1f %%: RMS / max [deg]" % (
+                r["setup"], r["poses"], "s" if r["poses"] > 1 else "", r["soft_iron_pct"]),
+                "%.2f / %.2f" % (r["rms_deg"], r["max_deg"]), "", "goal max <= 2 (%d seeds)"
+                % r["seeds"], verdict(r["max_deg"] <= 2.0)))
+    return R
+
+
 def rows_32bit(res):
     """The 32-bit rows: app per-sample ratios on both MicroPythons, heap on x86-32."""
     R = []
@@ -714,6 +767,7 @@ def rows(res, derived):
                 s10["estimate_ms"], s10["upper_ms"]), "%d long-int ops" % s10["long_ops"], ""))
     R.extend(rows_32bit(res))
     R.extend(rows_quality(res))
+    R.extend(rows_location(res))
     return R
 
 
@@ -842,9 +896,25 @@ def readme_section(R, m, derived, res=None):
         "overhead is not." % src,
         "",
         summary(res or {}, derived),
+    ] + quickcal_section(res or {}) + [
         END,
     ]
     return "\n".join(lines)
+
+
+def quickcal_section(res):
+    """The whole quick-calibration table (docs/quick_calibration.md explains it)."""
+    q = _get(res, "quickcal", "cpython") or {}
+    if not q.get("rows"):
+        return []
+    from host_sim.cli.benchmarks.quickcal import markdown
+    return ["", "### Quick calibration (one pose / two opposite poses)", "",
+            "Heading error at 12 other headings after `quick_calibrate` (%d seeds per row; "
+            "host_sim/cli/benchmarks/quickcal.py, explained in docs/quick_calibration.md). "
+            "One pose cannot stay within 2 deg at +-3 %% soft iron whatever the method: "
+            "tests/test_quickcal.py shows two boards that read alike at the calibration pose "
+            "and differ by ~7 deg at the opposite heading." % q["rows"][0]["seeds"], "",
+            markdown(q["rows"])]
 
 
 def write_doc(section, path=None):

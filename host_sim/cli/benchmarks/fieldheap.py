@@ -1,4 +1,5 @@
-# MicroPython only: what the field model costs on the heap.
+# MicroPython only: what the field model costs on the heap (docs/field_model.md, `make bench`,
+# tests/test_field.py). python -m host_sim.cli.benchmarks.fieldheap (one JSON line)
 #
 # import_bytes     live heap after `import firmware.field` (its bytecode and constants; the
 #                  modules it imports, firmware.trig and firmware.fixedpoint, imported first)
