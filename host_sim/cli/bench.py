@@ -271,6 +271,8 @@ def memory32(session, build, smoke, log=print):
     out["mpy"] = run_script("memory", MICROPYTHON_32, [session] + (["--smoke"] if smoke else []),
                             extra_path=mpy, cwd=build)
     out["session_bytes"] = os.path.getsize(session)
+    log("  modheap    x86-32 (.mpy)")
+    out["modules_mpy"] = run_script("modheap", MICROPYTHON_32, extra_path=mpy, cwd=build)
     rom = os.path.join(build, "firmware.romfs")
     try:
         romfs_image(os.path.join(mpy, "firmware"), rom)
@@ -278,6 +280,8 @@ def memory32(session, build, smoke, log=print):
         out["romfs"] = run_script("memory", MICROPYTHON_32, [session, rom, "--romfs"] +
                                   (["--smoke"] if smoke else []), cwd=build)
         out["romfs_bytes"] = os.path.getsize(rom)
+        log("  modheap    x86-32 (ROMFS)")
+        out["modules_romfs"] = run_script("modheap", MICROPYTHON_32, [rom, "--romfs"], cwd=build)
     except (BenchError, OSError) as e:
         out["romfs"] = {"error": str(e)}
         rom = None
@@ -896,10 +900,30 @@ def readme_section(R, m, derived, res=None):
         "overhead is not." % src,
         "",
         summary(res or {}, derived),
-    ] + quickcal_section(res or {}) + [
+    ] + modheap_section(res or {}) + quickcal_section(res or {}) + [
         END,
     ]
     return "\n".join(lines)
+
+
+def modheap_section(res):
+    """Heap per firmware module on the 32-bit build, from .mpy files and from ROMFS."""
+    mp = _get(res, "memory32", "modules_mpy", "modules") or {}
+    rf = _get(res, "memory32", "modules_romfs", "modules") or {}
+    if not mp:
+        return []
+    from host_sim.cli.benchmarks.modheap import HEADING, MACHINERY
+    out = ["", "### Heap per firmware module, 32-bit MicroPython (x86-32)", "",
+           "Live heap each module adds when imported in this order "
+           "(host_sim/cli/benchmarks/modheap.py): from .mpy files its bytecode is on the heap; "
+           "from ROMFS (as frozen) only its objects and names are.", "",
+           "| module | part | .mpy [B] | ROMFS [B] |", "|---|---|---|---|"]
+    for part, names in (("heading", HEADING), ("calibration and extras", MACHINERY)):
+        for n in names:
+            out.append("| %s | %s | %s | %s |" % (n, part, mp.get(n, "n/a"), rf.get(n, "n/a")))
+        out.append("| **total** | %s | %s | %s |" % (
+            part, sum(mp.get(n, 0) for n in names), sum(rf.get(n, 0) for n in names)))
+    return out
 
 
 def quickcal_section(res):

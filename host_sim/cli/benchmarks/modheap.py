@@ -1,0 +1,49 @@
+"""MicroPython only: the live heap each firmware module adds when it is imported, in the order a
+board imports them (what a calibrated board needs to show a heading first, then the
+calibration machinery). From .py source or .mpy files the module's bytecode is on the heap;
+from a ROMFS image (or frozen) it stays in flash and what remains is the module's objects:
+its dict, function and class objects, module-level tables, and the names (qstrs) it interns.
+
+python -m host_sim.cli.benchmarks.modheap [IMAGE --romfs]   (one JSON line)
+"""
+import gc
+import sys
+
+from host_sim.cli.benchmarks import common
+
+HEADING = ("compat", "errors", "fixedpoint", "i2cdevice", "trig", "kang_tables", "axes",
+           "calibration", "compass", "health", "store", "mpu6050", "qmc5883l", "detect", "app")
+MACHINERY = ("history", "samples", "accum", "solve", "acceptance", "calibrator", "hmc5883l",
+             "qmc5883p", "location", "field", "quickcal", "accuracy", "motioncal",
+             "motioncal_mode", "calimport")
+
+
+def live():
+    gc.collect()
+    return gc.mem_alloc()
+
+
+def main():
+    if not hasattr(gc, "mem_alloc"):
+        common.emit({"interpreter": common.interpreter(), "skipped": "needs gc.mem_alloc"})
+        return
+    if "--romfs" in sys.argv:
+        import vfs
+        with open(sys.argv[1], "rb") as f:
+            rom = f.read()
+        vfs.mount(vfs.VfsRom(rom), "/rom")
+        sys.path.insert(0, "/rom")
+    out = {}
+    prev = live()
+    for name in HEADING + MACHINERY:
+        __import__("firmware." + name)
+        now = live()
+        out[name] = now - prev
+        prev = now
+    common.emit({"interpreter": common.interpreter(), "modules": out,
+                 "heading": sum(out[n] for n in HEADING),
+                 "machinery": sum(out[n] for n in MACHINERY)})
+
+
+if __name__ == "__main__":
+    main()
