@@ -9,6 +9,7 @@ firmware.calibrator on CPython and asks for the same integers, and rebuilds the 
 tests/motioncal_ref.build_packet. Skipped, with the reason, when node, chromium or the npm
 packages are missing (`make test` installs them; as root it installs chromium).
 """
+import base64
 import json
 import os
 import shutil
@@ -21,6 +22,7 @@ import pytest
 from firmware.calibrator import SOLVE_EVERY, Calibrator
 from firmware.errors import CalibrationRejected
 from host_sim.cli import web as webcli
+from host_sim.cli.args import UsageError
 from tests.motioncal_ref import build_packet, crc16_modbus, is_float_ok, sent_values
 
 ROOT = webcli.ROOT
@@ -184,7 +186,7 @@ def test_cli_bad_port_is_one_line(capsys):
 def test_cli_port_in_use_is_one_line(capsys, monkeypatch):
     import socket
     monkeypatch.setattr(webcli, "vendored", lambda root=ROOT: True)
-    monkeypatch.setattr(webcli, "write_manifest", lambda root=ROOT: None)
+    monkeypatch.setattr(webcli, "refresh", lambda root=ROOT: None)
     s = socket.socket()
     s.bind(("127.0.0.1", 0))
     s.listen(1)
@@ -217,6 +219,53 @@ def test_server_serves_web_and_firmware_only():
     finally:
         srv.shutdown()
         srv.server_close()
+
+
+def _fake_root(tmp_path, mjs):
+    (tmp_path / "firmware").mkdir()
+    (tmp_path / "firmware" / "__init__.py").write_text("")
+    (tmp_path / "firmware" / "a.py").write_text("X = '\u00b5T </script>'\n")
+    (tmp_path / "web" / "vendor").mkdir(parents=True)
+    (tmp_path / "web" / "webcal.py").write_text("import firmware.a\n")
+    (tmp_path / "web" / "vendor" / "micropython.mjs").write_text(mjs)
+    (tmp_path / "web" / "vendor" / "micropython.wasm").write_bytes(b"\0asm\1\0\0\0\xff")
+    return str(tmp_path)
+
+
+LOADER = ("var u=import.meta.url;async function _createMicroPythonModule(m){return m}"
+          "export default _createMicroPythonModule;export async function loadMicroPython(o)"
+          "{return _createMicroPythonModule(o)}globalThis.x=1;")
+
+
+def test_bundle_holds_the_port_and_the_sources(tmp_path):
+    root = _fake_root(tmp_path, LOADER)
+    with open(webcli.write_bundle(root), encoding="utf-8") as f:
+        text = f.read()
+    head, loader = text.split("globalThis.webcalBundle = ", 1)[1].split("\n};\n", 1)
+    data = json.loads(head + "}")
+    assert base64.b64decode(data["wasm"]) == b"\0asm\1\0\0\0\xff"
+    assert data["glue"] == "import firmware.a\n"
+    assert data["firmware"] == {"__init__.py": "", "a.py": "X = '\u00b5T </script>'\n"}
+    # the loader as a classic script: no export statement, no import.meta, its export handed
+    # over at the end
+    assert "export " not in loader and "import.meta" not in loader
+    assert "async function loadMicroPython(o)" in loader
+    assert loader.rstrip().endswith("globalThis.webcalBundle.loadMicroPython = loadMicroPython;\n})();")
+    if shutil.which("node"):
+        p = subprocess.run(["node", "--check", os.path.join(root, "web", "vendor", "bundle.js")],
+                           capture_output=True, text=True, timeout=30)
+        assert p.returncode == 0, p.stderr
+
+
+def test_bundle_refuses_an_unknown_loader(tmp_path):
+    root = _fake_root(tmp_path, LOADER.replace("export default", "export  default"))
+    with pytest.raises(UsageError) as e:
+        webcli.write_bundle(root)
+    assert "\n" not in str(e.value) and "micropython.mjs" in str(e.value)
+    assert not os.path.exists(os.path.join(root, "web", "vendor", "bundle.js"))
+    # an export left over after the two expected ones is refused too
+    with pytest.raises(UsageError):
+        webcli.port_script(LOADER + "export const y=2;")
 
 
 def test_manifest_lists_every_firmware_module(tmp_path):
