@@ -101,8 +101,10 @@ def test_page_loads_from_files_or_the_bundle(run):
     # served: the port's module, its .wasm and firmware/ fetched; file://: vendor/bundle.js
     # (Chromium fetches no file from a file:// page), with no fallback taken when served
     assert run["loadedFrom"] == {"served": "files", "file": "bundle"}[run["mode"]]
-    # Chromium counts file:// as a secure context: Web Serial is offered there too (docs/web.md)
+    # Chromium counts file:// as a secure context: Web Serial is offered there too, and
+    # getPorts() answers (no port granted yet) rather than refusing the origin (docs/web.md)
     assert run["secureContext"] is True and run["webSerial"] is True
+    assert run["serialPorts"] == 0
 
 
 def test_simulated_board_streams(run):
@@ -271,7 +273,7 @@ def test_bundle_holds_the_port_and_the_sources(tmp_path):
     # over at the end
     assert "export " not in loader and "import.meta" not in loader
     assert "async function loadMicroPython(o)" in loader
-    assert loader.rstrip().endswith("globalThis.webcalBundle.loadMicroPython = loadMicroPython;\n})();")
+    assert loader.endswith("\nglobalThis.webcalBundle.loadMicroPython = loadMicroPython;\n})();\n")
     if shutil.which("node"):
         p = subprocess.run(["node", "--check", os.path.join(root, "web", "vendor", "bundle.js")],
                            capture_output=True, text=True, timeout=30)

@@ -22,7 +22,7 @@ const params = new URLSearchParams(location.search);
 // What the page exposes for tests and for the curious (window.webcal).
 const W = window.webcal = {
     ready: false, readyMs: null, error: null,
-    loadedFrom: null,       // "files" (served: vendor/, ../firmware/) or "bundle" (vendor/bundle.js)
+    loadedFrom: null,       // "files" (vendor/ and ../firmware/, served) or "bundle"
     source: null, lines: 0, badLines: 0,
     samples: [],            // every magnetometer sample fed to the calibrator, 0.1 uT, in order
     log: [],                // every solve: {n: samples fed before it, cal | reason}

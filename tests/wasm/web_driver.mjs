@@ -42,8 +42,11 @@ try {
     out.bootError = await page.evaluate(() => window.webcal.error);
     // where the port and the sources came from ("files" or "bundle"), and what the page's
     // origin gets: a secure context and navigator.serial (Web Serial), as Chromium decides
-    Object.assign(out, await page.evaluate(() => ({ loadedFrom: window.webcal.loadedFrom,
-        secureContext: window.isSecureContext, webSerial: "serial" in navigator })));
+    // getPorts(): the ports this origin was granted (none yet), or why it was refused
+    Object.assign(out, await page.evaluate(async () => ({ loadedFrom: window.webcal.loadedFrom,
+        secureContext: window.isSecureContext, webSerial: "serial" in navigator,
+        serialPorts: "serial" in navigator
+            ? await navigator.serial.getPorts().then((p) => p.length, (e) => String(e)) : null })));
     if (!out.bootError) {
         const s0 = Date.now();
         await page.click("#sim");
