@@ -45,7 +45,8 @@ wasm:  ## install the WebAssembly test tier from npm (skips without node)
 	fi
 
 # web: the browser calibrator (docs/web.md): vendors the WebAssembly port into web/vendor/
-# (git-ignored) and, as root, installs Debian's chromium for tests/test_web.py when missing.
+# (git-ignored) with bundle.js, what web/index.html opened from file:// loads, and, as root,
+# installs Debian's chromium for tests/test_web.py when missing.
 web: $(STAMP) wasm  ## vendor the WebAssembly port into web/ for the browser calibrator; chromium for its test
 	@if [ ! -x /usr/bin/chromium ]; then \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \

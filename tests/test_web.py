@@ -1,16 +1,20 @@
 """The browser calibrator (web/, docs/web.md) in a real headless Chromium.
 
-One run of tests/wasm/web_driver.mjs (playwright-core, pinned in tests/wasm/package.json,
-driving Debian's chromium) against `python -m host_sim web`'s server: the page loads the
-MicroPython WebAssembly port and firmware/, the simulated board streams, MotionCal's Send Cal
-rule is reached, Send Cal goes out and the board's echo confirms it. The page exposes what it
-fed and what came out (window.webcal); this test replays the same samples through
-firmware.calibrator on CPython and asks for the same integers, and rebuilds the packet with
-tests/motioncal_ref.build_packet. Skipped, with the reason, when node, chromium or the npm
-packages are missing (`make test` installs them; as root it installs chromium).
+Two runs of tests/wasm/web_driver.mjs (playwright-core, pinned in tests/wasm/package.json,
+driving Debian's chromium), one against `python -m host_sim web`'s server and one opening
+web/index.html straight from the disk (file://, through web/vendor/bundle.js), each asked
+the same: the page loads the MicroPython WebAssembly port and firmware/, the simulated board
+streams, MotionCal's Send Cal rule is reached, Send Cal goes out and the board's echo confirms
+it. The page exposes what it fed and what came out (window.webcal); this test replays the
+same samples through firmware.calibrator on CPython and asks for the same integers, and
+rebuilds the packet with tests/motioncal_ref.build_packet. Skipped, with the reason, when
+node, chromium or the npm packages are missing (`make test` installs them; as root it
+installs chromium).
 """
+import base64
 import json
 import os
+import pathlib
 import shutil
 import struct
 import subprocess
@@ -21,13 +25,15 @@ import pytest
 from firmware.calibrator import SOLVE_EVERY, Calibrator
 from firmware.errors import CalibrationRejected
 from host_sim.cli import web as webcli
+from host_sim.cli.args import UsageError
 from tests.motioncal_ref import build_packet, crc16_modbus, is_float_ok, sent_values
 
 ROOT = webcli.ROOT
 DRIVER = os.path.join(ROOT, "tests", "wasm", "web_driver.mjs")
 PLAYWRIGHT = os.path.join(ROOT, "tests", "wasm", "node_modules", "playwright-core")
 CHROMIUM = os.environ.get("CHROMIUM", "/usr/bin/chromium")
-SHOT = os.path.join(ROOT, "build", "web.png")
+SHOTS = {"served": os.path.join(ROOT, "build", "web.png"),        # docs/web.png's source
+         "file": os.path.join(ROOT, "build", "web-file.png")}
 SEED = 1
 SPEED = 20            # the simulated board at 20x real time (100 Hz -> 2000 lines/s)
 READY_MS = 3000       # page ready (port + firmware imported) within 3 s of navigation start
@@ -47,29 +53,38 @@ def _why_skip():
     return None
 
 
-@pytest.fixture(scope="module")
-def run():
+def _drive(url, shot):
+    os.makedirs(os.path.dirname(shot), exist_ok=True)
+    if os.path.exists(shot):
+        os.remove(shot)
+    return subprocess.run(["node", DRIVER, url, shot, CHROMIUM], capture_output=True,
+                          text=True, timeout=90, cwd=ROOT)
+
+
+@pytest.fixture(scope="module", params=["served", "file"])
+def run(request):
     why = _why_skip()
     if why:
         pytest.skip(why)
-    webcli.vendor()               # what `make web` does: the port's files + the manifest
-    srv = webcli.make_server(0)
-    t = threading.Thread(target=srv.serve_forever, daemon=True)
-    t.start()
-    try:
-        url = "http://127.0.0.1:%d/web/?seed=%d&speed=%d" % (srv.server_address[1], SEED, SPEED)
-        os.makedirs(os.path.dirname(SHOT), exist_ok=True)
-        if os.path.exists(SHOT):
-            os.remove(SHOT)
-        p = subprocess.run(["node", DRIVER, url, SHOT, CHROMIUM], capture_output=True,
-                           text=True, timeout=90, cwd=ROOT)
-    finally:
-        srv.shutdown()
-        srv.server_close()
+    mode, shot = request.param, SHOTS[request.param]
+    webcli.vendor()               # what `make web` does: the port's files, manifest, bundle
+    query = "?seed=%d&speed=%d" % (SEED, SPEED)
+    if mode == "file":            # no server at all
+        p = _drive(pathlib.Path(ROOT, "web", "index.html").as_uri() + query, shot)
+    else:
+        srv = webcli.make_server(0)
+        t = threading.Thread(target=srv.serve_forever, daemon=True)
+        t.start()
+        try:
+            p = _drive("http://127.0.0.1:%d/web/%s" % (srv.server_address[1], query), shot)
+        finally:
+            srv.shutdown()
+            srv.server_close()
     assert p.returncode == 0, p.stderr[-2000:]
     out = json.loads(p.stdout)
-    print("browser tier: ready %.0f ms, Send Cal after %.1f s of simulated motion, "
-          "heading RMS %.2f deg, run %d ms" % (out["readyMs"], out["simSecondsAtSend"],
+    out["mode"], out["shot"] = mode, shot
+    print("browser tier (%s): ready %.0f ms, Send Cal after %.1f s of simulated motion, "
+          "heading RMS %.2f deg, run %d ms" % (mode, out["readyMs"], out["simSecondsAtSend"],
                                               out["headingError"]["rms"],
                                               out["times"]["totalMs"]))
     return out
@@ -80,6 +95,16 @@ def test_page_loads_clean_and_fast(run):
     assert run["consoleErrors"] == [] and run["pageErrors"] == []
     assert run["failedRequests"] == []
     assert 0 < run["readyMs"] < READY_MS, run["readyMs"]
+
+
+def test_page_loads_from_files_or_the_bundle(run):
+    # served: the port's module, its .wasm and firmware/ fetched; file://: vendor/bundle.js
+    # (Chromium fetches no file from a file:// page), with no fallback taken when served
+    assert run["loadedFrom"] == {"served": "files", "file": "bundle"}[run["mode"]]
+    # Chromium counts file:// as a secure context: Web Serial is offered there too, and
+    # getPorts() answers (no port granted yet) rather than refusing the origin (docs/web.md)
+    assert run["secureContext"] is True and run["webSerial"] is True
+    assert run["serialPorts"] == 0
 
 
 def test_simulated_board_streams(run):
@@ -165,7 +190,7 @@ def test_send_cal_rule_and_heading(run):
 
 
 def test_screenshot_saved(run):
-    with open(SHOT, "rb") as f:
+    with open(run["shot"], "rb") as f:
         head = f.read(24)
     assert head[:8] == b"\x89PNG\r\n\x1a\n"
     width, height = struct.unpack(">II", head[16:24])
@@ -184,7 +209,7 @@ def test_cli_bad_port_is_one_line(capsys):
 def test_cli_port_in_use_is_one_line(capsys, monkeypatch):
     import socket
     monkeypatch.setattr(webcli, "vendored", lambda root=ROOT: True)
-    monkeypatch.setattr(webcli, "write_manifest", lambda root=ROOT: None)
+    monkeypatch.setattr(webcli, "refresh", lambda root=ROOT: None)
     s = socket.socket()
     s.bind(("127.0.0.1", 0))
     s.listen(1)
@@ -217,6 +242,53 @@ def test_server_serves_web_and_firmware_only():
     finally:
         srv.shutdown()
         srv.server_close()
+
+
+def _fake_root(tmp_path, mjs):
+    (tmp_path / "firmware").mkdir()
+    (tmp_path / "firmware" / "__init__.py").write_text("")
+    (tmp_path / "firmware" / "a.py").write_text("X = '\u00b5T </script>'\n")
+    (tmp_path / "web" / "vendor").mkdir(parents=True)
+    (tmp_path / "web" / "webcal.py").write_text("import firmware.a\n")
+    (tmp_path / "web" / "vendor" / "micropython.mjs").write_text(mjs)
+    (tmp_path / "web" / "vendor" / "micropython.wasm").write_bytes(b"\0asm\1\0\0\0\xff")
+    return str(tmp_path)
+
+
+LOADER = ("var u=import.meta.url;async function _createMicroPythonModule(m){return m}"
+          "export default _createMicroPythonModule;export async function loadMicroPython(o)"
+          "{return _createMicroPythonModule(o)}globalThis.x=1;")
+
+
+def test_bundle_holds_the_port_and_the_sources(tmp_path):
+    root = _fake_root(tmp_path, LOADER)
+    with open(webcli.write_bundle(root), encoding="utf-8") as f:
+        text = f.read()
+    head, loader = text.split("globalThis.webcalBundle = ", 1)[1].split("\n};\n", 1)
+    data = json.loads(head + "}")
+    assert base64.b64decode(data["wasm"]) == b"\0asm\1\0\0\0\xff"
+    assert data["glue"] == "import firmware.a\n"
+    assert data["firmware"] == {"__init__.py": "", "a.py": "X = '\u00b5T </script>'\n"}
+    # the loader as a classic script: no export statement, no import.meta, its export handed
+    # over at the end
+    assert "export " not in loader and "import.meta" not in loader
+    assert "async function loadMicroPython(o)" in loader
+    assert loader.endswith("\nglobalThis.webcalBundle.loadMicroPython = loadMicroPython;\n})();\n")
+    if shutil.which("node"):
+        p = subprocess.run(["node", "--check", os.path.join(root, "web", "vendor", "bundle.js")],
+                           capture_output=True, text=True, timeout=30)
+        assert p.returncode == 0, p.stderr
+
+
+def test_bundle_refuses_an_unknown_loader(tmp_path):
+    root = _fake_root(tmp_path, LOADER.replace("export default", "export  default"))
+    with pytest.raises(UsageError) as e:
+        webcli.write_bundle(root)
+    assert "\n" not in str(e.value) and "micropython.mjs" in str(e.value)
+    assert not os.path.exists(os.path.join(root, "web", "vendor", "bundle.js"))
+    # an export left over after the two expected ones is refused too
+    with pytest.raises(UsageError):
+        webcli.port_script(LOADER + "export const y=2;")
 
 
 def test_manifest_lists_every_firmware_module(tmp_path):

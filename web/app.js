@@ -4,7 +4,13 @@
 // the samples, computes MotionCal's quality figures and sends the result back as MotionCal's
 // 68-byte packet, confirmed by the board's Cal1/Cal2 echo. Protocol facts: the MotionCal
 // notes (../shared/notes/motioncal.md in the project's reference material), sections 1, 3-5.
-// Every URL is relative, so the page works from any static host serving web/ and firmware/.
+// Every URL is relative, so the page works from any static host serving web/ and firmware/,
+// and from the disk (file://) through web/vendor/bundle.js (boot() below, docs/web.md).
+//
+// A classic script, not an ES module: Chromium refuses to load a module script file into a
+// file:// page. The whole file is one function scope in strict mode, as a module would be.
+(function () {
+"use strict";
 
 const SEND_RULE = { gaps: 15, variance: 4.5, wobble: 4, fit: 5 };  // MotionCal gui.cpp, notes 3
 const BATCH = 400;          // samples fed to the calibrator per processing tick (UI stays live)
@@ -16,6 +22,7 @@ const params = new URLSearchParams(location.search);
 // What the page exposes for tests and for the curious (window.webcal).
 const W = window.webcal = {
     ready: false, readyMs: null, error: null,
+    loadedFrom: null,       // "files" (vendor/ and ../firmware/, served) or "bundle"
     source: null, lines: 0, badLines: 0,
     samples: [],            // every magnetometer sample fed to the calibrator, 0.1 uT, in order
     log: [],                // every solve: {n: samples fed before it, cal | reason}
@@ -38,30 +45,93 @@ async function fetchText(url) {
     return r.text();
 }
 
-async function boot() {
-    setStatus("loading MicroPython…");
-    const portP = import("./vendor/micropython.mjs");
-    const manifest = JSON.parse(await fetchText("vendor/manifest.json"));
-    const names = manifest.firmware;
-    const textsP = Promise.all(names.map((f) => fetchText("../firmware/" + f)));
-    const glueP = fetchText("webcal.py");
-    const { loadMicroPython } = await portP;
-    mp = await loadMicroPython({
-        url: new URL("vendor/micropython.wasm", location.href).href,
+// Where the port and the Python sources come from: {from, port: a promise of the port's
+// loadMicroPython and the .wasm's URL, texts: a promise of the firmware files and webcal.py}.
+// Two promises, so that the port starts while the sources still arrive.
+
+// From a server (python -m host_sim web, any static host): the port's ES module, its .wasm
+// by URL, the firmware files vendor/manifest.json lists and webcal.py, fetched.
+function fromFiles() {
+    const port = import("./vendor/micropython.mjs").then((m) => ({
+        loadMicroPython: m.loadMicroPython,
+        wasmUrl: new URL("vendor/micropython.wasm", location.href).href }));
+    const texts = fetchText("vendor/manifest.json").then((t) => {
+        const names = JSON.parse(t).firmware;
+        return Promise.all([Promise.all(names.map((f) => fetchText("../firmware/" + f))),
+            fetchText("webcal.py")]).then(([firmware, glue]) => ({
+            glue, firmware: names.map((f, i) => [f, firmware[i]]) }));
+    });
+    return { from: "files", port, texts };
+}
+
+// From vendor/bundle.js, one classic script made by `make web` (host_sim/cli/web.py): what a
+// file:// page can load. Chromium refuses fetch(), XHR and import() of files there but runs a
+// <script src> of a file, and fetches a data: URL, which is how the .wasm (base64 in the
+// bundle) reaches the port's loader. Its firmware is as of the last `make web`.
+function fromBundle() {
+    const bundle = new Promise((resolve, reject) => {
+        const s = document.createElement("script");
+        s.src = "vendor/bundle.js";
+        s.onerror = () => reject(new Error("vendor/bundle.js did not load: run `make web` first"));
+        s.onload = () => {
+            const B = window.webcalBundle;
+            if (B && typeof B.loadMicroPython === "function") resolve(B);
+            else reject(new Error("vendor/bundle.js is incomplete: run `make web` again"));
+        };
+        document.head.appendChild(s);
+    });
+    return { from: "bundle",
+        port: bundle.then((B) => ({ loadMicroPython: B.loadMicroPython,
+            wasmUrl: "data:application/wasm;base64," + B.wasm })),
+        texts: bundle.then((B) => ({ glue: B.glue, firmware: Object.entries(B.firmware) })) };
+}
+
+async function start(src) {
+    src.texts.catch(() => {});       // reported below, once the port is up
+    const { loadMicroPython, wasmUrl } = await src.port;
+    const portP = loadMicroPython({
+        url: wasmUrl,
         heapsize: 8 << 20,
         stdout: (line) => console.log(line),
         stderr: (line) => console.warn(line),
     });
-    const texts = await textsP;
+    let texts;
+    try {
+        texts = await src.texts;
+    } catch (e) {
+        // the port sets globals when it is up: let it settle before another one starts
+        await portP.catch(() => {});
+        throw e;
+    }
+    return { from: src.from, port: await portP, texts };
+}
+
+async function boot() {
+    setStatus("loading MicroPython…");
+    let got;
+    if (location.protocol === "file:") {
+        got = await start(fromBundle());
+    } else {
+        try {
+            got = await start(fromFiles());
+        } catch (e) {
+            // a static host without firmware/ beside web/, or one that refuses .mjs or .wasm
+            console.warn("served files failed (" + e.message + "): trying vendor/bundle.js");
+            got = await start(fromBundle()).catch(() => { throw e; });
+        }
+    }
+    mp = got.port;
     mp.FS.mkdir("/firmware");
-    names.forEach((f, i) => mp.FS.writeFile("/firmware/" + f, texts[i]));
-    mp.FS.writeFile("/webcal.py", await glueP);
+    for (const [f, text] of got.texts.firmware) mp.FS.writeFile("/firmware/" + f, text);
+    mp.FS.writeFile("/webcal.py", got.texts.glue);
     mp.runPython("import webcal");
     W.readyMs = performance.now();   // since navigation start
+    W.loadedFrom = got.from;
     W.ready = true;
     for (const id of ["sim", "clear"]) $(id).disabled = false;
     $("connect").disabled = !("serial" in navigator);
-    setStatus(`ready in ${W.readyMs.toFixed(0)} ms: ` + ("serial" in navigator
+    setStatus(`ready in ${W.readyMs.toFixed(0)} ms` + (got.from === "bundle"
+        ? " (from vendor/bundle.js)" : "") + ": " + ("serial" in navigator
         ? "connect a board or start the simulated board"
         : "no Web Serial in this browser (Chrome or Edge have it): try the simulated board"));
 }
@@ -624,3 +694,4 @@ boot().then(() => {
     requestAnimationFrame(draw);
     if (params.get("autostart") === "sim") startSim();
 }).catch((e) => fail("could not start: " + e.message));
+})();

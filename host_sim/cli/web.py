@@ -10,24 +10,32 @@ at least web/ and firmware/ side by side) works the same.
 micropython.wasm of npm @micropython/micropython-webassembly-pyscript, pinned in
 tests/wasm/package.json and installed into tests/wasm/node_modules by `make wasm`) into
 web/vendor/ and writes web/vendor/manifest.json, the list of firmware/*.py files the page
-fetches (a static host cannot list a folder). web/vendor/ is generated, not committed
-(.gitignore). Serving refreshes the manifest and vendors first when web/vendor/ is missing.
+fetches (a static host cannot list a folder), and web/vendor/bundle.js, the same files for a
+page opened from the disk (file://), where Chromium refuses fetch(), ES modules and
+WebAssembly loaded from files but runs a classic <script src>: the port's loader made a classic
+script (port_script()), the .wasm as base64 (the page hands it to the loader as a data: URL)
+and the sources of firmware/*.py and web/webcal.py as strings. web/vendor/ is generated, not
+committed (.gitignore). Serving refreshes the manifest and the bundle (so firmware edits reach
+both) and vendors first when web/vendor/ is missing.
 
 Exit status: 0 done (Ctrl-C ends serving); 2 bad usage, the port in use, or the port files
-missing (one line on stderr).
+missing or not the pinned loader (one line on stderr).
 """
+import base64
 import http.server
 import json
 import os
+import re
 import shutil
 import sys
 
-from host_sim.cli.args import STATUS_OK, STATUS_USAGE, Parser, UsageError
+from host_sim.cli.args import STATUS_OK, STATUS_USAGE, Parser, UsageError, warn
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 PKG_DIR = os.path.join("tests", "wasm", "node_modules", "@micropython",
                        "micropython-webassembly-pyscript")
 PORT_FILES = ("micropython.mjs", "micropython.wasm")
+BUNDLE = "bundle.js"   # for file:// pages (docs/web.md)
 SERVED = ("web", "firmware")   # the only top-level folders served
 DEFAULT_PORT = 8014
 MIME = {".mjs": "text/javascript", ".js": "text/javascript", ".wasm": "application/wasm",
@@ -45,21 +53,86 @@ def write_manifest(root=ROOT):
     vendor = os.path.join(root, "web", "vendor")
     os.makedirs(vendor, exist_ok=True)
     text = json.dumps({"firmware": firmware_files(root)}, indent=1) + "\n"
-    path = os.path.join(vendor, "manifest.json")
+    return _write_if_changed(os.path.join(vendor, "manifest.json"), text)
+
+
+def _write_if_changed(path, text):
     try:
-        with open(path) as f:
+        with open(path, encoding="utf-8") as f:
             if f.read() == text:
                 return path
     except OSError:
         pass
-    with open(path, "w") as f:
+    with open(path, "w", encoding="utf-8") as f:
         f.write(text)
     return path
 
 
+# micropython.mjs is Emscripten's ES-module output (MODULARIZE + EXPORT_ES6) followed by
+# MicroPython's JavaScript API (loadMicroPython). A classic script cannot hold its two
+# `export` statements, its `import.meta.url`s or its top-level `await` (in a Node-only
+# branch). port_script() drops the two exports, puts the bundle's own URL where
+# import.meta.url was (only Node branches and a default wasm location read it; the page always
+# gives the wasm's URL) and wraps the whole in an async function, which keeps the module's
+# scope and strict mode. Exact replacements of the pinned package's text: anything else is
+# refused rather than guessed at.
+_PORT_EDITS = (("export default _createMicroPythonModule;", ""),
+               ("export async function loadMicroPython(", "async function loadMicroPython("))
+_EXPORT_STATEMENT = re.compile(r"(^|[;{}])\s*export\s*(default\b|async\b|function\b|const\b|"
+                               r"let\b|var\b|class\b|\{|\*)")
+
+
+def port_script(mjs):
+    """micropython.mjs's text -> a classic script that sets webcalBundle.loadMicroPython (the
+    module's export) once it has run. UsageError when the text is not what it expects."""
+    for old, new in _PORT_EDITS:
+        if mjs.count(old) != 1:
+            raise UsageError("micropython.mjs: %r found %d times, expected once: not the loader "
+                             "of the pinned package (tests/wasm/package.json); cannot make %s"
+                             % (old, mjs.count(old), BUNDLE))
+        mjs = mjs.replace(old, new)
+    mjs = mjs.replace("import.meta.url", "webcalScriptUrl")
+    left = _EXPORT_STATEMENT.search(mjs) or re.search(r"\bimport\s*\.\s*meta\b", mjs)
+    if left:
+        raise UsageError("micropython.mjs: module syntax left after the edits (%r); cannot "
+                         "make %s" % (left.group(0).strip(), BUNDLE))
+    return ("(async function () {\n\"use strict\";\n"
+            "const webcalScriptUrl = document.currentScript ? document.currentScript.src "
+            ": location.href;\n"
+            + mjs + "\nglobalThis.webcalBundle.loadMicroPython = loadMicroPython;\n})();\n")
+
+
+def bundle_text(root=ROOT):
+    """web/vendor/bundle.js's text from the vendored port, firmware/*.py and web/webcal.py."""
+    vdir = os.path.join(root, "web", "vendor")
+    with open(os.path.join(vdir, "micropython.mjs"), encoding="utf-8") as f:
+        loader = port_script(f.read())
+    with open(os.path.join(vdir, "micropython.wasm"), "rb") as f:
+        wasm = base64.b64encode(f.read()).decode("ascii")
+    firmware = {}
+    for name in firmware_files(root):
+        with open(os.path.join(root, "firmware", name), encoding="utf-8") as f:
+            firmware[name] = f.read()
+    with open(os.path.join(root, "web", "webcal.py"), encoding="utf-8") as f:
+        glue = f.read()
+    js = json.dumps      # ASCII JSON: a valid JavaScript string and object literal
+    return ("// web/vendor/bundle.js: GENERATED by `python -m host_sim web --vendor` (make web) "
+            "from\n// web/vendor/micropython.mjs and .wasm, firmware/*.py and web/webcal.py; "
+            "do not edit.\n// What web/app.js loads when the page is opened from a file "
+            "(docs/web.md).\n"
+            "globalThis.webcalBundle = {\n\"wasm\": " + js(wasm) + ",\n\"glue\": " + js(glue)
+            + ",\n\"firmware\": " + js(firmware, indent=0) + "\n};\n" + loader)
+
+
+def write_bundle(root=ROOT):
+    vdir = os.path.join(root, "web", "vendor")
+    os.makedirs(vdir, exist_ok=True)
+    return _write_if_changed(os.path.join(vdir, BUNDLE), bundle_text(root))
+
+
 def vendor(root=ROOT):
-    """Copy the port's files into web/vendor/ and write the manifest; UsageError when the npm
-    package is not installed. Returns the vendor folder."""
+    """Copy the port's files into web/vendor/, write the manifest and the bundle; UsageError
+    when the npm package is not installed. Returns the vendor folder."""
     src = os.path.join(root, PKG_DIR)
     dst = os.path.join(root, "web", "vendor")
     missing = [f for f in PORT_FILES if not os.path.isfile(os.path.join(src, f))]
@@ -70,7 +143,18 @@ def vendor(root=ROOT):
     for f in PORT_FILES:
         shutil.copyfile(os.path.join(src, f), os.path.join(dst, f))
     write_manifest(root)
+    write_bundle(root)
     return dst
+
+
+def refresh(root=ROOT):
+    """Before serving: the manifest and the bundle follow firmware/ and web/webcal.py. A
+    bundle that cannot be made is a warning here (the served page does not need it)."""
+    write_manifest(root)
+    try:
+        write_bundle(root)
+    except UsageError as e:
+        warn("web", "%s (pages opened from file:// will not load)" % e)
 
 
 def vendored(root=ROOT):
@@ -135,11 +219,13 @@ def make_server(port=DEFAULT_PORT, root=ROOT, host="127.0.0.1"):
 def _body(opts):
     if opts["vendor"]:
         d = vendor()
-        print("vendored %s into %s" % (", ".join(PORT_FILES), os.path.relpath(d, os.getcwd())))
+        print("vendored %s, manifest.json and %s (for file:// pages) into %s"
+              % (", ".join(PORT_FILES), BUNDLE, os.path.relpath(d, os.getcwd())))
         return STATUS_OK
     if not vendored():
         vendor()
-    write_manifest()
+    else:
+        refresh()
     try:
         srv = make_server(opts["port"])
     except OSError as e:

@@ -2,7 +2,8 @@
 //
 //   node tests/wasm/web_driver.mjs URL SCREENSHOT.png [CHROMIUM]
 //
-// Opens URL (the page, with ?seed=&speed= for the simulated board), waits until the
+// Opens URL (the page, with ?seed=&speed= for the simulated board; http://... as served, or
+// file:///.../web/index.html?... straight from the disk), waits until the
 // MicroPython port is up, starts the simulated board, waits until MotionCal's Send Cal rule
 // holds, clicks Send Cal, waits for the Cal1/Cal2 confirmation, saves a screenshot and prints
 // one JSON object on stdout: readyMs, wall-clock times, console errors, page errors, and what
@@ -39,6 +40,13 @@ try {
     out.times.readyWallMs = Date.now() - nav;
     out.readyMs = await page.evaluate(() => window.webcal.readyMs);
     out.bootError = await page.evaluate(() => window.webcal.error);
+    // where the port and the sources came from ("files" or "bundle"), and what the page's
+    // origin gets: a secure context and navigator.serial (Web Serial), as Chromium decides
+    // getPorts(): the ports this origin was granted (none yet), or why it was refused
+    Object.assign(out, await page.evaluate(async () => ({ loadedFrom: window.webcal.loadedFrom,
+        secureContext: window.isSecureContext, webSerial: "serial" in navigator,
+        serialPorts: "serial" in navigator
+            ? await navigator.serial.getPorts().then((p) => p.length, (e) => String(e)) : null })));
     if (!out.bootError) {
         const s0 = Date.now();
         await page.click("#sim");
