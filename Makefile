@@ -31,17 +31,20 @@ test: $(STAMP) wasm web  ## the whole test suite on CPython and MicroPython
 	$(PY) -m pytest -q
 
 # --- 32-bit test tiers (tests/mp.py) -------------------------------------------------------
-# wasm: the MicroPython WebAssembly port from npm (tests/wasm/package.json), installed into the
-# work tree once per package-lock.json; without node or npm the tier's tests skip.
+# wasm: the MicroPython WebAssembly port from npm (tests/wasm/package.json), installed into
+# build/npm/node_modules (outside the sources) once per package-lock.json; without node or npm
+# the tier's tests skip.
 WASM_DIR   := tests/wasm
-WASM_STAMP := $(WASM_DIR)/node_modules/.installed-$(shell cksum < $(WASM_DIR)/package-lock.json | cut -d' ' -f1)
+NPM_DIR    := build/npm
+WASM_STAMP := $(NPM_DIR)/node_modules/.installed-$(shell cksum < $(WASM_DIR)/package-lock.json | cut -d' ' -f1)
 
 wasm:  ## install the WebAssembly test tier from npm (skips without node)
 	@if ! command -v node >/dev/null 2>&1; then echo "wasm tier skipped: node not found on PATH"; \
 	elif ! command -v npm >/dev/null 2>&1; then echo "wasm tier skipped: npm not found on PATH"; \
 	elif [ ! -f $(WASM_STAMP) ]; then \
-	  if npm ci --prefix $(WASM_DIR) --no-audit --no-fund --loglevel=error; then touch $(WASM_STAMP); \
-	  else echo "wasm tier skipped: npm ci failed (tests/wasm/node_modules not installed)"; fi; \
+	  mkdir -p $(NPM_DIR) && cp $(WASM_DIR)/package.json $(WASM_DIR)/package-lock.json $(NPM_DIR)/ && \
+	  if npm ci --prefix $(NPM_DIR) --no-audit --no-fund --loglevel=error; then touch $(WASM_STAMP); \
+	  else echo "wasm tier skipped: npm ci failed ($(NPM_DIR)/node_modules not installed)"; fi; \
 	fi
 
 # web: the browser calibrator (docs/web.md): vendors the WebAssembly port into web/vendor/
@@ -54,8 +57,8 @@ web: $(STAMP) wasm  ## vendor the WebAssembly port into web/ for the browser cal
 	      || echo "browser tier will skip: apt-get install chromium failed"; \
 	  else echo "browser tier will skip: /usr/bin/chromium missing (as root: apt-get install -y chromium)"; fi; \
 	fi
-	@if [ -d $(WASM_DIR)/node_modules/@micropython ]; then $(PY) -m host_sim web --vendor; \
-	else echo "web/vendor not made: tests/wasm/node_modules missing (make wasm needs node and npm)"; fi
+	@if [ -d $(NPM_DIR)/node_modules/@micropython ]; then $(PY) -m host_sim web --vendor; \
+	else echo "web/vendor not made: $(NPM_DIR)/node_modules missing (make wasm needs node and npm)"; fi
 
 # arm: the parity scenarios on the Cortex-M qemu firmware in ../shared/tools (minutes; not in
 # `make test`). Installs qemu-system-arm from Debian when missing and run as root.

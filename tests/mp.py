@@ -51,7 +51,9 @@ class Tier:
 
 
 WASM_DIR = os.path.join(ROOT, "tests", "wasm")
-WASM_PKG = os.path.join(WASM_DIR, "node_modules", "@micropython",
+# the npm packages (tests/wasm/package.json) are installed by `make wasm` outside the sources
+NODE_MODULES = os.path.join(ROOT, "build", "npm", "node_modules")
+WASM_PKG = os.path.join(NODE_MODULES, "@micropython",
                         "micropython-webassembly-pyscript", "micropython.mjs")
 SHARED_TOOLS = os.environ.get("ECOMPASS_TOOLS", os.path.join(ROOT, "..", "shared", "tools"))
 X86_32 = os.path.join(SHARED_TOOLS, "micropython-x86-32")
@@ -66,7 +68,7 @@ def _wasm_reason():
     if not shutil.which("npm"):
         return "npm not found on PATH"
     if not os.path.exists(WASM_PKG):
-        return "tests/wasm/node_modules not installed (make wasm)"
+        return "build/npm/node_modules not installed (make wasm)"
     return None
 
 

@@ -26,11 +26,12 @@ from firmware.calibrator import SOLVE_EVERY, Calibrator
 from firmware.errors import CalibrationRejected
 from host_sim.cli import web as webcli
 from host_sim.cli.args import UsageError
+from tests import mp
 from tests.motioncal_ref import build_packet, crc16_modbus, is_float_ok, sent_values
 
 ROOT = webcli.ROOT
 DRIVER = os.path.join(ROOT, "tests", "wasm", "web_driver.mjs")
-PLAYWRIGHT = os.path.join(ROOT, "tests", "wasm", "node_modules", "playwright-core")
+PLAYWRIGHT = os.path.join(mp.NODE_MODULES, "playwright-core")
 CHROMIUM = os.environ.get("CHROMIUM", "/usr/bin/chromium")
 SHOTS = {"served": os.path.join(ROOT, "build", "web.png"),        # docs/web.png's source
          "file": os.path.join(ROOT, "build", "web-file.png")}

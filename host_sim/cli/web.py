@@ -8,7 +8,7 @@ at least web/ and firmware/ side by side) works the same.
 
 --vendor (what `make web` runs) copies the WebAssembly port (micropython.mjs and
 micropython.wasm of npm @micropython/micropython-webassembly-pyscript, pinned in
-tests/wasm/package.json and installed into tests/wasm/node_modules by `make wasm`) into
+tests/wasm/package.json and installed into build/npm/node_modules by `make wasm`) into
 web/vendor/ and writes web/vendor/manifest.json, the list of firmware/*.py files the page
 fetches (a static host cannot list a folder), and web/vendor/bundle.js, the same files for a
 page opened from the disk (file://), where Chromium refuses fetch(), ES modules and
@@ -32,7 +32,7 @@ import sys
 from host_sim.cli.args import STATUS_OK, STATUS_USAGE, Parser, UsageError, warn
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-PKG_DIR = os.path.join("tests", "wasm", "node_modules", "@micropython",
+PKG_DIR = os.path.join("build", "npm", "node_modules", "@micropython",
                        "micropython-webassembly-pyscript")
 PORT_FILES = ("micropython.mjs", "micropython.wasm")
 BUNDLE = "bundle.js"   # for file:// pages (docs/web.md)

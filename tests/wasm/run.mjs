@@ -23,10 +23,13 @@
 //   bytes the script allocates in total (not the heap a board needs: a board collects).
 import fs from "node:fs";
 import path from "node:path";
-import { createRequire } from "node:module";
+import { fileURLToPath, pathToFileURL } from "node:url";
 
-const require = createRequire(import.meta.url);
-const PKG = "@micropython/micropython-webassembly-pyscript";
+// the npm packages are installed by `make wasm` into build/npm/node_modules, outside the sources
+const NODE_MODULES = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "..", "..",
+                                  "build", "npm", "node_modules");
+const PKG = pathToFileURL(path.join(NODE_MODULES, "@micropython",
+                                    "micropython-webassembly-pyscript", "micropython.mjs")).href;
 
 function usage(msg) {
     process.stderr.write(`run.mjs: ${msg}\n`);

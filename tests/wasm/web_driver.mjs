@@ -8,9 +8,15 @@
 // holds, clicks Send Cal, waits for the Cal1/Cal2 confirmation, saves a screenshot and prints
 // one JSON object on stdout: readyMs, wall-clock times, console errors, page errors, and what
 // the page exposes as window.webcal (samples, solve log, current calibration, packet hex...).
-// playwright-core is pinned in tests/wasm/package.json; it downloads no browser: Debian's
-// chromium is used (flags: ../.library machines note "Known to work" for this sandbox).
-import { chromium } from "playwright-core";
+// playwright-core is pinned in tests/wasm/package.json (installed by `make wasm` into
+// build/npm/node_modules); it downloads no browser: Debian's chromium is used.
+import path from "node:path";
+import { createRequire } from "node:module";
+import { fileURLToPath } from "node:url";
+
+const NODE_MODULES = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "..", "..",
+                                  "build", "npm", "node_modules");
+const { chromium } = createRequire(path.join(NODE_MODULES, "index.js"))("playwright-core");
 
 const [url, shot, exe = "/usr/bin/chromium"] = process.argv.slice(2);
 if (!url || !shot) {
