@@ -1,6 +1,7 @@
 """Every ```python block in README.md and docs/*.md runs on CPython against the simulator, with
 exactly the setup lines it shows. A block whose first line is a comment starting `# board
-only` (or `# needs`) uses a real board or names from the text around it: it must compile."""
+only` (or `# needs`) uses a real board or names from the text around it: it must compile.
+Every image they show (`![...](file)`) exists."""
 import glob
 import os
 import re
@@ -37,3 +38,15 @@ def test_doc_block(code, monkeypatch, tmp_path):
         return
     monkeypatch.chdir(ROOT)
     exec(compiled, {"__name__": "__doc_block__"})
+
+
+def test_images_exist():
+    """Every ![...](file) in README.md and docs/*.md names a file in the repository."""
+    missing, seen = [], 0
+    for path in ["README.md"] + sorted(glob.glob(os.path.join(ROOT, "docs", "*.md"))):
+        full = os.path.join(ROOT, path)
+        for m in re.finditer(r"!\[[^\]]*\]\(([^)\s]+)\)", open(full).read()):
+            seen += 1
+            if not os.path.isfile(os.path.join(os.path.dirname(full), m.group(1))):
+                missing.append("%s: %s" % (os.path.relpath(full, ROOT), m.group(1)))
+    assert seen >= 3 and not missing, missing
