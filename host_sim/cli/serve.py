@@ -5,7 +5,9 @@ demo's world: strong iron from the seed, a figure-8 by default) in MotionCal mod
 Raw: lines out, the 68-byte Send Cal packet in, the Cal1/Cal2 echo out.
 
     python -m host_sim serve --fast --seconds 60 > stream.txt      # a minute of Raw lines
-    python -m host_sim serve --pty        # prints /dev/pts/N: point MotionCal's Port there
+    python -m host_sim serve --pty        # prints /dev/pts/N (MotionCal on Linux lists a pty
+                                          # only as docs/motioncal.md shows: a ttyACM link and
+                                          # a modem-line shim)
 
 Binary-safe: stdin is read as bytes without blocking (select), output goes to
 sys.stdout.buffer. Pace: the simulated clock follows the wall clock by default (50 Raw lines
