@@ -22,14 +22,6 @@ LAPS = 2                           # the session is replayed twice
 PERIOD_US = 5000
 
 
-class Clock:
-    def __init__(self):
-        self.now = 0
-
-    def ticks(self):
-        return self.now
-
-
 def make_app(bus, clock):
     return CompassApp(bus, mag=QMC5883L(bus, odr=200), accel=MPU6050(bus),
                       ticks_us=clock.ticks, store=None)
@@ -38,7 +30,7 @@ def make_app(bus, clock):
 def main():
     mag, acc = common.session(N, dt_us=DT_US)
     bus = common.replay_board(mag, acc)
-    clock = Clock()
+    clock = common.Clock()
     app = make_app(bus, clock)
     gc.collect()
     plain = []

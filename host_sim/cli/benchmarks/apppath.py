@@ -24,14 +24,6 @@ RUNS = 3 if SMOKE else 25
 PERIOD_US = 5000
 
 
-class Clock:
-    def __init__(self):
-        self.now = 0
-
-    def ticks(self):
-        return self.now
-
-
 def load(path):
     with open(path, "rb") as f:
         data = f.read()
@@ -43,7 +35,7 @@ def make_app(bus, fast):
     from firmware.app import CompassApp
     from firmware.mpu6050 import MPU6050
     from firmware.qmc5883l import QMC5883L
-    clock = Clock()
+    clock = common.Clock()
     app = CompassApp(bus, mag=QMC5883L(bus, odr=200), accel=MPU6050(bus), ticks_us=clock.ticks,
                      store=None, fast=fast, learn=True)
     return app, clock

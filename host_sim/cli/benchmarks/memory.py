@@ -37,14 +37,6 @@ SMOKE = common.smoke()
 PERIOD_US = 5000
 
 
-class Clock:
-    def __init__(self):
-        self.now = 0
-
-    def ticks(self):
-        return self.now
-
-
 def mem_total():
     import micropython
     f = getattr(micropython, "mem_total", None)
@@ -93,7 +85,7 @@ def main():
     from firmware.mpu6050 import MPU6050
     from firmware.qmc5883l import QMC5883L
     bus = common.replay_board(mag, acc)
-    clock = Clock()
+    clock = common.Clock()
     app = CompassApp(bus, mag=QMC5883L(bus, odr=200), accel=MPU6050(bus),
                      ticks_us=clock.ticks, store=None)
     m["app"] = live()
