@@ -8,15 +8,19 @@ and the Compass use these automatically; the results are the same bits.
     plain (its home)                          mirror here
     calibration.correct(k, raw, out)          correct(k, raw, out)
     axes.apply(m, src, dst)                   apply(m, src, dst)
-    compass.orient(st, b, g)                  orient(st, b, g)   (and its steps level, tilt,
-    compass.magnitude(st), compass.dip(st)    magnitude(st), dip(st)        derotate)
+    compass.measure(st, b, g)                 measure(st, b, g)  (and its steps orient, level,
+    compass.orient(st, b, g), magnitude(st),  orient(st, b, g), ...        tilt, derotate)
+    dip(st), judge(st)                        magnitude(st), dip(st), judge(st)
     trig.norm14(src, dst, o)                  norm14(src, dst, o)
     trig.atan2(y, x), trig.sin(a), cos(a)     atan2(y, x), sin(a), cos(a)
-    fixedpoint.isqrt(n)                       isqrt(n), for n < 2**30 (the compass's range)
+    fixedpoint.isqrt(n)                       isqrt(n), for n < 2**30 (the compass's range;
+                                              Newton's iteration: the same floor square root)
 
-Each computes, operation for operation, what its plain original computes and calls the
-mirrors of what its original calls; the orchestration (Compass.update, the app's step) is the
-plain code in both paths. The compass's state `st` is its array('i') (ptr32 loads and stores;
+Each computes what its plain original computes, bit for bit, and calls the mirrors of what
+its original calls; most are written operation for operation, isqrt and norm14's shift search
+in the form that suits native code (no division in the plain isqrt, no loop over a changing m
+in native norm14). The orchestration (Compass.update, the app's step) is the plain code in
+both paths. The compass's state `st` is its array('i') (ptr32 loads and stores;
 a load is zero-extended on the 64-bit unix port, so every value read back, all below 2**16 in
 magnitude, is sign-extended from 18 bits: ((v + 0x20000) & 0x3FFFF) - 0x20000, the same on a
 32-bit board). Viper ints are machine words
@@ -97,19 +101,18 @@ def cos(angle: int) -> int:
 
 @micropython.viper
 def isqrt(n: int) -> int:
-    """fixedpoint.isqrt for 0 <= n < 2**30 (digit by digit, as its small-int branch)."""
-    r = 0
-    b = 0x10000000
-    while b > n:
-        b >>= 2
-    while b:
-        if n >= r + b:
-            n -= r + b
-            r = (r >> 1) + b
-        else:
-            r >>= 1
-        b >>= 2
-    return r
+    """fixedpoint.isqrt for 0 <= n < 2**30. The floor square root is one number whatever the
+    method: here Newton's iteration from above (x0 = 2**15 > sqrt(n); each step is
+    floor((x + n // x) / 2) and decreases until it would not), where fixedpoint's bytecode
+    takes the digit-by-digit loop, which needs no division."""
+    if n < 2:
+        return n
+    x = 0x8000
+    y = (x + n // x) >> 1
+    while y < x:
+        x = y
+        y = (x + n // x) >> 1
+    return x
 
 
 @micropython.viper
@@ -173,7 +176,8 @@ def tilt(st):
 
 @micropython.viper
 def derotate(st):
-    """compass.derotate."""
+    """compass.derotate: Bf = Ry(-theta) Rx(-phi) Bp (AN4248 eq. 19) into 13..15, from the
+    scaled b (0..2) and the sines and cosines of roll (7, 8) and pitch (9, 10)."""
     p = ptr32(st)
     x = ((p[0] + 0x20000) & 0x3FFFF) - 0x20000
     y = ((p[1] + 0x20000) & 0x3FFFF) - 0x20000
@@ -192,10 +196,11 @@ def derotate(st):
 def magnitude(st) -> int:
     """compass.magnitude."""
     p = ptr32(st)
-    x = ((p[0] + 0x20000) & 0x3FFFF) - 0x20000
-    y = ((p[1] + 0x20000) & 0x3FFFF) - 0x20000
-    z = ((p[2] + 0x20000) & 0x3FFFF) - 0x20000
-    m = int(isqrt(x * x + y * y + z * z))
+    n = 0
+    for i in range(3):
+        v = ((p[i] + 0x20000) & 0x3FFFF) - 0x20000
+        n += v * v
+    m = int(isqrt(n))
     k = ((p[6] + 0x20000) & 0x3FFFF) - 0x20000
     if k > 0:
         return (m + (1 << (k - 1))) >> k
@@ -208,15 +213,50 @@ def magnitude(st) -> int:
 def dip(st) -> int:
     """compass.dip."""
     p = ptr32(st)
-    x = ((p[13] + 0x20000) & 0x3FFFF) - 0x20000
-    y = ((p[14] + 0x20000) & 0x3FFFF) - 0x20000
-    z = ((p[15] + 0x20000) & 0x3FFFF) - 0x20000
-    return int(atan2(z, int(isqrt(x * x + y * y))))
+    n = 0
+    for i in range(13, 15):
+        v = ((p[i] + 0x20000) & 0x3FFFF) - 0x20000
+        n += v * v
+    return int(atan2(((p[15] + 0x20000) & 0x3FFFF) - 0x20000, int(isqrt(n))))
+
+
+@micropython.viper
+def judge(st) -> int:
+    """compass.judge. |b| (20) and the |b| window (16, 17) are non-negative: their zero-extended
+    loads are right as they are; the dip (21), its window (18, 19) and the pitch (12) are
+    sign-extended."""
+    p = ptr32(st)
+    m = int(p[20])
+    f = 1 if m < int(p[16]) or m > int(p[17]) else 0  # FLAG_INTERFERENCE
+    m = ((p[21] + 0x20000) & 0x3FFFF) - 0x20000
+    if m < ((p[18] + 0x20000) & 0x3FFFF) - 0x20000:
+        f = 1
+    if m > ((p[19] + 0x20000) & 0x3FFFF) - 0x20000:
+        f = 1
+    if m > 13653 or m < -13653:
+        f |= 2  # FLAG_DIP_HIGH
+    m = ((p[12] + 0x20000) & 0x3FFFF) - 0x20000
+    if m > 14564 or m < -14564:
+        f |= 4  # FLAG_GIMBAL
+    return f
+
+
+@micropython.viper
+def measure(st, b, g) -> int:
+    """compass.measure."""
+    h = int(orient(st, b, g))
+    if h >= 0:
+        p = ptr32(st)
+        p[20] = int(magnitude(st))
+        p[21] = int(dip(st))
+        p[22] = int(judge(st))
+    return h
 
 
 @micropython.viper
 def norm14(src, dst, o: int) -> int:
-    """trig.norm14."""
+    """trig.norm14. The shift is found on the largest |component| m without changing it:
+    up while m << k < 2**13, down while m >> k >= 2**14 (trig's loop shifts m itself)."""
     x = int(src[0])
     y = int(src[1])
     z = int(src[2])
@@ -230,21 +270,24 @@ def norm14(src, dst, o: int) -> int:
     if m == 0:
         return -128  # trig.ZERO_VECTOR
     k = 0
-    while m < 0x2000:
-        m <<= 1
-        k += 1
-    while m >= 0x4000:
-        m >>= 1
-        k -= 1
-    if k >= 0:
+    if m < 0x2000:
+        while (m << k) < 0x2000:
+            k += 1
         dst[o] = x << k
         dst[o + 1] = y << k
         dst[o + 2] = z << k
-    else:
-        dst[o] = _rshift(x, 0 - k)
-        dst[o + 1] = _rshift(y, 0 - k)
-        dst[o + 2] = _rshift(z, 0 - k)
-    return k
+        return k
+    while (m >> k) >= 0x4000:
+        k += 1
+    if k == 0:
+        dst[o] = x
+        dst[o + 1] = y
+        dst[o + 2] = z
+        return 0
+    dst[o] = _rshift(x, k)
+    dst[o + 1] = _rshift(y, k)
+    dst[o + 2] = _rshift(z, k)
+    return 0 - k
 
 
 @micropython.viper

@@ -11,8 +11,9 @@ SCENARIO = "tests/scenarios/fast_parity.py"
 MIRRORS = {"correct": "calibration", "apply": "axes", "atan2": "trig", "sin": "trig",
            "cos": "trig", "norm14": "trig", "isqrt": "fixedpoint", "orient": "compass",
            "level": "compass", "tilt": "compass", "derotate": "compass", "magnitude": "compass",
-           "dip": "compass"}
-UNCALLED = {"cos", "level", "tilt", "derotate"}  # reached through orient, or trivial
+           "dip": "compass", "judge": "compass", "measure": "compass"}
+UNCALLED = {"cos", "level", "tilt", "derotate", "judge"}  # reached through orient or
+#                                                          measure, or trivial
 
 
 def _run(micro):

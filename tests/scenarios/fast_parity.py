@@ -105,6 +105,14 @@ def kernels_agree(v):
         check("state", list(st2), list(st1), [v, g])
         check("magnitude", FAST.magnitude(st2), compass.magnitude(st1), [v, g])
         check("dip", FAST.dip(st2), compass.dip(st1), [v, g])
+        # measure: the windows (16..19) from the sample itself, so every flag is reached
+        for st in (st1, st2):
+            st[16] = abs(v[0]) * 3
+            st[17] = abs(v[1]) * 3
+            st[18] = v[2] >> 2
+            st[19] = (v[2] >> 2) + (abs(v[0]) >> 3)
+        check("measure", FAST.measure(st2, v, g), compass.measure(st1, v, g), [v, g])
+        check("state", list(st2), list(st1), [v, g])
     n = (v[0] * v[0] + v[1] * v[1]) >> 2  # < 2**30, the mirror's domain
     check("isqrt", FAST.isqrt(n), fixedpoint.isqrt(n), n)
 
@@ -154,7 +162,7 @@ def allocation():
     st = array("i", bytearray(4 * compass.STATE_SIZE))
     g = array("h", (300, -200, 16000))
     for name in ("correct", "apply", "atan2", "sin", "norm14", "isqrt", "orient", "magnitude",
-                 "dip"):
+                 "dip", "measure"):
         f = getattr(FAST, name)
         t = mt()
         for _ in range(200):
@@ -168,7 +176,7 @@ def allocation():
                 f(12345)
             elif name == "norm14":
                 f(v, d, 1)
-            elif name == "orient":
+            elif name in ("orient", "measure"):
                 f(st, v, g)
             elif name in ("magnitude", "dip"):
                 f(st)
