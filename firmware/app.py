@@ -186,6 +186,12 @@ def _status_of(e):
     return STATUS_BUS_ERROR
 
 
+def _collector_attr(name, default):
+    # an app attribute that is the collector's (`default` while not collecting)
+    return property(lambda self: getattr(self.collector, name) if self.collector is not None
+                    else default)
+
+
 class CompassApp:
     """See the module docstring. Attributes after each step(): heading_kang, compass, raw,
     body, gravity, status, calibration, calibrator (None until collecting), collector,
@@ -869,37 +875,13 @@ class CompassApp:
     def calibrator(self):
         return self.collector.calibrator if self.collector is not None else None
 
-    def _counter(self, name, default):
-        c = self.collector
-        return getattr(c, name) if c is not None else default
-
-    @property
-    def accepted(self):
-        return self._counter("accepted", 0)
-
-    @property
-    def refused(self):
-        return self._counter("refused", 0)
-
-    @property
-    def solves(self):
-        return self._counter("solves", 0)
-
-    @property
-    def last_reason(self):
-        return self._counter("last_reason", None)
-
-    @property
-    def last_detail(self):
-        return self._counter("last_detail", None)
-
-    @property
-    def last_model(self):
-        return self._counter("last_model", None)
-
-    @property
-    def relearning(self):
-        return self._counter("relearning", False)
+    accepted = _collector_attr("accepted", 0)
+    refused = _collector_attr("refused", 0)
+    solves = _collector_attr("solves", 0)
+    last_reason = _collector_attr("last_reason", None)
+    last_detail = _collector_attr("last_detail", None)
+    last_model = _collector_attr("last_model", None)
+    relearning = _collector_attr("relearning", False)
 
     @property
     def solving(self):
