@@ -434,7 +434,9 @@ class CompassApp:
         """Start collecting samples for a new calibration (imports the calibration machinery);
         the calibration in force stays until a better one is accepted."""
         if self.collector is None:
+            from firmware import samples
             from firmware.calibrator import Collector
+            samples.use_kernels(compass.KERNELS or False)  # the kernel set the app chose
             self.collector = Collector(model=self.model, capacity=self.capacity,
                                        counts_per_gauss=self.mag.counts_per_gauss,
                                        current=self.calibration, solve_every=self.solve_every,

@@ -15,6 +15,9 @@ and the Compass use these automatically; the results are the same bits.
     trig.atan2(y, x), trig.sin(a), cos(a)     atan2(y, x), sin(a), cos(a)
     fixedpoint.isqrt(n)                       isqrt(n), for n < 2**30 (the compass's range;
                                               Newton's iteration: the same floor square root)
+    samples.screen(b)                         screen(b)  (SampleBuffer.offer's rejection test:
+                                              the newest sample, the own cell's hash chain,
+                                              the neighbour cells; the same counters)
 
 Each computes what its plain original computes, bit for bit, and calls the mirrors of what
 its original calls; most are written operation for operation, isqrt and norm14's shift search
@@ -340,3 +343,129 @@ def apply(m, src, dst):
     dst[0] = x
     dst[1] = y
     dst[2] = z
+
+
+# --- samples.SampleBuffer.offer's rejection test ------------------------------------------
+# The candidate and the buffer's scalars travel in its scratch array q (array('i'): 0..2 the
+# candidate, 3..5 its cell, 6..8 the cell probed, 9 the separation s, 10 s * s, 11 the table
+# mask, 12/13 the cells and entries counted); data and cells are array('h') (ptr16, unsigned:
+# sign-extended by hand), the table array('H'). Every value is below 2**17 in magnitude but
+# s * s (< 2**30, non-negative) and the mask: the 18-bit sign extension as above.
+
+@micropython.viper
+def _near(q, data, j: int) -> int:
+    # samples.SampleBuffer._near: 1 when held sample data[j..j+2] is closer than s
+    p = ptr32(q)
+    d = ptr16(data)
+    s = int(p[9])
+    a = ((d[j] ^ 0x8000) - 0x8000) - (((p[0] + 0x20000) & 0x3FFFF) - 0x20000)
+    if a <= 0 - s or a >= s:
+        return 0
+    b = ((d[j + 1] ^ 0x8000) - 0x8000) - (((p[1] + 0x20000) & 0x3FFFF) - 0x20000)
+    if b <= 0 - s or b >= s:
+        return 0
+    c = ((d[j + 2] ^ 0x8000) - 0x8000) - (((p[2] + 0x20000) & 0x3FFFF) - 0x20000)
+    if c <= 0 - s or c >= s:
+        return 0
+    return 1 if a * a + b * b + c * c < int(p[10]) else 0
+
+
+@micropython.viper
+def _chain(q, data, cells, table) -> int:
+    # samples.SampleBuffer._probe: the chain of the cell in q[6..8]; 0 far (an empty entry
+    # ends it), 1 taken (the cell's occupant), 2 near (a sample within s met on the way)
+    p = ptr32(q)
+    c = ptr16(cells)
+    t = ptr16(table)
+    cx = ((p[6] + 0x20000) & 0x3FFFF) - 0x20000
+    cy = ((p[7] + 0x20000) & 0x3FFFF) - 0x20000
+    cz = ((p[8] + 0x20000) & 0x3FFFF) - 0x20000
+    h = (cx * 0x2F1B) ^ (cy * 0x1D4F) ^ (cz * 0x3A95)  # samples._hash
+    h = (h ^ (h >> 13)) & 0x7FFF
+    h *= 0x5BD1
+    i = (h ^ (h >> 15)) & int(p[11])
+    p[12] = p[12] + 1
+    while True:
+        p[13] = p[13] + 1
+        e = int(t[i])
+        if e == 0:
+            return 0
+        e = 3 * (e - 1)
+        if int(_near(q, data, e)):
+            return 2
+        if (((c[e] ^ 0x8000) - 0x8000) == cx and ((c[e + 1] ^ 0x8000) - 0x8000) == cy
+                and ((c[e + 2] ^ 0x8000) - 0x8000) == cz):
+            return 1
+        i = (i + 1) & int(p[11])
+
+
+@micropython.viper
+def _gap(q, k: int, side: int) -> int:
+    # samples.SampleBuffer._gaps, one entry: the squared gap to the cell below (side 0) or
+    # above (side 1) the candidate's on axis k
+    p = ptr32(q)
+    s = int(p[9])
+    u = (((p[k] + 0x20000) & 0x3FFFF) - 0x20000) - (((p[3 + k] + 0x20000) & 0x3FFFF)
+                                                   - 0x20000) * s + 1
+    if side:
+        u = s + 1 - u
+    return u * u
+
+
+@micropython.viper
+def _around(q, data, cells, table) -> int:
+    # samples.SampleBuffer._neighbours (with _plane and _row): 1 when a neighbour cell holds
+    # a sample within s; the cells whose nearest point is s or more away are skipped
+    p = ptr32(q)
+    s2 = int(p[10])
+    a = -1
+    while a <= 1:
+        ga = int(_gap(q, 0, a + 1 >> 1)) if a else 0
+        if ga < s2:
+            p[6] = p[3] + a
+            b = -1
+            while b <= 1:
+                gb = ga + (int(_gap(q, 1, b + 1 >> 1)) if b else 0)
+                if gb < s2:
+                    p[7] = p[4] + b
+                    c = -1
+                    while c <= 1:
+                        gc = gb + (int(_gap(q, 2, c + 1 >> 1)) if c else 0)
+                        if gc < s2 and gc != 0:
+                            p[8] = p[5] + c
+                            if int(_chain(q, data, cells, table)) == 2:
+                                return 1
+                        c += 1
+                b += 1
+        a += 1
+    return 0
+
+
+@micropython.viper
+def screen(b) -> int:
+    """samples.screen."""
+    q = b._q
+    p = ptr32(q)
+    data = b.data
+    cells = b._cells
+    table = b._table
+    s = int(b.separation)
+    p[9] = s
+    p[10] = int(b._s2)
+    p[11] = int(b._mask)
+    p[12] = 0
+    p[13] = 0
+    r = 1
+    last = int(b._last)
+    if last < 0 or not int(_near(q, data, 3 * last)):
+        p[3] = (((p[0] + 0x20000) & 0x3FFFF) - 0x20000) // s
+        p[4] = (((p[1] + 0x20000) & 0x3FFFF) - 0x20000) // s
+        p[5] = (((p[2] + 0x20000) & 0x3FFFF) - 0x20000) // s
+        p[6] = p[3]
+        p[7] = p[4]
+        p[8] = p[5]
+        if int(_chain(q, data, cells, table)) == 0:
+            r = int(_around(q, data, cells, table))
+    b.last_cells = int(p[12])
+    b.last_probes = int(p[13])
+    return r

@@ -2,6 +2,9 @@
 # whole per-sample path (correct -> axes -> Compass.update) with either kernel set:
 #   correct  vs calibration.correct     apply vs axes.apply
 #   atan2, sin, cos, norm14 vs trig's    isqrt vs fixedpoint.isqrt (n < 2**30)
+#   measure (orient, magnitude, dip, judge) vs compass's
+#   screen   vs samples.screen: two SampleBuffers offered the same samples (result, counters,
+#            held samples), at several capacities and separations
 # Inputs: the int16 extremes (+-32767, -32768, -4096, 0, +-1), a small-int generator (no long
 # ints on a 32-bit port), and the real logs in ../shared/datasets (integer-count logs, when the
 # folder is there) through a calibration with strong soft iron. Where the port has no native
@@ -11,7 +14,7 @@
 import json
 from array import array
 
-from firmware import axes, calibration, compass, fixedpoint, trig
+from firmware import axes, calibration, compass, fixedpoint, samples, trig
 from firmware.calibration import Calibration
 from firmware.compat import kernels
 
@@ -117,6 +120,22 @@ def kernels_agree(v):
     check("isqrt", FAST.isqrt(n), fixedpoint.isqrt(n), n)
 
 
+def buffers_agree(vs):
+    # the same offers to a buffer screened by samples.screen and one by FAST.screen
+    for cap, sep in ((300, 900), (40, 3000), (100, 1), (60, 16384), (20, 200)):
+        b1 = samples.SampleBuffer(cap, sep)
+        b2 = samples.SampleBuffer(cap, sep)
+        for v in vs:
+            samples.use_kernels(False)
+            r1 = b1.offer(v[0], v[1], v[2])
+            samples.use_kernels(FAST)
+            r2 = b2.offer(v[0], v[1], v[2])
+            check("screen", [r2, b2.last_cells, b2.last_probes, b2.count],
+                  [r1, b1.last_cells, b1.last_probes, b1.count], [cap, sep, v])
+        check("buffer", list(b2.data), list(b1.data), [cap, sep])
+    samples.use_kernels()
+
+
 def pipeline(v, g, kern):
     compass.use_kernels(kern)
     c = compass.Compass(field=3700, declination_kang=-1234)
@@ -137,6 +156,10 @@ def run():
         return out
     for v in vs + logs:
         kernels_agree(v)
+    # a slow figure-8 (rnd16 noise) then the generator's and the logs' samples
+    walk = [[(rnd16() >> 10) + 9000 * ((i >> 6) & 3) - 12000, (rnd16() >> 10) + 70 * (i & 63),
+             (rnd16() >> 10) - 50 * (i & 127)] for i in range(1200)]
+    buffers_agree(walk + vs[:600] + logs[:600])
     gs = [[0, 0, 16384], [16384, 0, 0], [-11585, 300, 11585], [0, 0, 0], None, [3, -3, 3]]
     i = 0
     for v in vs + logs:
@@ -161,8 +184,14 @@ def allocation():
     m = MAPS[3].m
     st = array("i", bytearray(4 * compass.STATE_SIZE))
     g = array("h", (300, -200, 16000))
+    buf = samples.SampleBuffer(300, 900)
+    for i in range(300):
+        buf.offer(40 * i - 6000, (i * 37) % 4000, 900)
+    buf._q[0] = 123  # a candidate of its own for screen (its scratch: offer sets it)
+    buf._q[1] = 456
+    buf._q[2] = 789
     for name in ("correct", "apply", "atan2", "sin", "norm14", "isqrt", "orient", "magnitude",
-                 "dip", "measure"):
+                 "dip", "measure", "screen"):
         f = getattr(FAST, name)
         t = mt()
         for _ in range(200):
@@ -180,6 +209,8 @@ def allocation():
                 f(st, v, g)
             elif name in ("magnitude", "dip"):
                 f(st)
+            elif name == "screen":
+                f(buf)
             else:
                 f(123456789)
         res[name] = (mt() - t) // 200
