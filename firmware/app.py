@@ -90,6 +90,7 @@ from firmware.compass import FLAG_NO_GRAVITY, Compass
 from firmware.compat import const, kernels, ticks_diff, ticks_us, sleep_us, wall_clock
 from firmware.errors import SensorNotFound, SensorOverflow, StoreError, DataReadyTimeout
 from firmware.health import Health
+from firmware import i2cdevice
 from firmware.trig import cdeg_to_kang, kang_to_str
 
 STATUS_OK = "ok"
@@ -232,11 +233,11 @@ class CompassApp:
             from firmware import axes, calibration
             self._correct = calibration.correct
             self._apply = axes.apply
-            compass.use_kernels(False)
         else:
             self._correct = kn.correct
             self._apply = kn.apply
-            compass.use_kernels(kn)
+        compass.use_kernels(kn or False)
+        i2cdevice.use_kernels(kn or False)  # the drivers' decode
 
         self.raw = array("h", (0, 0, 0))       # the last sample, chip axes, counts
         self._cor = array("h", (0, 0, 0))      # corrected, sensor axes

@@ -25,6 +25,8 @@ kernels()         the fast-path module firmware.fast (viper/native code with the
                   decorators at compile time, so that code lives in firmware/fast.py
                   and is only ever imported here, inside try/except. Set FAST = False before
                   the first call to force the plain path (tests compare the two).
+pick(kn, name, plain)  the function `name` of kernel set kn (None: kernels()), or `plain`
+                  when there is none (kn False or None): a module's use_kernels().
 """
 import time
 
@@ -110,3 +112,10 @@ def kernels():
             # .mpy of another architecture (ValueError), no room for the native code
             _kernels = None
     return _kernels
+
+
+def pick(kn, name, plain):
+    """kn's function `name` (kn None: the port's kernels()), else `plain`."""
+    if kn is None:
+        kn = kernels()
+    return getattr(kn, name) if kn else plain

@@ -469,3 +469,16 @@ def screen(b) -> int:
     b.last_cells = int(p[12])
     b.last_probes = int(p[13])
     return r
+
+
+@micropython.viper
+def int16x3_into(d, buf, msb: int):
+    """i2cdevice.int16x3_into."""
+    p = ptr8(d)
+    h = 1 - msb
+    v = (p[h] << 8) | p[msb]
+    buf[0] = v - 0x10000 if v & 0x8000 else v
+    v = (p[2 + h] << 8) | p[2 + msb]
+    buf[1] = v - 0x10000 if v & 0x8000 else v
+    v = (p[4 + h] << 8) | p[4 + msb]
+    buf[2] = v - 0x10000 if v & 0x8000 else v

@@ -35,9 +35,11 @@ step instead of one per transfer group (a `with` costs two method calls).
 
 option_code(chip, name, value, table): the register code of a keyword option.
 int16x3_into(d, buf, msb): three int16, LSB first (QMC5883L, QMC5883P data blocks) or MSB
-first (MPU6050), sign-extended by hand.
+first (MPU6050), sign-extended by hand. The drivers call it as `decode`, which use_kernels()
+points at its mirror in firmware/fast.py where the port has the native emitter (the same
+bits; use_kernels(False): this one), as firmware.compass.use_kernels does for the heading.
 """
-from firmware.compat import const, ticks_diff, ticks_us, wait_clock
+from firmware.compat import const, pick, ticks_diff, ticks_us, wait_clock
 from firmware.errors import BusError, DataReadyTimeout, SensorNotFound, SensorOverflow
 
 _MIN_POLL_US = const(250)       # no faster status polling than this (an I2C status read ~100 us)
@@ -91,6 +93,16 @@ def _hex(b):
     return " ".join("0x%02X" % v for v in b)
 
 
+decode = int16x3_into  # the drivers' per-sample decode: it or its fast mirror (use_kernels)
+
+
+def use_kernels(kn=None):
+    """The drivers' decode from the kernel set `kn`: None picks firmware.fast where the
+    native emitter exists, False the plain function."""
+    global decode
+    decode = pick(kn, "int16x3_into", int16x3_into)
+
+
 class BusGuard:
     """`with dev.guard:` maps a bus OSError to BusError(dev.address, dev.register)."""
 
@@ -101,6 +113,8 @@ class BusGuard:
         return None
 
     def __exit__(self, kind, value, tb):
+        if value is None:
+            return False
         e = self.mapped(value)
         if e is not value:
             raise e
@@ -296,11 +310,13 @@ class Magnetometer(Device):
 
     def sample_into(self, buf):
         """read_into() for callers already inside a guard: X, Y, Z int16 LSB first."""
-        status = self.fetch()
+        status = self.wait(self._status, self._ready)
+        self.register = self._data  # fetch(), written out: one call less per sample
+        self._i2c.readfrom_mem_into(self.address, self._data, self._buf)
         self.suspect = status & self._stale != 0
         if status & self._alarms:
             self._alarm(status)
-        int16x3_into(self._buf, buf, 0)
+        decode(self._buf, buf, 0)
 
     def fetch(self):
         """Wait for data-ready and read the six data bytes into self._buf (inside a guard);
@@ -333,3 +349,6 @@ class Magnetometer(Device):
         raw = self.held(0)
         raise self.overflow(raw, "%s set (an axis is beyond +-%d G), raw %s; %s"
                             % (bit, self.TABLES[0][self.range_code], raw, advice))
+
+
+use_kernels()

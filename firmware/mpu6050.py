@@ -19,7 +19,8 @@ Errors: SensorNotFound (WHO_AM_I is not 0x68), BusError.
 from firmware.compat import const
 
 from firmware.errors import SensorNotFound
-from firmware.i2cdevice import Device, int16x3_into, option_code
+from firmware import i2cdevice
+from firmware.i2cdevice import Device, option_code
 
 # Registers (register map rev 4.2)
 _CONFIG = const(0x1A)         # DLPF_CFG[2:0]
@@ -90,7 +91,7 @@ class MPU6050(Device):
         """read_accel_into() for callers already inside a guard (the app's read guard)."""
         self.register = _ACCEL_XOUT_H
         self._i2c.readfrom_mem_into(self.address, _ACCEL_XOUT_H, self._buf)
-        int16x3_into(self._buf, buf, 1)
+        i2cdevice.decode(self._buf, buf, 1)
 
     def read_accel(self):
         """(x, y, z) raw counts, the chip's axes."""

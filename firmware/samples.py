@@ -34,7 +34,7 @@ from array import array
 
 from firmware.fixedpoint import isqrt
 
-from firmware.compat import const, kernels
+from firmware.compat import const, pick
 
 REJECTED = const(0)  # offer(): too close to a held sample, or its cell is taken
 KEPT = const(1)      # offer(): stored in a free slot
@@ -201,12 +201,9 @@ _screen = screen  # offer()'s: this function or its fast mirror, module-wide (us
 def use_kernels(kn=None):
     """SampleBuffer.offer's rejection test from the kernel set `kn` (as
     firmware.compass.use_kernels): None picks firmware.fast where the native emitter exists,
-    False the plain function. Returns the set in use (None for the plain one)."""
+    False the plain function."""
     global _screen
-    if kn is None:
-        kn = kernels()
-    _screen = kn.screen if kn else screen
-    return kn or None
+    _screen = pick(kn, "screen", screen)
 
 
 class SampleBuffer:

@@ -11,7 +11,8 @@ SCENARIO = "tests/scenarios/fast_parity.py"
 MIRRORS = {"correct": "calibration", "apply": "axes", "atan2": "trig", "sin": "trig",
            "cos": "trig", "norm14": "trig", "isqrt": "fixedpoint", "orient": "compass",
            "level": "compass", "tilt": "compass", "derotate": "compass", "magnitude": "compass",
-           "dip": "compass", "judge": "compass", "measure": "compass", "screen": "samples"}
+           "dip": "compass", "judge": "compass", "measure": "compass", "screen": "samples",
+           "int16x3_into": "i2cdevice"}
 UNCALLED = {"cos", "level", "tilt", "derotate", "judge"}  # reached through orient or
 #                                                          measure, or trivial
 

@@ -14,7 +14,7 @@
 import json
 from array import array
 
-from firmware import axes, calibration, compass, fixedpoint, samples, trig
+from firmware import axes, calibration, compass, fixedpoint, i2cdevice, samples, trig
 from firmware.calibration import Calibration
 from firmware.compat import kernels
 
@@ -118,6 +118,14 @@ def kernels_agree(v):
         check("state", list(st2), list(st1), [v, g])
     n = (v[0] * v[0] + v[1] * v[1]) >> 2  # < 2**30, the mirror's domain
     check("isqrt", FAST.isqrt(n), fixedpoint.isqrt(n), n)
+    raw = bytearray(6)
+    for i in range(3):
+        raw[2 * i] = v[i] & 0xFF
+        raw[2 * i + 1] = (v[i] >> 8) & 0xFF
+    for msb in (0, 1):
+        i2cdevice.int16x3_into(raw, a, msb)
+        FAST.int16x3_into(raw, b, msb)
+        check("int16x3_into", list(b), list(a), [v, msb])
 
 
 def buffers_agree(vs):
@@ -191,7 +199,7 @@ def allocation():
     buf._q[1] = 456
     buf._q[2] = 789
     for name in ("correct", "apply", "atan2", "sin", "norm14", "isqrt", "orient", "magnitude",
-                 "dip", "measure", "screen"):
+                 "dip", "measure", "screen", "int16x3_into"):
         f = getattr(FAST, name)
         t = mt()
         for _ in range(200):
@@ -211,6 +219,8 @@ def allocation():
                 f(st)
             elif name == "screen":
                 f(buf)
+            elif name == "int16x3_into":
+                f(b"\x01\x80\xff\x7f\x00\x00", o, 1)
             else:
                 f(123456789)
         res[name] = (mt() - t) // 200
