@@ -90,6 +90,7 @@ from firmware.compass import FLAG_NO_GRAVITY, Compass
 from firmware.compat import const, kernels, ticks_diff, ticks_us, sleep_us, wall_clock
 from firmware.errors import SensorNotFound, SensorOverflow, StoreError, DataReadyTimeout
 from firmware.health import Health
+from firmware import i2cdevice
 from firmware.trig import cdeg_to_kang, kang_to_str
 
 STATUS_OK = "ok"
@@ -161,10 +162,14 @@ class _StepGuard:
 class _ReadGuard:
     """`with` block around the sensor reads: keeps the exception of a failed read (bus error,
     data-ready timeout, overflow) and lets the step go on. A `with` frame stays within the
-    11 words MicroPython keeps on the C stack, where `except ... as e` would not."""
+    11 words MicroPython keeps on the C stack, where `except ... as e` would not. The drivers'
+    unguarded sample_into() / config_matches() run inside it (one guard for the step's reads,
+    not one more per driver call): .dev names the device being read, whose BusGuard maps a
+    port's OSError to the BusError naming address and register, as the driver's own would."""
 
     def __init__(self):
         self.error = None
+        self.dev = None
 
     def __enter__(self):
         self.error = None
@@ -173,7 +178,8 @@ class _ReadGuard:
         if value is None:
             return False
         if isinstance(value, _READ_ERRORS):
-            self.error = value
+            guard = getattr(self.dev, "guard", None)
+            self.error = guard.mapped(value) if guard is not None else value
             return True
         return False
 
@@ -184,6 +190,12 @@ def _status_of(e):
     if isinstance(e, SensorOverflow):
         return STATUS_OVERFLOW
     return STATUS_BUS_ERROR
+
+
+def _collector_attr(name, default):
+    # an app attribute that is the collector's (`default` while not collecting)
+    return property(lambda self: getattr(self.collector, name) if self.collector is not None
+                    else default)
 
 
 class CompassApp:
@@ -221,11 +233,11 @@ class CompassApp:
             from firmware import axes, calibration
             self._correct = calibration.correct
             self._apply = axes.apply
-            compass.use_kernels(False)
         else:
             self._correct = kn.correct
             self._apply = kn.apply
-            compass.use_kernels(kn)
+        compass.use_kernels(kn or False)
+        i2cdevice.use_kernels(kn or False)  # the drivers' decode
 
         self.raw = array("h", (0, 0, 0))       # the last sample, chip axes, counts
         self._cor = array("h", (0, 0, 0))      # corrected, sensor axes
@@ -234,11 +246,17 @@ class CompassApp:
         self.gravity = array("h", (0, 0, 0))   # body frame, AN4248 sign (+1 g down, level)
         self._guard = _ReadGuard()
         self._step_guard = _StepGuard()
+        # the per-sample calls, looked up once: a driver's unguarded read where it has one
+        # (inside the read guard), the axis maps' arrays
+        self._mag_into = getattr(self.mag, "sample_into", None) or self.mag.read_into
+        self._mm = self._mag_map.m
+        self._am = self._acc_map.m
         self._accel_auto = accel is None    # detected: look again later when absent
         self.health = Health(self.mag.counts_per_gauss,
                              _HMC_OVERFLOW if self.mag.KIND == "hmc5883l" else -32768,
                              self.accel.counts_per_g if self.accel is not None else 16384)
-        self._mag_cfg = getattr(self.mag, "config_ok", None)
+        self._mag_cfg = (getattr(self.mag, "config_matches", None)
+                         or getattr(self.mag, "config_ok", None))
         self.tilt = self.accel is not None  # False: the level formula (no or implausible accel)
         self._tilt_bad = 0
         self._since_cfg = 0
@@ -397,6 +415,7 @@ class CompassApp:
 
     def _use(self, cal):
         self.calibration = cal
+        self._k = cal.k  # _heading's
         tol = _FIT_SIGMAS * cal.fit_error // 100
         if tol < _FIELD_TOL_PCT:
             tol = _FIELD_TOL_PCT
@@ -416,7 +435,9 @@ class CompassApp:
         """Start collecting samples for a new calibration (imports the calibration machinery);
         the calibration in force stays until a better one is accepted."""
         if self.collector is None:
+            from firmware import samples
             from firmware.calibrator import Collector
+            samples.use_kernels(compass.KERNELS or False)  # the kernel set the app chose
             self.collector = Collector(model=self.model, capacity=self.capacity,
                                        counts_per_gauss=self.mag.counts_per_gauss,
                                        current=self.calibration, solve_every=self.solve_every,
@@ -615,10 +636,13 @@ class CompassApp:
 
     def _read(self):
         g = self._guard
+        acc = self.accel
         with g:
-            self.mag.read_into(self.raw)
-            if self.accel is not None:
-                self.accel.read_accel_into(self._acc)
+            g.dev = self.mag
+            self._mag_into(self.raw)
+            if acc is not None:
+                g.dev = acc
+                acc.sample_into(self._acc)
         if g.error is None:
             return STATUS_OK
         self.last_error = g.error
@@ -656,7 +680,9 @@ class CompassApp:
 
     def _read_config(self):
         self._cfg_ok = True
-        with self._guard:
+        g = self._guard
+        with g:
+            g.dev = self.mag
             self._cfg_ok = self._mag_cfg()
 
     def _tilt_check(self):
@@ -678,12 +704,12 @@ class CompassApp:
                 self.reinits += 1
 
     def _heading(self):
-        self._correct(self.calibration.k, self.raw, self._cor)
-        self._apply(self._mag_map.m, self._cor, self.body)
+        self._correct(self._k, self.raw, self._cor)
+        self._apply(self._mm, self._cor, self.body)
         if self.accel is None or not self.tilt:
             h = self.compass.update(self.body)
         else:
-            self._apply(self._acc_map.m, self._acc, self.gravity)
+            self._apply(self._am, self._acc, self.gravity)
             h = self.compass.update(self.body, self.gravity)
         if h < 0:
             return STATUS_NO_GRAVITY if self.compass.flags & FLAG_NO_GRAVITY else STATUS_NO_FIELD
@@ -869,37 +895,13 @@ class CompassApp:
     def calibrator(self):
         return self.collector.calibrator if self.collector is not None else None
 
-    def _counter(self, name, default):
-        c = self.collector
-        return getattr(c, name) if c is not None else default
-
-    @property
-    def accepted(self):
-        return self._counter("accepted", 0)
-
-    @property
-    def refused(self):
-        return self._counter("refused", 0)
-
-    @property
-    def solves(self):
-        return self._counter("solves", 0)
-
-    @property
-    def last_reason(self):
-        return self._counter("last_reason", None)
-
-    @property
-    def last_detail(self):
-        return self._counter("last_detail", None)
-
-    @property
-    def last_model(self):
-        return self._counter("last_model", None)
-
-    @property
-    def relearning(self):
-        return self._counter("relearning", False)
+    accepted = _collector_attr("accepted", 0)
+    refused = _collector_attr("refused", 0)
+    solves = _collector_attr("solves", 0)
+    last_reason = _collector_attr("last_reason", None)
+    last_detail = _collector_attr("last_detail", None)
+    last_model = _collector_attr("last_model", None)
+    relearning = _collector_attr("relearning", False)
 
     @property
     def solving(self):

@@ -34,7 +34,7 @@ and the read's frames stay within MicroPython's C-stack bound: a read allocates 
 (tests/scenarios/busio_alloc.py measures it on MicroPython).
 Writes longer than _OUT_MAX - 1 bytes (no driver makes one) build their bytes.
 """
-from firmware.compat import const, sleep_us, ticks_diff, ticks_us
+from firmware.compat import const, ticks_diff, ticks_us, wait_clock
 
 _ETIMEDOUT = const(110)
 _LOCK_POLL_US = const(100)          # one try_lock() poll every 100 us (a byte at 100 kHz is 90 us)
@@ -66,12 +66,7 @@ class BusioI2C:
                              % (lock_timeout_us, _MAX_TIMEOUT_US))
         self.bus = i2c
         self.lock_timeout_us = lock_timeout_us
-        if delay_us is None:
-            self._delay = sleep_us
-            self._measured = ticks_us is not None
-        else:
-            self._delay = delay_us
-            self._measured = False
+        self._delay, self._measured = wait_clock(delay_us)
         self._out = bytearray(_OUT_MAX)
         self._reg = memoryview(self._out)[0:1]
         self._write_then_read = i2c.writeto_then_readfrom

@@ -16,11 +16,12 @@ heading(b, g=None, declination=0)
                east positive); g None means a level board. ValueError for a zero b or g.
 Compass        the same heading plus pitch, roll, field magnitude and dip, and the flags below,
                all updated in place: the per-sample path allocates nothing.
-Compass.update runs three steps on an int array of working state: orient (normalise, tilt or
-level, de-rotate, eq. 22), magnitude and dip, then the flags. Where the port has the native
-emitter the steps are firmware/fast.py's viper mirrors of the functions here (same names,
-same signatures, same bits): use_kernels() picks at import, use_kernels(False) forces the
-plain ones, KERNELS says which set is in use.
+Compass.update runs one step, measure(), on an int array of working state that also holds the
+windows and the results: orient (normalise, tilt or level, de-rotate, eq. 22), magnitude and
+dip, then the flags (judge). Where the port has the native emitter it is firmware/fast.py's
+viper mirror of the function here (same names, same signatures, same bits), which calls the
+mirrors of the steps: one call from bytecode per sample. use_kernels() picks at import,
+use_kernels(False) forces the plain ones, KERNELS says which set is in use.
 
 Flags (Compass.flags bits; the booleans mirror the first three):
   FLAG_INTERFERENCE  .interference: |b| is outside field * (1 +- field_tol_pct %) (or the
@@ -58,7 +59,9 @@ _NO_LIMIT = const(0x3FFFFFFF)  # field window when no reference field is set
 
 # The working state of one Compass, array('i') (the steps below read and write it):
 #   0..2 b scaled by trig.norm14, 3..5 g likewise, 6 b's shift, 7/8 sin/cos of roll and
-#   9/10 of pitch (Q15), 11 roll, 12 pitch (KANG), 13..15 the de-rotated field Bf (eq. 19)
+#   9/10 of pitch (Q15), 11 roll, 12 pitch (KANG), 13..15 the de-rotated field Bf (eq. 19);
+#   16/17 the |b| window (lo, hi: 0..2**30 - 1), 18/19 the dip window (KANG), then the results
+#   of the last good update: 20 |b|, 21 dip (KANG), 22 flags
 _KB = const(6)
 _SPHI = const(7)
 _CPHI = const(8)
@@ -69,7 +72,14 @@ _PITCH = const(12)
 _BFX = const(13)
 _BFY = const(14)
 _BFZ = const(15)
-STATE_SIZE = const(16)
+_LO = const(16)
+_HI = const(17)
+_DIP_LO = const(18)
+_DIP_HI = const(19)
+_MAG = const(20)
+_DIP = const(21)
+_FLAGS = const(22)
+STATE_SIZE = const(23)
 
 
 FLAG_INTERFERENCE = const(1)
@@ -152,34 +162,67 @@ def dip(st):
     return atan2(st[_BFZ], isqrt(x * x + y * y))
 
 
-# The steps a Compass runs, module-wide: the plain functions above, or their viper mirrors in
-# firmware.fast where this port has the native emitter (same bits; see use_kernels). Globals,
-# not attributes: a global costs no extra word in the calling frame.
-_orient = orient
-_magnitude = magnitude
-_dip = dip
+def judge(st):
+    """The flags of the sample in st: |b| and the dip against their windows (interference),
+    the dip and pitch limits (AN4248 sec. 6)."""
+    m = st[_MAG]
+    x = st[_DIP]
+    f = 0
+    if m < st[_LO] or m > st[_HI] or x < st[_DIP_LO] or x > st[_DIP_HI]:
+        f = FLAG_INTERFERENCE
+    if x > _DIP_LIMIT_KANG or x < -_DIP_LIMIT_KANG:
+        f |= FLAG_DIP_HIGH
+    x = st[_PITCH]
+    if x > _GIMBAL_PITCH_KANG or x < -_GIMBAL_PITCH_KANG:
+        f |= FLAG_GIMBAL
+    return f
+
+
+def measure(st, b, g):
+    """Compass.update's work on the state: orient, then |b|, the dip and the flags into st.
+    The magnetic heading 0..65535, or orient's -1 / -2 (st's results then untouched)."""
+    h = orient(st, b, g)
+    if h >= 0:
+        st[_MAG] = magnitude(st)
+        st[_DIP] = dip(st)
+        st[_FLAGS] = judge(st)
+    return h
+
+
+# The step a Compass runs, module-wide: measure above, or its viper mirror in firmware.fast
+# where this port has the native emitter (same bits; see use_kernels). A global, not an
+# attribute: a global costs no extra word in the calling frame.
+_measure = measure
+_orient = orient  # heading()'s
 KERNELS = None
 
 
 def use_kernels(kn=None):
-    """Run every Compass's steps (orient, magnitude, dip) with the kernel set `kn`:
-    None picks firmware.fast where the native emitter exists (else the plain functions),
-    False the plain functions, a module (firmware.fast) its mirrors. Returns the set in use
-    (None for the plain functions)."""
-    global _orient, _magnitude, _dip, KERNELS
+    """Run every Compass's steps with the kernel set `kn`: None picks firmware.fast where the
+    native emitter exists (else the plain functions), False the plain functions, a module
+    (firmware.fast) its mirrors. Returns the set in use (None for the plain functions)."""
+    global _measure, _orient, KERNELS
     if kn is None:
         kn = kernels()
     if not kn:
+        _measure = measure
         _orient = orient
-        _magnitude = magnitude
-        _dip = dip
         KERNELS = None
         return None
+    _measure = kn.measure
     _orient = kn.orient
-    _magnitude = kn.magnitude
-    _dip = kn.dip
     KERNELS = kn
     return kn
+
+
+def _slot(i):
+    # a Compass attribute that reads state slot i
+    return property(lambda self: self.st[i])
+
+
+def _flag(bit):
+    # a Compass attribute that is True while the last good update set this flag
+    return property(lambda self: self.st[_FLAGS] & bit != 0)
 
 
 class Compass:
@@ -200,21 +243,13 @@ class Compass:
     def __init__(self, field=0, declination_kang=0, field_tol_pct=_FIELD_TOL_PCT):
         self.declination_kang = declination_kang
         self.heading_kang = 0
-        self.dip_kang = 0
-        self.magnitude = 0
-        self.flags = 0
-        self.interference = False
-        self.dip_high = False
-        self.gimbal = False
+        self._failed = 0  # FLAG_NO_FIELD / FLAG_NO_GRAVITY after a failed update, else 0
         self.st = array("i", bytearray(4 * STATE_SIZE))  # the steps' working state
         level(self.st)
         self.field = 0
         self.field_tol_pct = field_tol_pct
-        self._lo = 0
-        self._hi = _NO_LIMIT
-        self._dip_lo = -_KANG_90  # the dip window: off (every dip is within +-90 deg)
-        self._dip_hi = _KANG_90
         self.set_field(field, field_tol_pct)
+        self.set_dip(None)
 
     def set_field(self, field, field_tol_pct=None):
         """Reference |b| for the interference check (0: off), and optionally its tolerance."""
@@ -226,70 +261,56 @@ class Compass:
             raise ValueError("reference field %d is negative" % field)
         self.field = field
         d = field * self.field_tol_pct // 100
-        self._lo = field - d if field else 0
-        self._hi = field + d if field else _NO_LIMIT
+        self.st[_LO] = field - d if field else 0
+        self.st[_HI] = field + d if field else _NO_LIMIT
+
+    # The results live in the state (the kernel writes them); a failed update leaves the last
+    # good ones and sets only flags.
+    roll_kang = _slot(_ROLL)
+    pitch_kang = _slot(_PITCH)
+    magnitude = _slot(_MAG)
+    dip_kang = _slot(_DIP)
+    interference = _flag(FLAG_INTERFERENCE)
+    dip_high = _flag(FLAG_DIP_HIGH)
+    gimbal = _flag(FLAG_GIMBAL)
 
     @property
-    def roll_kang(self):
-        return self.st[_ROLL]
-
-    @property
-    def pitch_kang(self):
-        return self.st[_PITCH]
+    def flags(self):
+        return self._failed or self.st[_FLAGS]
 
     def set_window(self, lo, hi):
         """Interference window on |b| given by its ends (b's units), e.g. one spanning the field
         model's |B| and the calibration's (firmware/location.py); set_field() replaces it."""
         if not 0 <= lo <= hi:
             raise ValueError("field window %d..%d: need 0 <= lo <= hi" % (lo, hi))
-        self._lo = lo
-        self._hi = hi
+        self.st[_LO] = lo if lo < _NO_LIMIT else _NO_LIMIT
+        self.st[_HI] = hi if hi < _NO_LIMIT else _NO_LIMIT
 
     def set_dip(self, dip_kang=None, tol_kang=0):
         """Expected dip (inclination, KANG, down positive) and its tolerance: a measured dip
         outside it raises the interference flag (PX4's EKF2 checks inclination the same way).
         None turns the check off. Only meaningful with a gravity vector: the level-board path
         assumes pitch = roll = 0."""
-        if dip_kang is None:
-            self._dip_lo = -_KANG_90
-            self._dip_hi = _KANG_90
+        if dip_kang is None:  # off: every dip is within +-90 deg
+            self.st[_DIP_LO] = -_KANG_90
+            self.st[_DIP_HI] = _KANG_90
             return
         if not -_KANG_90 <= dip_kang <= _KANG_90 or not 0 <= tol_kang <= _KANG_90:
             raise ValueError("dip %d +- %d KANG: need |dip| <= 16384 and 0 <= tol <= 16384"
                              % (dip_kang, tol_kang))
-        self._dip_lo = dip_kang - tol_kang
-        self._dip_hi = dip_kang + tol_kang
+        self.st[_DIP_LO] = dip_kang - tol_kang
+        self.st[_DIP_HI] = dip_kang + tol_kang
 
     def update(self, b, g=None):
-        h = _orient(self.st, b, g)
+        h = _measure(self.st, b, g)
         if h < 0:
-            self.flags = FLAG_NO_FIELD if h == -1 else FLAG_NO_GRAVITY
+            self._failed = FLAG_NO_FIELD if h == -1 else FLAG_NO_GRAVITY
             return -1
-        self._check_field(_magnitude(self.st))
-        self._check_dip(_dip(self.st))
+        if self._failed:
+            self._failed = 0
         h = (h + self.declination_kang) & 0xFFFF
         self.heading_kang = h
         return h
-
-    def _check_field(self, m):
-        self.magnitude = m
-        self.interference = m < self._lo or m > self._hi
-        self.flags = FLAG_INTERFERENCE if self.interference else 0
-
-    def _check_dip(self, x):
-        self.dip_kang = x
-        if x < self._dip_lo or x > self._dip_hi:
-            self.interference = True
-            self.flags |= FLAG_INTERFERENCE
-        self.dip_high = x > _DIP_LIMIT_KANG or x < -_DIP_LIMIT_KANG
-        x = self.st[_PITCH]
-        self.gimbal = x > _GIMBAL_PITCH_KANG or x < -_GIMBAL_PITCH_KANG
-        x = self.flags
-        if self.dip_high:
-            x |= FLAG_DIP_HIGH
-        if self.gimbal:
-            x |= FLAG_GIMBAL
-        self.flags = x
 
 
 use_kernels()

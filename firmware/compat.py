@@ -12,6 +12,10 @@ ticks_us()        time.ticks_us where the port has it, else None (CPython: the s
 sleep_us(us)      time.sleep_us where it exists; on CircuitPython a busy wait on that clock
                   (its time.sleep takes float seconds); else a no-op (the simulator passes
                   its own).
+wait_clock(delay_us)  (delay, measured) for a bounded wait (firmware/i2cdevice.py's data-ready
+                  wait, firmware/busio_i2c.py's lock wait): None gives sleep_us, the wait
+                  measured with ticks_us where the port has it; the simulator's delay_us gives
+                  itself, the waited time then being the sum of the delays asked for.
 wall_clock()      (now_us, diff) for measuring real time: ticks_us / ticks_diff on MicroPython,
                   perf_counter_ns on CPython (used only for stall figures, never for logic).
 kernels()         the fast-path module firmware.fast (viper/native code with the same
@@ -21,6 +25,8 @@ kernels()         the fast-path module firmware.fast (viper/native code with the
                   decorators at compile time, so that code lives in firmware/fast.py
                   and is only ever imported here, inside try/except. Set FAST = False before
                   the first call to force the plain path (tests compare the two).
+pick(kn, name, plain)  the function `name` of kernel set kn (None: kernels()), or `plain`
+                  when there is none (kn False or None): a module's use_kernels().
 """
 import time
 
@@ -66,6 +72,13 @@ if ticks_us is None and _MICRO and hasattr(time, "monotonic_ns"):  # CircuitPyth
 sleep_us = sleep_us or _no_sleep
 
 
+def wait_clock(delay_us):
+    """(delay, measured): see the module docstring."""
+    if delay_us is None:
+        return sleep_us, ticks_us is not None
+    return delay_us, False
+
+
 def _sub(a, b):
     return a - b
 
@@ -99,3 +112,10 @@ def kernels():
             # .mpy of another architecture (ValueError), no room for the native code
             _kernels = None
     return _kernels
+
+
+def pick(kn, name, plain):
+    """kn's function `name` (kn None: the port's kernels()), else `plain`."""
+    if kn is None:
+        kn = kernels()
+    return getattr(kn, name) if kn else plain

@@ -8,15 +8,22 @@ and the Compass use these automatically; the results are the same bits.
     plain (its home)                          mirror here
     calibration.correct(k, raw, out)          correct(k, raw, out)
     axes.apply(m, src, dst)                   apply(m, src, dst)
-    compass.orient(st, b, g)                  orient(st, b, g)   (and its steps level, tilt,
-    compass.magnitude(st), compass.dip(st)    magnitude(st), dip(st)        derotate)
+    compass.measure(st, b, g)                 measure(st, b, g)  (and its steps orient, level,
+    compass.orient(st, b, g), magnitude(st),  orient(st, b, g), ...        tilt, derotate)
+    dip(st), judge(st)                        magnitude(st), dip(st), judge(st)
     trig.norm14(src, dst, o)                  norm14(src, dst, o)
     trig.atan2(y, x), trig.sin(a), cos(a)     atan2(y, x), sin(a), cos(a)
-    fixedpoint.isqrt(n)                       isqrt(n), for n < 2**30 (the compass's range)
+    fixedpoint.isqrt(n)                       isqrt(n), for n < 2**30 (the compass's range;
+                                              Newton's iteration: the same floor square root)
+    samples.screen(b)                         screen(b)  (SampleBuffer.offer's rejection test:
+                                              the newest sample, the own cell's hash chain,
+                                              the neighbour cells; the same counters)
 
-Each computes, operation for operation, what its plain original computes and calls the
-mirrors of what its original calls; the orchestration (Compass.update, the app's step) is the
-plain code in both paths. The compass's state `st` is its array('i') (ptr32 loads and stores;
+Each computes what its plain original computes, bit for bit, and calls the mirrors of what
+its original calls; most are written operation for operation, isqrt and norm14's shift search
+in the form that suits native code (no division in the plain isqrt, no loop over a changing m
+in native norm14). The orchestration (Compass.update, the app's step) is the plain code in
+both paths. The compass's state `st` is its array('i') (ptr32 loads and stores;
 a load is zero-extended on the 64-bit unix port, so every value read back, all below 2**16 in
 magnitude, is sign-extended from 18 bits: ((v + 0x20000) & 0x3FFFF) - 0x20000, the same on a
 32-bit board). Viper ints are machine words
@@ -97,19 +104,18 @@ def cos(angle: int) -> int:
 
 @micropython.viper
 def isqrt(n: int) -> int:
-    """fixedpoint.isqrt for 0 <= n < 2**30 (digit by digit, as its small-int branch)."""
-    r = 0
-    b = 0x10000000
-    while b > n:
-        b >>= 2
-    while b:
-        if n >= r + b:
-            n -= r + b
-            r = (r >> 1) + b
-        else:
-            r >>= 1
-        b >>= 2
-    return r
+    """fixedpoint.isqrt for 0 <= n < 2**30. The floor square root is one number whatever the
+    method: here Newton's iteration from above (x0 = 2**15 > sqrt(n); each step is
+    floor((x + n // x) / 2) and decreases until it would not), where fixedpoint's bytecode
+    takes the digit-by-digit loop, which needs no division."""
+    if n < 2:
+        return n
+    x = 0x8000
+    y = (x + n // x) >> 1
+    while y < x:
+        x = y
+        y = (x + n // x) >> 1
+    return x
 
 
 @micropython.viper
@@ -173,7 +179,8 @@ def tilt(st):
 
 @micropython.viper
 def derotate(st):
-    """compass.derotate."""
+    """compass.derotate: Bf = Ry(-theta) Rx(-phi) Bp (AN4248 eq. 19) into 13..15, from the
+    scaled b (0..2) and the sines and cosines of roll (7, 8) and pitch (9, 10)."""
     p = ptr32(st)
     x = ((p[0] + 0x20000) & 0x3FFFF) - 0x20000
     y = ((p[1] + 0x20000) & 0x3FFFF) - 0x20000
@@ -192,10 +199,11 @@ def derotate(st):
 def magnitude(st) -> int:
     """compass.magnitude."""
     p = ptr32(st)
-    x = ((p[0] + 0x20000) & 0x3FFFF) - 0x20000
-    y = ((p[1] + 0x20000) & 0x3FFFF) - 0x20000
-    z = ((p[2] + 0x20000) & 0x3FFFF) - 0x20000
-    m = int(isqrt(x * x + y * y + z * z))
+    n = 0
+    for i in range(3):
+        v = ((p[i] + 0x20000) & 0x3FFFF) - 0x20000
+        n += v * v
+    m = int(isqrt(n))
     k = ((p[6] + 0x20000) & 0x3FFFF) - 0x20000
     if k > 0:
         return (m + (1 << (k - 1))) >> k
@@ -208,15 +216,50 @@ def magnitude(st) -> int:
 def dip(st) -> int:
     """compass.dip."""
     p = ptr32(st)
-    x = ((p[13] + 0x20000) & 0x3FFFF) - 0x20000
-    y = ((p[14] + 0x20000) & 0x3FFFF) - 0x20000
-    z = ((p[15] + 0x20000) & 0x3FFFF) - 0x20000
-    return int(atan2(z, int(isqrt(x * x + y * y))))
+    n = 0
+    for i in range(13, 15):
+        v = ((p[i] + 0x20000) & 0x3FFFF) - 0x20000
+        n += v * v
+    return int(atan2(((p[15] + 0x20000) & 0x3FFFF) - 0x20000, int(isqrt(n))))
+
+
+@micropython.viper
+def judge(st) -> int:
+    """compass.judge. |b| (20) and the |b| window (16, 17) are non-negative: their zero-extended
+    loads are right as they are; the dip (21), its window (18, 19) and the pitch (12) are
+    sign-extended."""
+    p = ptr32(st)
+    m = int(p[20])
+    f = 1 if m < int(p[16]) or m > int(p[17]) else 0  # FLAG_INTERFERENCE
+    m = ((p[21] + 0x20000) & 0x3FFFF) - 0x20000
+    if m < ((p[18] + 0x20000) & 0x3FFFF) - 0x20000:
+        f = 1
+    if m > ((p[19] + 0x20000) & 0x3FFFF) - 0x20000:
+        f = 1
+    if m > 13653 or m < -13653:
+        f |= 2  # FLAG_DIP_HIGH
+    m = ((p[12] + 0x20000) & 0x3FFFF) - 0x20000
+    if m > 14564 or m < -14564:
+        f |= 4  # FLAG_GIMBAL
+    return f
+
+
+@micropython.viper
+def measure(st, b, g) -> int:
+    """compass.measure."""
+    h = int(orient(st, b, g))
+    if h >= 0:
+        p = ptr32(st)
+        p[20] = int(magnitude(st))
+        p[21] = int(dip(st))
+        p[22] = int(judge(st))
+    return h
 
 
 @micropython.viper
 def norm14(src, dst, o: int) -> int:
-    """trig.norm14."""
+    """trig.norm14. The shift is found on the largest |component| m without changing it:
+    up while m << k < 2**13, down while m >> k >= 2**14 (trig's loop shifts m itself)."""
     x = int(src[0])
     y = int(src[1])
     z = int(src[2])
@@ -230,21 +273,24 @@ def norm14(src, dst, o: int) -> int:
     if m == 0:
         return -128  # trig.ZERO_VECTOR
     k = 0
-    while m < 0x2000:
-        m <<= 1
-        k += 1
-    while m >= 0x4000:
-        m >>= 1
-        k -= 1
-    if k >= 0:
+    if m < 0x2000:
+        while (m << k) < 0x2000:
+            k += 1
         dst[o] = x << k
         dst[o + 1] = y << k
         dst[o + 2] = z << k
-    else:
-        dst[o] = _rshift(x, 0 - k)
-        dst[o + 1] = _rshift(y, 0 - k)
-        dst[o + 2] = _rshift(z, 0 - k)
-    return k
+        return k
+    while (m >> k) >= 0x4000:
+        k += 1
+    if k == 0:
+        dst[o] = x
+        dst[o + 1] = y
+        dst[o + 2] = z
+        return 0
+    dst[o] = _rshift(x, k)
+    dst[o + 1] = _rshift(y, k)
+    dst[o + 2] = _rshift(z, k)
+    return 0 - k
 
 
 @micropython.viper
@@ -297,3 +343,142 @@ def apply(m, src, dst):
     dst[0] = x
     dst[1] = y
     dst[2] = z
+
+
+# --- samples.SampleBuffer.offer's rejection test ------------------------------------------
+# The candidate and the buffer's scalars travel in its scratch array q (array('i'): 0..2 the
+# candidate, 3..5 its cell, 6..8 the cell probed, 9 the separation s, 10 s * s, 11 the table
+# mask, 12/13 the cells and entries counted); data and cells are array('h') (ptr16, unsigned:
+# sign-extended by hand), the table array('H'). Every value is below 2**17 in magnitude but
+# s * s (< 2**30, non-negative) and the mask: the 18-bit sign extension as above.
+
+@micropython.viper
+def _near(q, data, j: int) -> int:
+    # samples.SampleBuffer._near: 1 when held sample data[j..j+2] is closer than s
+    p = ptr32(q)
+    d = ptr16(data)
+    s = int(p[9])
+    a = ((d[j] ^ 0x8000) - 0x8000) - (((p[0] + 0x20000) & 0x3FFFF) - 0x20000)
+    if a <= 0 - s or a >= s:
+        return 0
+    b = ((d[j + 1] ^ 0x8000) - 0x8000) - (((p[1] + 0x20000) & 0x3FFFF) - 0x20000)
+    if b <= 0 - s or b >= s:
+        return 0
+    c = ((d[j + 2] ^ 0x8000) - 0x8000) - (((p[2] + 0x20000) & 0x3FFFF) - 0x20000)
+    if c <= 0 - s or c >= s:
+        return 0
+    return 1 if a * a + b * b + c * c < int(p[10]) else 0
+
+
+@micropython.viper
+def _chain(q, data, cells, table) -> int:
+    # samples.SampleBuffer._probe: the chain of the cell in q[6..8]; 0 far (an empty entry
+    # ends it), 1 taken (the cell's occupant), 2 near (a sample within s met on the way)
+    p = ptr32(q)
+    c = ptr16(cells)
+    t = ptr16(table)
+    cx = ((p[6] + 0x20000) & 0x3FFFF) - 0x20000
+    cy = ((p[7] + 0x20000) & 0x3FFFF) - 0x20000
+    cz = ((p[8] + 0x20000) & 0x3FFFF) - 0x20000
+    h = (cx * 0x2F1B) ^ (cy * 0x1D4F) ^ (cz * 0x3A95)  # samples._hash
+    h = (h ^ (h >> 13)) & 0x7FFF
+    h *= 0x5BD1
+    i = (h ^ (h >> 15)) & int(p[11])
+    p[12] = p[12] + 1
+    while True:
+        p[13] = p[13] + 1
+        e = int(t[i])
+        if e == 0:
+            return 0
+        e = 3 * (e - 1)
+        if int(_near(q, data, e)):
+            return 2
+        if (((c[e] ^ 0x8000) - 0x8000) == cx and ((c[e + 1] ^ 0x8000) - 0x8000) == cy
+                and ((c[e + 2] ^ 0x8000) - 0x8000) == cz):
+            return 1
+        i = (i + 1) & int(p[11])
+
+
+@micropython.viper
+def _gap(q, k: int, side: int) -> int:
+    # samples.SampleBuffer._gaps, one entry: the squared gap to the cell below (side 0) or
+    # above (side 1) the candidate's on axis k
+    p = ptr32(q)
+    s = int(p[9])
+    u = (((p[k] + 0x20000) & 0x3FFFF) - 0x20000) - (((p[3 + k] + 0x20000) & 0x3FFFF)
+                                                   - 0x20000) * s + 1
+    if side:
+        u = s + 1 - u
+    return u * u
+
+
+@micropython.viper
+def _around(q, data, cells, table) -> int:
+    # samples.SampleBuffer._neighbours (with _plane and _row): 1 when a neighbour cell holds
+    # a sample within s; the cells whose nearest point is s or more away are skipped
+    p = ptr32(q)
+    s2 = int(p[10])
+    a = -1
+    while a <= 1:
+        ga = int(_gap(q, 0, a + 1 >> 1)) if a else 0
+        if ga < s2:
+            p[6] = p[3] + a
+            b = -1
+            while b <= 1:
+                gb = ga + (int(_gap(q, 1, b + 1 >> 1)) if b else 0)
+                if gb < s2:
+                    p[7] = p[4] + b
+                    c = -1
+                    while c <= 1:
+                        gc = gb + (int(_gap(q, 2, c + 1 >> 1)) if c else 0)
+                        if gc < s2 and gc != 0:
+                            p[8] = p[5] + c
+                            if int(_chain(q, data, cells, table)) == 2:
+                                return 1
+                        c += 1
+                b += 1
+        a += 1
+    return 0
+
+
+@micropython.viper
+def screen(b) -> int:
+    """samples.screen."""
+    q = b._q
+    p = ptr32(q)
+    data = b.data
+    cells = b._cells
+    table = b._table
+    s = int(b.separation)
+    p[9] = s
+    p[10] = int(b._s2)
+    p[11] = int(b._mask)
+    p[12] = 0
+    p[13] = 0
+    r = 1
+    last = int(b._last)
+    if last < 0 or not int(_near(q, data, 3 * last)):
+        p[3] = (((p[0] + 0x20000) & 0x3FFFF) - 0x20000) // s
+        p[4] = (((p[1] + 0x20000) & 0x3FFFF) - 0x20000) // s
+        p[5] = (((p[2] + 0x20000) & 0x3FFFF) - 0x20000) // s
+        p[6] = p[3]
+        p[7] = p[4]
+        p[8] = p[5]
+        if int(_chain(q, data, cells, table)) == 0:
+            r = int(_around(q, data, cells, table))
+    b.last_cells = int(p[12])
+    b.last_probes = int(p[13])
+    return r
+
+
+@micropython.viper
+def int16x3_into(d, buf, msb: int):
+    """i2cdevice.int16x3_into."""
+    p = ptr8(d)
+    h = 1 - msb
+    v = (p[h] << 8) | p[msb]
+    buf[0] = v - 0x10000 if v & 0x8000 else v
+    v = (p[2 + h] << 8) | p[2 + msb]
+    buf[1] = v - 0x10000 if v & 0x8000 else v
+    v = (p[4 + h] << 8) | p[4 + msb]
+    buf[2] = v - 0x10000 if v & 0x8000 else v

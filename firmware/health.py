@@ -60,6 +60,17 @@ def mag_repeats(counts_per_gauss):
     return 32
 
 
+def _run(p, v, n):
+    # the run of exact repeats after sample v: n + 1 (capped) when v repeats p, the previous
+    # sample; else 0, and p takes v
+    if v[0] != p[0] or v[1] != p[1] or v[2] != p[2]:
+        p[0] = v[0]
+        p[1] = v[1]
+        p[2] = v[2]
+        return 0
+    return n + 1 if n < _RUN_CAP else n
+
+
 class Health:
     """The state of the per-sample checks (see the module docstring). overflow: the chip's
     overflow code besides the int16 limits (HMC5883L -4096; else -32768)."""
@@ -96,16 +107,9 @@ class Health:
     def mag_stale(self, raw, suspect=False):
         """suspect: the chip's status hinted at old data (QMC5883L DOR, HMC5883L LOCK): then
         one exact repeat is enough."""
-        p = self.last
-        if raw[0] != p[0] or raw[1] != p[1] or raw[2] != p[2]:
-            p[0] = raw[0]
-            p[1] = raw[1]
-            p[2] = raw[2]
-            self.same = 0
-            return False
-        if self.same < _RUN_CAP:
-            self.same += 1
-        return suspect or self.same >= self.repeats
+        n = _run(self.last, raw, self.same)
+        self.same = n
+        return n > 0 and (suspect or n >= self.repeats)
 
     def _g2(self, a):
         x = a[0] >> _G_SHIFT
@@ -114,16 +118,9 @@ class Health:
         return x * x + y * y + z * z
 
     def _frozen(self, a):
-        p = self.alast
-        if a[0] != p[0] or a[1] != p[1] or a[2] != p[2]:
-            p[0] = a[0]
-            p[1] = a[1]
-            p[2] = a[2]
-            self.asame = 0
-            return False
-        if self.asame < _RUN_CAP:
-            self.asame += 1
-        return self.asame >= _ACCEL_REPEATS
+        n = _run(self.alast, a, self.asame)
+        self.asame = n
+        return n >= _ACCEL_REPEATS
 
     def tilt_ok(self, a):
         n = self._g2(a)

@@ -25,8 +25,8 @@ reads -4096, the ADC overflow marker, or anything outside the output range -2048
 """
 from firmware.compat import const
 
-from firmware.errors import BusError, SensorNotFound, SensorOverflow
-from firmware.i2cdevice import Device, option_code
+from firmware.errors import SensorOverflow
+from firmware.i2cdevice import Magnetometer, option_code
 
 # Registers (datasheet register list)
 _CRA = const(0x00)
@@ -60,55 +60,45 @@ _ST_HIGH = const(575)
 _SETTLE_MARGIN_US = const(2000)
 
 
-class HMC5883L(Device):
+class HMC5883L(Magnetometer):
     KIND = "hmc5883l"
     OPTIONS = ("gain", "rate", "averaging", "delay_us", "timeout_us")
+    TABLES = (_GAINS, _RATES_HZ, _AVERAGING)
+    PER_CODE = (_PERIODS_US, _COUNTS_PER_GAUSS)
+    FLAGS = (_LOCK, 0)  # LOCK still set when RDY rises: the data registers hold an old set
+    REGISTERS = (_ID_A, _STATUS, _RDY, _DATA, _CRA)
+    ID = b"H43"
 
     def __init__(self, i2c, address=0x1E, *, gain=1, rate=15, averaging=8, delay_us=None,
                  timeout_us=None):
-        gn = option_code("HMC5883L", "gain", gain, _GAINS)
-        ri = option_code("HMC5883L", "rate", rate, _RATES_HZ)
-        ma = option_code("HMC5883L", "averaging", averaging, _AVERAGING)
-        super().__init__(i2c, address, _PERIODS_US[ri], delay_us, timeout_us)
-        self._probe_id()
+        super().__init__(i2c, address, delay_us, timeout_us, gain, rate, averaging)
+
+    def _config_of(self, codes):
+        # CRA (averaging, rate, normal measurement) and CRB (gain), read back in one transfer.
+        # MODE is not: the datasheet sets LOCK on a MODE read, which would cost a measurement;
+        # a chip that fell back to single mode stops raising RDY and the reads time out.
+        gn, ri, ma = codes
         self._cra = ma << 5 | _RATE_DO[ri] << 2 | _MS_NORMAL
-        self.range_code = gn
-        self.suspect = False  # the last sample's status said its data may be old (LOCK)
-        self.configure()
+        return (self._cra, gn << 5)
 
-    def configure(self):
-        """This driver's configuration (rate, averaging, gain, continuous mode), written again
-        after a chip reset; returns once samples carry it."""
-        with self.guard:
-            self._write_u8(_CRA, self._cra)
-            self._set_gain_code(self.range_code)
-            self._write_u8(_MODE, _MODE_CONTINUOUS)
-            self._settle(self.period_us)
-
-    def _probe_id(self):
-        b = self._buf
-        try:
-            with self.guard:
-                self._read_into(_ID_A, memoryview(b)[0:3])
-        except BusError as e:
-            raise SensorNotFound("no HMC5883L at 0x%02X: reading ID registers 0x0A-0x0C failed "
-                                 "(errno %s)" % (self.address, e.errno), address=self.address)
-        if b[0] != 0x48 or b[1] != 0x34 or b[2] != 0x33:  # 'H', '4', '3'
-            raise SensorNotFound("no HMC5883L at 0x%02X: ID registers 0x0A-0x0C read "
-                                 "0x%02X 0x%02X 0x%02X, expected 'H43' (0x48 0x34 0x33)"
-                                 % (self.address, b[0], b[1], b[2]), address=self.address)
+    def _configure(self):
+        # rate, averaging, gain, continuous mode; returns once samples carry them
+        self._write_u8(_CRA, self._cra)
+        self._set_gain_code(self.range_code)
+        self._write_u8(_MODE, _MODE_CONTINUOUS)
+        self._settle(self.period_us)
 
     def _set_gain_code(self, gn):
         self._write_u8(_CRB, gn << 5)
         self.range_code = gn
         self.counts_per_gauss = _COUNTS_PER_GAUSS[gn]
+        self.set_config((self._cra, gn << 5))
 
     def _settle(self, period_us):
         # The first measurement after a configuration change keeps the old gain: let two
         # measurements complete, then read (all six bytes: clears LOCK) and drop one sample.
         self._delay(2 * period_us + _SETTLE_MARGIN_US)
-        self.wait(_STATUS, _RDY)
-        self._read_into(_DATA, self._buf)
+        self.fetch()
 
     def set_gain(self, gain):
         """Change the GN code (0..7); returns once samples carry the new gain."""
@@ -117,26 +107,10 @@ class HMC5883L(Device):
             self._set_gain_code(gn)
             self._settle(self.period_us)
 
-    def config_ok(self):
-        """True when CRA and CRB still hold this driver's configuration (one 2-byte read):
-        False after a brown-out (defaults 0x10, 0x20) or a glitch write. MODE is not read: the
-        datasheet sets LOCK on a MODE read, which would cost a measurement; a chip that fell
-        back to single mode stops raising RDY and the reads time out instead."""
-        b = self._buf
-        with self.guard:
-            self._read_into(_CRA, self._b2)
-        return b[0] == self._cra and b[1] == self.range_code << 5
-
-    def read_into(self, buf):
-        """Wait for RDY, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
-        with self.guard:
-            self._sample_into(buf)
-
-    def _sample_into(self, buf):
-        # LOCK still set when RDY rises: the data registers hold an old set (hardware.md)
-        self.suspect = self.wait(_STATUS, _RDY) & _LOCK != 0
+    def sample_into(self, buf):
+        """read_into() for callers already inside a guard: the chip sends X, Z, Y MSB first."""
+        self.suspect = self.fetch() & _LOCK != 0  # (hardware.md)
         d = self._buf
-        self._read_into(_DATA, d)  # all six bytes in one transaction (a partial read sets LOCK)
         x = d[0] << 8 | d[1]       # int16 MSB first, in the order X, Z, Y
         z = d[2] << 8 | d[3]
         y = d[4] << 8 | d[5]
@@ -149,22 +123,14 @@ class HMC5883L(Device):
         buf[2] = z - 0x10000 if z & 0x8000 else z
 
     def _overflow(self):
-        d = self._buf
-        x, z, y = ((d[i] << 8 | d[i + 1]) - ((d[i] & 0x80) << 9) for i in (0, 2, 4))
+        x, z, y = self.held(1)
         raw = (x, y, z)
         if _OVERFLOW in raw:
             msg = ("ADC overflow (-4096) in raw %s; lower the gain (set_gain(%d) or higher)"
                    % (raw, min(self.range_code + 1, 7)))
         else:
             msg = "raw %s outside the output range -2048..2047" % (raw,)
-        raise SensorOverflow("HMC5883L at 0x%02X: %s" % (self.address, msg),
-                             address=self.address, raw=raw)
-
-    def read(self):
-        """(x, y, z) raw counts, the chip's axes."""
-        v = [0, 0, 0]
-        self.read_into(v)
-        return (v[0], v[1], v[2])
+        raise self.overflow(raw, msg)
 
     def self_test(self):
         """Positive-bias self test; returns (passed, (x, y, z) counts at gain 5)."""

@@ -24,18 +24,31 @@ on the C stack (py/objfun.c VM_MAX_STATE_ON_STACK) and would come from the heap 
 sample; the `with` frame stays on the stack, so a read allocates nothing
 (tests/scenarios/drivers_alloc.py).
 
+Magnetometer(Device): the scaffolding the magnetometer drivers share (options, ID probe,
+configure with read-back, read with the status checked, config_ok(), read(), overflow
+reports); each chip's file keeps its datasheet's facts and gives them as class attributes
+(see the class).
+
+Callers that map bus errors themselves (the app's read guard, firmware/app.py) use the
+unguarded sample_into(buf) / config_matches() inside their own `with` block: one guard per
+step instead of one per transfer group (a `with` costs two method calls).
+
 option_code(chip, name, value, table): the register code of a keyword option.
 int16x3_into(d, buf, msb): three int16, LSB first (QMC5883L, QMC5883P data blocks) or MSB
-first (MPU6050), sign-extended by hand.
+first (MPU6050), sign-extended by hand. The drivers call it as `decode`, which use_kernels()
+points at its mirror in firmware/fast.py where the port has the native emitter (the same
+bits; use_kernels(False): this one), as firmware.compass.use_kernels does for the heading.
 """
-from firmware.compat import const, sleep_us, ticks_diff, ticks_us
-from firmware.errors import BusError, DataReadyTimeout, SensorNotFound
+from firmware.compat import const, pick, ticks_diff, ticks_us, wait_clock
+from firmware.errors import BusError, DataReadyTimeout, SensorNotFound, SensorOverflow
 
 _MIN_POLL_US = const(250)       # no faster status polling than this (an I2C status read ~100 us)
 _MAX_TIMEOUT_US = const(1 << 29)  # keeps every wait computation a small int on 32-bit ports
 
 # errno values ports raise from machine.I2C (116 is ETIMEDOUT in the ESP-IDF's newlib)
 _ERRNO_NAMES = {5: "EIO", 19: "ENODEV: no ACK", 110: "ETIMEDOUT", 116: "ETIMEDOUT"}
+_OURS = (BusError, DataReadyTimeout, SensorNotFound)  # already say what happened (a module
+#                                                      constant: a literal tuple is built per use)
 
 
 def _errno(e):
@@ -76,6 +89,20 @@ def int16x3_into(d, buf, msb):
     buf[2] = v - 0x10000 if v & 0x8000 else v
 
 
+def _hex(b):
+    return " ".join("0x%02X" % v for v in b)
+
+
+decode = int16x3_into  # the drivers' per-sample decode: it or its fast mirror (use_kernels)
+
+
+def use_kernels(kn=None):
+    """The drivers' decode from the kernel set `kn`: None picks firmware.fast where the
+    native emitter exists, False the plain function."""
+    global decode
+    decode = pick(kn, "int16x3_into", int16x3_into)
+
+
 class BusGuard:
     """`with dev.guard:` maps a bus OSError to BusError(dev.address, dev.register)."""
 
@@ -86,12 +113,20 @@ class BusGuard:
         return None
 
     def __exit__(self, kind, value, tb):
-        if value is None or not isinstance(value, OSError):
+        if value is None:
             return False
-        if isinstance(value, (BusError, DataReadyTimeout, SensorNotFound)):
-            return False  # already says what happened
+        e = self.mapped(value)
+        if e is not value:
+            raise e
+        return False
+
+    def mapped(self, value):
+        """The error to report for `value`: a BusError naming the device's address and register
+        for a port's OSError; anything else (already one of ours, or no OSError) unchanged."""
+        if value is None or not isinstance(value, OSError) or isinstance(value, _OURS):
+            return value
         d = self._dev
-        raise bus_error(value, d.address, d.register)
+        return bus_error(value, d.address, d.register)
 
 
 class Device:
@@ -103,20 +138,13 @@ class Device:
         self.register = None            # the register of the transfer under way (for errors)
         self._buf = bytearray(6)        # the one scratch buffer: data block, status, config byte
         self._b1 = memoryview(self._buf)[0:1]
-        self._b2 = memoryview(self._buf)[0:2]   # config_ok() read-backs of 2 or 3 registers
-        self._b3 = memoryview(self._buf)[0:3]
         self.guard = BusGuard(self)
         self._set_timing(period_us, delay_us, timeout_us)
 
     def _set_timing(self, period_us, delay_us, timeout_us):
         # Default bound: two periods (the first set after a configuration write takes up to
         # two, HMC5883L datasheet) plus 10 ms of bus latency.
-        if delay_us is None:
-            self._delay = sleep_us
-            self._measured = ticks_us is not None
-        else:
-            self._delay = delay_us
-            self._measured = False
+        self._delay, self._measured = wait_clock(delay_us)
         if timeout_us is None:
             timeout_us = 2 * period_us + 10000
         if type(timeout_us) is not int or not 0 < timeout_us <= _MAX_TIMEOUT_US:
@@ -140,14 +168,17 @@ class Device:
         self._buf[0] = value
         self._i2c.writeto_mem(self.address, reg, self._b1)
 
-    def _probe_u8(self, reg, name):
-        # The ID read: no answer means no chip here (SensorNotFound), not a failed transfer.
+    def _probe(self, reg, n, name):
+        # The ID read (n bytes from reg, a view of the scratch buffer): no answer means no chip
+        # here (SensorNotFound), not a failed transfer.
+        view = memoryview(self._buf)[0:n]
         try:
             with self.guard:
-                return self._read_u8(reg)
+                self._read_into(reg, view)
         except BusError as e:
             raise SensorNotFound("no %s at 0x%02X: reading ID register 0x%02X failed (errno %s)"
                                  % (name, self.address, reg, e.errno), address=self.address)
+        return view
 
     def wait_ready(self, reg, mask):
         """Poll status register `reg` until a bit of `mask` is set; return the status byte."""
@@ -155,23 +186,169 @@ class Device:
             return self.wait(reg, mask)
 
     def wait(self, reg, mask):
-        """wait_ready() for callers already inside `with self.guard:`."""
+        """wait_ready() for callers already inside `with self.guard:`. The first poll is the
+        usual answer (a driver reads at or below the output rate): it costs one transfer and
+        no clock reading; the bounded wait starts only when it says "not ready"."""
+        self.register = reg
+        self._i2c.readfrom_mem_into(self.address, reg, self._b1)
+        status = self._buf[0]
+        if status & mask:
+            return status
+        return self._poll(reg, mask)
+
+    def _poll(self, reg, mask):
+        # The bound counts from the first "not ready": the poll before it is one transfer
+        # (~100 us at 400 kHz) more than timeout_us at the most.
         t0 = ticks_us() if self._measured else 0
         waited = 0
         while True:
-            status = self._read_u8(reg)
-            if status & mask:
-                return status
             if self._measured:
                 waited = ticks_diff(ticks_us(), t0)
             if waited >= self.timeout_us:  # the status was read once more after the bound
-                self._timed_out(reg, status, waited)
+                self._timed_out(reg, self._buf[0], waited)
             self._delay(self._poll_us)
             if not self._measured:
                 waited += self._poll_us
+            status = self._read_u8(reg)
+            if status & mask:
+                return status
 
     def _timed_out(self, reg, status, waited):
         raise DataReadyTimeout(
             "no data ready from 0x%02X after %d us: status register 0x%02X = 0x%02X "
             "(chip in standby, or not converting?)" % (self.address, waited, reg, status),
             address=self.address, waited_us=waited)
+
+
+class Magnetometer(Device):
+    """What the magnetometer drivers share: options to register codes, the ID probe,
+    configure() with its read-back, read_into() behind the data-ready bit, config_ok(),
+    read() and the overflow report. Each chip's file (qmc5883l.py, qmc5883p.py, hmc5883l.py)
+    keeps its datasheet's facts and gives them as class attributes:
+
+      KIND, OPTIONS  the driver's name in records and its keyword options (public)
+      TABLES         per option the values offered, register code = index; the first option
+                     is the range (its code is .range_code), the second the output rate
+      PER_CODE       (output period in us per rate code, counts/G per range code)
+      FLAGS          (status bit saying the data may be old, status bits for _alarm())
+      REGISTERS      (ID register, status register, data-ready bit, first of the six data
+                     registers, first configuration register)
+      ID             the bytes the ID register and those after it read
+
+    The chip's constructor passes its option values in the order of OPTIONS; the chip gives
+    _config_of(codes) (the bytes the configuration registers hold from the first on, which
+    config_ok() reads back in one transfer), _configure() (the datasheet's sequence, inside
+    the guard; _check_config() reads the configuration back) and, where its data block is not
+    X, Y, Z int16 LSB first, its own sample_into(buf). The six data bytes are read in one
+    transaction: a partial read leaves the chip's data lock set.
+    """
+
+    def __init__(self, i2c, address, delay_us, timeout_us, *values):
+        codes = [option_code(self.KIND.upper(), self.OPTIONS[i], v, self.TABLES[i])
+                 for i, v in enumerate(values)]
+        periods, counts = self.PER_CODE
+        super().__init__(i2c, address, periods[codes[1]], delay_us, timeout_us)
+        self.chip = self.KIND.upper()
+        reg, self._status, self._ready, self._data, self._config = self.REGISTERS
+        self._stale, self._alarms = self.FLAGS
+        self.range_code = codes[0]
+        self.counts_per_gauss = counts[codes[0]]
+        self.suspect = False  # the status hinted at old data on the last read (DOR, LOCK)
+        self.skipped = 0      # reads whose status said a sample set was lost (QMC5883L DOR)
+        self.expect_id(reg, self.ID)
+        self.set_config(self._config_of(codes))
+        self.configure()
+
+    def expect_id(self, reg, want):
+        """The ID probe: SensorNotFound unless the registers from `reg` on read `want` (bytes)."""
+        got = self._probe(reg, len(want), self.chip)
+        if got != want:
+            raise SensorNotFound("no %s at 0x%02X: ID register 0x%02X reads %s, expected %s"
+                                 % (self.chip, self.address, reg, _hex(got), _hex(want)),
+                                 address=self.address)
+
+    def set_config(self, want):
+        """The bytes the configuration registers must hold from self._config on."""
+        self._want = bytes(want)
+        self._back = memoryview(self._buf)[0:len(want)]
+
+    def configure(self):
+        """This driver's configuration, written again after a chip reset (the datasheet's
+        sequence in the driver's _configure())."""
+        with self.guard:
+            self._configure()
+
+    def _check_config(self):
+        # the read-back after configuring: a chip that does not keep what was written is not
+        # the chip named (or not a chip at all)
+        if self.config_matches():
+            return
+        b = self._buf
+        i = 0
+        while b[i] == self._want[i]:
+            i += 1
+        raise SensorNotFound("no %s at 0x%02X: register 0x%02X written 0x%02X reads back 0x%02X"
+                             % (self.chip, self.address, self._config + i, self._want[i], b[i]),
+                             address=self.address)
+
+    def config_ok(self):
+        """True when the configuration registers still hold this driver's configuration (one
+        transfer): False after a brown-out or soft reset, or a glitch write."""
+        with self.guard:
+            return self.config_matches()
+
+    def config_matches(self):
+        """config_ok() for callers already inside a guard (the app's read guard)."""
+        self.register = self._config
+        self._i2c.readfrom_mem_into(self.address, self._config, self._back)
+        return self._back == self._want
+
+    def read_into(self, buf):
+        """Wait for data-ready, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
+        with self.guard:
+            self.sample_into(buf)
+
+    def sample_into(self, buf):
+        """read_into() for callers already inside a guard: X, Y, Z int16 LSB first."""
+        status = self.wait(self._status, self._ready)
+        self.register = self._data  # fetch(), written out: one call less per sample
+        self._i2c.readfrom_mem_into(self.address, self._data, self._buf)
+        self.suspect = status & self._stale != 0
+        if status & self._alarms:
+            self._alarm(status)
+        decode(self._buf, buf, 0)
+
+    def fetch(self):
+        """Wait for data-ready and read the six data bytes into self._buf (inside a guard);
+        the status byte."""
+        status = self.wait(self._status, self._ready)
+        self.register = self._data
+        self._i2c.readfrom_mem_into(self.address, self._data, self._buf)
+        return status
+
+    def read(self):
+        """(x, y, z) raw counts, the chip's axes."""
+        v = [0, 0, 0]
+        self.read_into(v)
+        return (v[0], v[1], v[2])
+
+    def held(self, msb):
+        """The data block in self._buf as a tuple of three int16, LSB (msb=0) or MSB first
+        (msb=1), in register order: for error reports (allocates)."""
+        v = [0, 0, 0]
+        int16x3_into(self._buf, v, msb)
+        return tuple(v)
+
+    def overflow(self, raw, detail):
+        """SensorOverflow for raw sample `raw` (a tuple, the chip's axes): `detail` says why."""
+        return SensorOverflow("%s at 0x%02X: %s" % (self.chip, self.address, detail),
+                              address=self.address, raw=raw)
+
+    def _overflow_bit(self, bit, advice):
+        # the status said an axis is beyond the range: the block is read (data lock released)
+        raw = self.held(0)
+        raise self.overflow(raw, "%s set (an axis is beyond +-%d G), raw %s; %s"
+                            % (bit, self.TABLES[0][self.range_code], raw, advice))
+
+
+use_kernels()

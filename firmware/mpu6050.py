@@ -19,7 +19,8 @@ Errors: SensorNotFound (WHO_AM_I is not 0x68), BusError.
 from firmware.compat import const
 
 from firmware.errors import SensorNotFound
-from firmware.i2cdevice import Device, int16x3_into, option_code
+from firmware import i2cdevice
+from firmware.i2cdevice import Device, option_code
 
 # Registers (register map rev 4.2)
 _CONFIG = const(0x1A)         # DLPF_CFG[2:0]
@@ -31,8 +32,8 @@ _PWR_MGMT_1 = const(0x6B)
 _WHO_AM_I = const(0x75)
 
 # Bit fields
-_I2C_BYPASS_EN = const(0x02)  # INT_PIN_CFG bit1
-_I2C_MST_EN = const(0x20)     # USER_CTRL bit5
+_I2C_BYPASS_EN = const(1 << 1)  # INT_PIN_CFG bit1
+_I2C_MST_EN = const(1 << 5)  # USER_CTRL bit5
 _WAKE_PLL_X = const(0x01)     # PWR_MGMT_1: SLEEP=0, clock from the X gyro PLL
 _ID_VALUE = const(0x68)       # WHO_AM_I reads 0x68 whatever AD0 is
 
@@ -49,7 +50,7 @@ class MPU6050(Device):
         afs = _RANGES_G.index(accel_range)
         cfg = option_code("MPU6050", "dlpf", dlpf, _DLPF_HZ)
         super().__init__(i2c, address, 1000)  # no data-ready wait: outputs update continuously
-        who = self._probe_u8(_WHO_AM_I, "MPU6050")
+        who = self._probe(_WHO_AM_I, 1, "MPU6050")[0]
         if who != _ID_VALUE:
             raise SensorNotFound("no MPU6050 at 0x%02X: WHO_AM_I (0x75) reads 0x%02X, expected "
                                  "0x68" % (address, who), address=address)
@@ -84,8 +85,13 @@ class MPU6050(Device):
     def read_accel_into(self, buf):
         """Read the accelerometer (counts) into buf[0..2]. Allocates nothing."""
         with self.guard:
-            self._read_into(_ACCEL_XOUT_H, self._buf)
-        int16x3_into(self._buf, buf, 1)
+            self.sample_into(buf)
+
+    def sample_into(self, buf):
+        """read_accel_into() for callers already inside a guard (the app's read guard)."""
+        self.register = _ACCEL_XOUT_H
+        self._i2c.readfrom_mem_into(self.address, _ACCEL_XOUT_H, self._buf)
+        i2cdevice.decode(self._buf, buf, 1)
 
     def read_accel(self):
         """(x, y, z) raw counts, the chip's axes."""

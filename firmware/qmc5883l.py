@@ -22,8 +22,8 @@ SensorOverflow (OVL: the six data bytes are still read first, to release the dat
 """
 from firmware.compat import const
 
-from firmware.errors import SensorNotFound, SensorOverflow
-from firmware.i2cdevice import Device, int16x3_into, option_code
+from firmware.errors import SensorNotFound
+from firmware.i2cdevice import Magnetometer
 
 # Registers (datasheet register map)
 _XOUT_L = const(0x00)      # X, Y, Z int16 LSB first in 0x00..0x05
@@ -44,7 +44,6 @@ _SOFT_RST = const(0x80)    # CTRL2 bit7
 # ROL_PNT = 0, since every read here sets the pointer itself, so the rollover never matters.
 _CTRL2_RUN = const(0x00)
 _SET_RESET_PERIOD = const(0x01)  # datasheet recommended value
-_ID_VALUE = const(0xFF)
 _POR_US = const(1000)      # after SOFT_RST; hardware.md gives no figure, 1 ms is generous
 
 _RANGES_G = (2, 8)                         # RNG[5:4] code = index
@@ -54,85 +53,40 @@ _PERIODS_US = (100000, 20000, 10000, 5000)
 _OSRS = (512, 256, 128, 64)                # OSR[7:6] code = index
 
 
-class QMC5883L(Device):
+class QMC5883L(Magnetometer):
     KIND = "qmc5883l"
     OPTIONS = ("range", "odr", "osr", "delay_us", "timeout_us")
+    TABLES = (_RANGES_G, _ODRS_HZ, _OSRS)
+    PER_CODE = (_PERIODS_US, _COUNTS_PER_GAUSS)
+    FLAGS = (_DOR, _DOR | _OVL)  # DOR: a set was skipped, so this one may be old too
+    REGISTERS = (_CHIP_ID, _STATUS, _DRDY, _XOUT_L, _CTRL1)
+    ID = b"\xff"
 
     def __init__(self, i2c, address=0x0D, *, range=2, odr=50, osr=512, delay_us=None,
                  timeout_us=None):
-        rng = option_code("QMC5883L", "range", range, _RANGES_G)
-        rate = option_code("QMC5883L", "odr", odr, _ODRS_HZ)
-        over = option_code("QMC5883L", "osr", osr, _OSRS)
-        super().__init__(i2c, address, _PERIODS_US[rate], delay_us, timeout_us)
-        self.range_code = rng
-        self.counts_per_gauss = _COUNTS_PER_GAUSS[rng]
-        self.skipped = 0
-        self.suspect = False  # DOR was set on the last read (see health.py: stale data)
+        super().__init__(i2c, address, delay_us, timeout_us, range, odr, osr)
 
-        chip_id = self._probe_u8(_CHIP_ID, "QMC5883L")
-        if chip_id != _ID_VALUE:
-            raise SensorNotFound("no QMC5883L at 0x%02X: chip ID register 0x0D reads 0x%02X, "
-                                 "expected 0xFF" % (address, chip_id), address=address)
-        self._ctrl1 = over << 6 | rng << 4 | rate << 2 | _MODE_CONTINUOUS
-        self.configure()
-
-    def configure(self):
-        """Soft reset, then this driver's configuration, read back (also after a chip reset)."""
-        with self.guard:
-            self._configure()
+    @staticmethod
+    def _config_of(codes):
+        rng, rate, over = codes
+        return (over << 6 | rng << 4 | rate << 2 | _MODE_CONTINUOUS,)  # CTRL1
 
     def _configure(self):
-        address = self.address
+        # soft reset, standby check, then this driver's configuration, read back
         self._write_u8(_CTRL2, _SOFT_RST)
         self._delay(_POR_US)
         ctrl1 = self._read_u8(_CTRL1)
         if ctrl1 & _MODE_MASK:
             raise SensorNotFound("no QMC5883L at 0x%02X: ID reads 0xFF but CTRL1 reads 0x%02X "
                                  "after a soft reset, not standby (an undriven bus reads 0xFF)"
-                                 % (address, ctrl1), address=address)
+                                 % (self.address, ctrl1), address=self.address)
         self._write_u8(_SET_RESET, _SET_RESET_PERIOD)
         self._write_u8(_CTRL2, _CTRL2_RUN)
-        cfg = self._ctrl1
-        self._write_u8(_CTRL1, cfg)
-        back = self._read_u8(_CTRL1)
-        if back != cfg:
-            raise SensorNotFound("no QMC5883L at 0x%02X: CTRL1 written 0x%02X reads back 0x%02X"
-                                 % (address, cfg, back), address=address)
+        self._write_u8(_CTRL1, self._want[0])
+        self._check_config()
 
-    def config_ok(self):
-        """True when CTRL1 still holds this driver's configuration (one byte read): False after
-        a brown-out or soft reset (standby, CTRL1 0) or a glitch write (another range)."""
-        with self.guard:
-            return self._read_u8(_CTRL1) == self._ctrl1
-
-    def read_into(self, buf):
-        """Wait for DRDY, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
-        with self.guard:
-            self._sample_into(buf)
-
-    def _sample_into(self, buf):
-        status = self.wait(_STATUS, _DRDY)
-        d = self._buf
-        self._read_into(_XOUT_L, d)  # all six bytes in one transaction: releases the data lock
-        self.suspect = status & _DOR != 0  # a set was skipped: this one may be old too
+    def _alarm(self, status):
         if status & _DOR:
             self.skipped += 1
         if status & _OVL:
-            self._overflow()
-        int16x3_into(d, buf, 0)
-
-    def _overflow(self):
-        d = self._buf
-        v = [0, 0, 0]
-        int16x3_into(d, v, 0)
-        raw = tuple(v)
-        raise SensorOverflow("QMC5883L at 0x%02X: OVL set (an axis is beyond +-%d G), raw %s; "
-                             "use range=8 or move the magnet away"
-                             % (self.address, _RANGES_G[self.range_code], raw),
-                             address=self.address, raw=raw)
-
-    def read(self):
-        """(x, y, z) raw counts, the chip's axes."""
-        v = [0, 0, 0]
-        self.read_into(v)
-        return (v[0], v[1], v[2])
+            self._overflow_bit("OVL", "use range=8 or move the magnet away")

@@ -18,8 +18,7 @@ Errors: SensorNotFound, BusError, DataReadyTimeout, SensorOverflow (status OVFL)
 """
 from firmware.compat import const
 
-from firmware.errors import SensorNotFound, SensorOverflow
-from firmware.i2cdevice import Device, int16x3_into, option_code
+from firmware.i2cdevice import Magnetometer
 
 # Registers (hardware.md)
 _CHIP_ID = const(0x00)
@@ -37,7 +36,6 @@ _OVFL = const(0x02)        # STATUS bit1
 _MODE_NORMAL = const(0x01)
 _SOFT_RST = const(0x80)    # CTRL2 bit7
 _SET_RESET_ON = const(0x00)  # CTRL2 SET/RESET[1:0] = 00: set and reset
-_ID_VALUE = const(0x80)
 _RESET_US = const(1000)    # after SOFT_RST (no figure in hardware.md; generous)
 
 _RANGES_G = (30, 12, 8, 2)                 # RNG[3:2] code = index
@@ -48,78 +46,32 @@ _OSRS = (8, 4, 2, 1)                       # OSR[5:4] code = index
 _DSRS = (1, 2, 4, 8)                       # DSR[7:6] code = index
 
 
-class QMC5883P(Device):
+class QMC5883P(Magnetometer):
     KIND = "qmc5883p"
     OPTIONS = ("range", "odr", "osr", "dsr", "delay_us", "timeout_us")
+    TABLES = (_RANGES_G, _ODRS_HZ, _OSRS, _DSRS)
+    PER_CODE = (_PERIODS_US, _COUNTS_PER_GAUSS)
+    FLAGS = (0, _OVFL)
+    REGISTERS = (_CHIP_ID, _STATUS, _DRDY, _XOUT_L, _CTRL1)
+    ID = b"\x80"
 
     def __init__(self, i2c, address=0x2C, *, range=8, odr=50, osr=8, dsr=1, delay_us=None,
                  timeout_us=None):
-        rng = option_code("QMC5883P", "range", range, _RANGES_G)
-        rate = option_code("QMC5883P", "odr", odr, _ODRS_HZ)
-        over = option_code("QMC5883P", "osr", osr, _OSRS)
-        down = option_code("QMC5883P", "dsr", dsr, _DSRS)
-        super().__init__(i2c, address, _PERIODS_US[rate], delay_us, timeout_us)
-        self.range_code = rng
-        self.counts_per_gauss = _COUNTS_PER_GAUSS[rng]
+        super().__init__(i2c, address, delay_us, timeout_us, range, odr, osr, dsr)
 
-        chip_id = self._probe_u8(_CHIP_ID, "QMC5883P")
-        if chip_id != _ID_VALUE:
-            raise SensorNotFound("no QMC5883P at 0x%02X: chip ID register 0x00 reads 0x%02X, "
-                                 "expected 0x80" % (address, chip_id), address=address)
-        self._ctrl1 = down << 6 | over << 4 | rate << 2 | _MODE_NORMAL
-        self._ctrl2 = rng << 2 | _SET_RESET_ON
-        self.configure()
-
-    def configure(self):
-        """Soft reset, then this driver's configuration, read back (also after a chip reset)."""
-        with self.guard:
-            self._configure()
+    @staticmethod
+    def _config_of(codes):
+        # CTRL1 and CTRL2 are adjacent: config_ok() reads both back in one 2-byte transfer
+        rng, rate, over, down = codes
+        return (down << 6 | over << 4 | rate << 2 | _MODE_NORMAL, rng << 2 | _SET_RESET_ON)
 
     def _configure(self):
-        address = self.address
+        # soft reset, then CTRL2 (range, set/reset) before CTRL1 (mode), read back
         self._write_u8(_CTRL2, _SOFT_RST)
         self._delay(_RESET_US)
-        ctrl2 = self._ctrl2
-        ctrl1 = self._ctrl1
-        self._write_u8(_CTRL2, ctrl2)
-        self._write_u8(_CTRL1, ctrl1)
-        for reg, want in ((_CTRL1, ctrl1), (_CTRL2, ctrl2)):
-            got = self._read_u8(reg)
-            if got != want:
-                raise SensorNotFound("no QMC5883P at 0x%02X: register 0x%02X written 0x%02X "
-                                     "reads back 0x%02X" % (address, reg, want, got),
-                                     address=address)
+        self._write_u8(_CTRL2, self._want[1])
+        self._write_u8(_CTRL1, self._want[0])
+        self._check_config()
 
-    def config_ok(self):
-        """True when CTRL1 and CTRL2 still hold this driver's configuration (a 2-byte read)."""
-        with self.guard:
-            self._read_into(_CTRL1, self._b2)
-            return self._buf[0] == self._ctrl1 and self._buf[1] == self._ctrl2
-
-    def read_into(self, buf):
-        """Wait for DRDY, read X, Y, Z (counts) into buf[0..2]. Allocates nothing."""
-        with self.guard:
-            self._sample_into(buf)
-
-    def _sample_into(self, buf):
-        status = self.wait(_STATUS, _DRDY)
-        d = self._buf
-        self._read_into(_XOUT_L, d)  # the whole block in one transaction
-        if status & _OVFL:
-            self._overflow()
-        int16x3_into(d, buf, 0)
-
-    def _overflow(self):
-        d = self._buf
-        v = [0, 0, 0]
-        int16x3_into(d, v, 0)
-        raw = tuple(v)
-        raise SensorOverflow("QMC5883P at 0x%02X: OVFL set (an axis is beyond +-%d G), raw %s; "
-                             "use a larger range" % (self.address, _RANGES_G[self.range_code],
-                                                     raw), address=self.address, raw=raw)
-
-    def read(self):
-        """(x, y, z) raw counts, the chip's axes."""
-        v = [0, 0, 0]
-        self.read_into(v)
-        return (v[0], v[1], v[2])
+    def _alarm(self, status):
+        self._overflow_bit("OVFL", "use a larger range")

@@ -34,7 +34,7 @@ from array import array
 
 from firmware.fixedpoint import isqrt
 
-from firmware.compat import const
+from firmware.compat import const, pick
 
 REJECTED = const(0)  # offer(): too close to a held sample, or its cell is taken
 KEPT = const(1)      # offer(): stored in a free slot
@@ -180,6 +180,32 @@ def bad_sample(x, y, z):
     return ValueError("sample (%d, %d, %d) is not int16" % (x, y, z))
 
 
+def screen(b):
+    """SampleBuffer.offer's rejection test for the candidate in b._q[0..2]: 1 when a held
+    sample closer than the separation, or a sample in its own cell, forbids keeping it, else
+    0 (its cell then in q[3..5]); counts b.last_cells and b.last_probes. firmware/fast.py
+    mirrors it (use_kernels)."""
+    # The newest sample is the usual reason to reject at 50 Hz: test it before hashing.
+    if b._last >= 0 and b._near(3 * b._last):
+        return 1
+    if b._own_cell() != _FAR:
+        return 1  # own cell taken (or a close sample met on its chain)
+    if b._neighbours():
+        return 1
+    return 0
+
+
+_screen = screen  # offer()'s: this function or its fast mirror, module-wide (use_kernels)
+
+
+def use_kernels(kn=None):
+    """SampleBuffer.offer's rejection test from the kernel set `kn` (as
+    firmware.compass.use_kernels): None picks firmware.fast where the native emitter exists,
+    False the plain function."""
+    global _screen
+    _screen = pick(kn, "screen", screen)
+
+
 class SampleBuffer:
     """Bounded, distance-separated buffer of raw int16 magnetometer samples (see module doc).
 
@@ -206,9 +232,11 @@ class SampleBuffer:
         self.gaps_x100 = N_REGIONS * _GAP_EMPTY
         self.last_cells = 0
         self.last_probes = 0
-        # offer()'s scratch: the candidate x, y, z, its cell, the cell being probed; and the
-        # squared gaps to the neighbour cells on each side of each axis (low x, high x, ...)
-        self._q = array("i", (0, 0, 0, 0, 0, 0, 0, 0, 0))
+        # offer()'s scratch: the candidate x, y, z, its cell, the cell being probed (and, for
+        # firmware/fast.py's screen, 9..13: separation, its square, table mask, cells and
+        # entries counted); and the squared gaps to the neighbour cells on each side of each
+        # axis (low x, high x, ...)
+        self._q = array("i", bytearray(4 * 14))
         self._gap = array("i", (0, 0, 0, 0, 0, 0))
         self._check_separation(separation)
         self.separation = separation
@@ -265,12 +293,7 @@ class SampleBuffer:
             raise bad_sample(x, y, z)
         self.last_cells = 0
         self.last_probes = 0
-        # The newest sample is the usual reason to reject at 50 Hz: test it before hashing.
-        if self._last >= 0 and self._near(3 * self._last):
-            return REJECTED
-        if self._own_cell() != _FAR:
-            return REJECTED  # own cell taken (or a close sample met on its chain)
-        if self._neighbours():
+        if _screen(self):
             return REJECTED
         return self._keep()
 
@@ -520,3 +543,6 @@ class SampleBuffer:
             if i0 + step < N_REGIONS:
                 yield
         out[0] = occupied * 100 // N_REGIONS
+
+
+use_kernels()

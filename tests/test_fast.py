@@ -11,8 +11,10 @@ SCENARIO = "tests/scenarios/fast_parity.py"
 MIRRORS = {"correct": "calibration", "apply": "axes", "atan2": "trig", "sin": "trig",
            "cos": "trig", "norm14": "trig", "isqrt": "fixedpoint", "orient": "compass",
            "level": "compass", "tilt": "compass", "derotate": "compass", "magnitude": "compass",
-           "dip": "compass"}
-UNCALLED = {"cos", "level", "tilt", "derotate"}  # reached through orient, or trivial
+           "dip": "compass", "judge": "compass", "measure": "compass", "screen": "samples",
+           "int16x3_into": "i2cdevice"}
+UNCALLED = {"cos", "level", "tilt", "derotate", "judge"}  # reached through orient or
+#                                                          measure, or trivial
 
 
 def _run(micro):
@@ -27,6 +29,7 @@ def test_viper_mirrors_match_the_plain_functions_on_micropython():
         assert r["cases"].get(name, 0) > 1000, name
     assert r["cases"]["state"] > 1000  # orient leaves the same working state
     assert r["cases"]["pipeline"] > 3000
+    assert r["cases"]["buffer"] == 5  # the buffers screened each way hold the same samples
     if os.path.isdir(os.path.join(mp.ROOT, "..", "shared", "datasets")):
         assert r["log_samples"] >= 3000
 

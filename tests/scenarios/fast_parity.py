@@ -2,6 +2,9 @@
 # whole per-sample path (correct -> axes -> Compass.update) with either kernel set:
 #   correct  vs calibration.correct     apply vs axes.apply
 #   atan2, sin, cos, norm14 vs trig's    isqrt vs fixedpoint.isqrt (n < 2**30)
+#   measure (orient, magnitude, dip, judge) vs compass's
+#   screen   vs samples.screen: two SampleBuffers offered the same samples (result, counters,
+#            held samples), at several capacities and separations
 # Inputs: the int16 extremes (+-32767, -32768, -4096, 0, +-1), a small-int generator (no long
 # ints on a 32-bit port), and the real logs in ../shared/datasets (integer-count logs, when the
 # folder is there) through a calibration with strong soft iron. Where the port has no native
@@ -11,7 +14,7 @@
 import json
 from array import array
 
-from firmware import axes, calibration, compass, fixedpoint, trig
+from firmware import axes, calibration, compass, fixedpoint, i2cdevice, samples, trig
 from firmware.calibration import Calibration
 from firmware.compat import kernels
 
@@ -105,8 +108,40 @@ def kernels_agree(v):
         check("state", list(st2), list(st1), [v, g])
         check("magnitude", FAST.magnitude(st2), compass.magnitude(st1), [v, g])
         check("dip", FAST.dip(st2), compass.dip(st1), [v, g])
+        # measure: the windows (16..19) from the sample itself, so every flag is reached
+        for st in (st1, st2):
+            st[16] = abs(v[0]) * 3
+            st[17] = abs(v[1]) * 3
+            st[18] = v[2] >> 2
+            st[19] = (v[2] >> 2) + (abs(v[0]) >> 3)
+        check("measure", FAST.measure(st2, v, g), compass.measure(st1, v, g), [v, g])
+        check("state", list(st2), list(st1), [v, g])
     n = (v[0] * v[0] + v[1] * v[1]) >> 2  # < 2**30, the mirror's domain
     check("isqrt", FAST.isqrt(n), fixedpoint.isqrt(n), n)
+    raw = bytearray(6)
+    for i in range(3):
+        raw[2 * i] = v[i] & 0xFF
+        raw[2 * i + 1] = (v[i] >> 8) & 0xFF
+    for msb in (0, 1):
+        i2cdevice.int16x3_into(raw, a, msb)
+        FAST.int16x3_into(raw, b, msb)
+        check("int16x3_into", list(b), list(a), [v, msb])
+
+
+def buffers_agree(vs):
+    # the same offers to a buffer screened by samples.screen and one by FAST.screen
+    for cap, sep in ((300, 900), (40, 3000), (100, 1), (60, 16384), (20, 200)):
+        b1 = samples.SampleBuffer(cap, sep)
+        b2 = samples.SampleBuffer(cap, sep)
+        for v in vs:
+            samples.use_kernels(False)
+            r1 = b1.offer(v[0], v[1], v[2])
+            samples.use_kernels(FAST)
+            r2 = b2.offer(v[0], v[1], v[2])
+            check("screen", [r2, b2.last_cells, b2.last_probes, b2.count],
+                  [r1, b1.last_cells, b1.last_probes, b1.count], [cap, sep, v])
+        check("buffer", list(b2.data), list(b1.data), [cap, sep])
+    samples.use_kernels()
 
 
 def pipeline(v, g, kern):
@@ -129,6 +164,10 @@ def run():
         return out
     for v in vs + logs:
         kernels_agree(v)
+    # a slow figure-8 (rnd16 noise) then the generator's and the logs' samples
+    walk = [[(rnd16() >> 10) + 9000 * ((i >> 6) & 3) - 12000, (rnd16() >> 10) + 70 * (i & 63),
+             (rnd16() >> 10) - 50 * (i & 127)] for i in range(1200)]
+    buffers_agree(walk + vs[:600] + logs[:600])
     gs = [[0, 0, 16384], [16384, 0, 0], [-11585, 300, 11585], [0, 0, 0], None, [3, -3, 3]]
     i = 0
     for v in vs + logs:
@@ -153,8 +192,14 @@ def allocation():
     m = MAPS[3].m
     st = array("i", bytearray(4 * compass.STATE_SIZE))
     g = array("h", (300, -200, 16000))
+    buf = samples.SampleBuffer(300, 900)
+    for i in range(300):
+        buf.offer(40 * i - 6000, (i * 37) % 4000, 900)
+    buf._q[0] = 123  # a candidate of its own for screen (its scratch: offer sets it)
+    buf._q[1] = 456
+    buf._q[2] = 789
     for name in ("correct", "apply", "atan2", "sin", "norm14", "isqrt", "orient", "magnitude",
-                 "dip"):
+                 "dip", "measure", "screen", "int16x3_into"):
         f = getattr(FAST, name)
         t = mt()
         for _ in range(200):
@@ -168,10 +213,14 @@ def allocation():
                 f(12345)
             elif name == "norm14":
                 f(v, d, 1)
-            elif name == "orient":
+            elif name in ("orient", "measure"):
                 f(st, v, g)
             elif name in ("magnitude", "dip"):
                 f(st)
+            elif name == "screen":
+                f(buf)
+            elif name == "int16x3_into":
+                f(b"\x01\x80\xff\x7f\x00\x00", o, 1)
             else:
                 f(123456789)
         res[name] = (mt() - t) // 200

@@ -70,7 +70,7 @@ def main():
         app, clock = make_app(b, fast)
         model = calibrate(app, clock, steps)
         apps[name] = (app, clock, model, b)
-    from firmware import compass
+    from firmware import compass, i2cdevice, samples
 
     def stepper(name):
         app, clock, _, b = apps[name]
@@ -78,6 +78,8 @@ def main():
 
         def run(n):
             compass.use_kernels(kern)  # the set this app chose (module-wide)
+            samples.use_kernels(kern)
+            i2cdevice.use_kernels(kern)
             b.rewind()
             for _ in range(n):
                 clock.now += PERIOD_US

@@ -21,7 +21,7 @@ from array import array
 from host_sim.cli.benchmarks import common, floatpath
 from host_sim.cli.benchmarks.common import IS_MP
 
-from firmware import axes, calibration, trig
+from firmware import axes, calibration, i2cdevice, trig
 from firmware import compass as compass_mod
 from firmware.axes import AxisMap
 from firmware.compass import Compass
@@ -84,12 +84,14 @@ fa = [0.0, 0.0, 0.0]
 
 # ---- ours, cumulative ---------------------------------------------------------------------
 def o1(n):
+    i2cdevice.use_kernels(False)  # the plain decode
     bus.rewind()
     for i in range(n):
         mag.read_into(raw)
 
 
 def o2(n):
+    i2cdevice.use_kernels(False)  # the plain decode
     bus.rewind()
     for i in range(n):
         mag.read_into(raw)
@@ -97,6 +99,7 @@ def o2(n):
 
 
 def o3(n):
+    i2cdevice.use_kernels(False)  # the plain decode
     bus.rewind()
     for i in range(n):
         mag.read_into(raw)
@@ -105,6 +108,7 @@ def o3(n):
 
 
 def o4(n):
+    i2cdevice.use_kernels(False)  # the plain decode
     bus.rewind()
     for i in range(n):
         mag.read_into(raw)
@@ -116,6 +120,7 @@ def o4(n):
 
 def ours(n):
     compass_mod.use_kernels(False)  # the plain path
+    i2cdevice.use_kernels(False)
     bus.rewind()
     for i in range(n):
         mag.read_into(raw)
@@ -129,6 +134,7 @@ def ours(n):
 # ---- ours with firmware.fast's kernels (viper on MicroPython; the plain ones elsewhere) --
 def ours_fast(n):
     compass_mod.use_kernels(kern)
+    i2cdevice.use_kernels(kern)
     bus.rewind()
     for i in range(n):
         mag.read_into(raw)
