@@ -103,3 +103,24 @@ def test_decimal_text_is_exact_both_ways(m, d, e):
 def test_decimal_refuses_non_numbers_and_huge_exponents(bad):
     with pytest.raises(ValueError):
         args.parse_decimal(bad)
+
+
+def test_many_positionals_repeatable_options_and_short_names():
+    p = Parser("pts", "[LAT,LON ...]")
+    p.positional("points", "LAT,LON", "places", required=False, many=True,
+                  kind=lambda t: tuple(int(v) for v in t.split(",")))
+    p.option("--device", "str", repeat=True, metavar="D")
+    p.option("--output", "path", short="-o")
+    o = p.parse(["-33,151", "--device", "a", "-o", "x.png", "51,-1", "--device", "b"])
+    assert o["points"] == [(-33, 151), (51, -1)]
+    assert o["device"] == ["a", "b"] and o["output"] == "x.png"
+    assert p.parse([])["points"] == [] and p.parse([])["device"] == []
+    with pytest.raises(UsageError, match="LAT,LON '1,x'"):
+        p.parse(["1,x"])
+    with pytest.raises(UsageError, match="--output given twice"):
+        p.parse(["-o", "a", "--output", "b"])
+    assert "-o, --output" in p.help_text()
+    q = Parser("need", "FILE...")
+    q.positional("files", "FILE", many=True)
+    with pytest.raises(UsageError, match="missing FILE"):
+        q.parse([])

@@ -106,7 +106,7 @@ def test_a_bad_record_refuses_the_whole_batch(tmp_path, capsys, bad, field):
     src = write_jsonl(tmp_path / "b.jsonl", good + [bad])
     rc, out, err = run(capsys, "--db", db, "ingest", src)
     assert rc == 2 and out == ""
-    assert err.count("\n") == 1 and err.startswith("quality: ")
+    assert err.count("\n") == 1 and err.startswith("host_sim quality: error: ")
     assert "b.jsonl:3:" in err and field in err               # names the line and the field
     assert count(db) == 1 and open(db, "rb").read() == before
 

@@ -113,6 +113,9 @@ class Option:
         self.metavar = metavar
         self.help = help
         self.dest = dest
+        self.many = False
+        self.short = None
+        self.repeat = False
 
     def convert(self, text):
         """The value of `text`, or UsageError naming the option."""
@@ -186,11 +189,14 @@ class Parser:
         self.positionals = []
 
     def option(self, name, kind="str", default=None, lo=None, hi=None, choices=None,
-               metavar=None, help="", dest=None):
-        """Declare `--name`; its value goes to opts[dest] (default: name without dashes,
-        '-' -> '_'). `default` is used as is (not converted) when the option is absent."""
+               metavar=None, help="", dest=None, short=None, repeat=False):
+        """Declare `--name` (and `short`, e.g. '-o'); its value goes to opts[dest] (default:
+        name without dashes, '-' -> '_'). `default` is used as is (not converted) when the
+        option is absent. repeat=True: it may be given again, opts[dest] is the list."""
         if dest is None:
             dest = name.lstrip("-").replace("-", "_")
+        if repeat and default is None:
+            default = []
         if kind == "flag" and default is None:
             default = False
         if kind == "decimal":
@@ -199,18 +205,26 @@ class Parser:
         if metavar is None:
             metavar = "" if kind == "flag" else dest.upper()
         o = Option(name, kind, default, lo, hi, choices, metavar, help, dest)
+        o.short = short
+        o.repeat = repeat
         self.options.append(o)
         return o
 
-    def positional(self, dest, metavar, help="", kind="str", required=True, default=None):
-        o = Option(dest, kind, default, None, None, None, metavar, help, dest)
+    def positional(self, dest, metavar, help="", kind="str", required=True, default=None,
+                   many=False, choices=None):
+        """Declare a positional; many=True (the last one only): every remaining word, each
+        converted, as a list (empty when none and not required)."""
+        if many and default is None:
+            default = []
+        o = Option(dest, kind, default, None, None, choices, metavar, help, dest)
         o.required = required
+        o.many = many
         self.positionals.append(o)
         return o
 
     def _find(self, name):
         for o in self.options:
-            if o.name == name:
+            if o.name == name or (o.short is not None and o.short == name):
                 return o
         return None
 
@@ -243,7 +257,7 @@ class Parser:
             o = self._find(name)
             if o is None:
                 raise UsageError("unknown option %s" % name)
-            if o.dest in given:
+            if o.dest in given and not o.repeat:
                 raise UsageError("%s given twice" % name)
             given.append(o.dest)
             if o.kind == "flag":
@@ -256,11 +270,19 @@ class Parser:
                     raise UsageError("%s needs a value (%s)" % (name, o.metavar))
                 val = argv[i]
                 i += 1
-            opts[o.dest] = o.convert(val)
-        if len(pos) > len(self.positionals):
+            if o.repeat:
+                opts[o.dest] = opts[o.dest] + [o.convert(val)]
+            else:
+                opts[o.dest] = o.convert(val)
+        many = self.positionals and self.positionals[-1].many
+        if len(pos) > len(self.positionals) and not many:
             raise UsageError("unexpected argument %r" % pos[len(self.positionals)])
         for k, o in enumerate(self.positionals):
-            if k < len(pos):
+            if o.many:
+                opts[o.dest] = [o.convert(w) for w in pos[k:]]
+                if o.required and not opts[o.dest]:
+                    raise UsageError("missing %s" % o.metavar)
+            elif k < len(pos):
                 opts[o.dest] = o.convert(pos[k])
             elif o.required:
                 raise UsageError("missing %s" % o.metavar)
@@ -278,7 +300,8 @@ class Parser:
             lines += ["", "arguments:"] + _rows(rows)
         rows = []
         for o in self.options:
-            head = o.name + (" " + o.metavar if o.metavar else "")
+            head = (o.short + ", " if o.short else "") + o.name + (
+                " " + o.metavar if o.metavar else "")
             text = o.help
             if o.kind == "choice" and "{choices}" in text:
                 text = text.replace("{choices}", ", ".join(o.choices))

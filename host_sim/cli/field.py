@@ -10,27 +10,9 @@ import json
 import sys
 
 from firmware.fixedpoint import rdiv
-from host_sim.cli.calibrate import parse_decimal
+from host_sim.cli.args import Parser, UsageError, error_line, parse_decimal
 
-USAGE = """usage: python -m host_sim field [--date YYYY-MM-DD] [--json] [--table FILE] [LAT,LON ...]
-
-The World Magnetic Model 2025 as the board computes it (firmware/field.py, integer-only).
-LAT,LON in decimal degrees (north, east positive), e.g. 51.5,-0.13 or -33.9,151.2; without
-arguments, one LAT,LON per line on stdin (blank lines and lines starting with # are skipped).
-
-options:
-  --date YYYY-MM-DD  the date (default today); the model covers 2025-01-01 .. 2030-01-01
-  --json             print a JSON list: lat, lon, declination_deg (east positive),
-                     inclination_deg (down positive), field_nt, horizontal_nt, status
-  --table FILE       the table file (default firmware/wmm2025.bin)
-  -h, --help         this text
-
-exit status: 0 done; 1 the date is outside the model's validity; 2 bad usage or input.
-"""
-
-
-class UsageError(Exception):
-    pass
+COMMAND = "field"
 
 
 def degrees_e7(text, what, limit):
@@ -60,27 +42,23 @@ def parse_date(text):
     return int(p[0]), int(p[1]), int(p[2])
 
 
-def parse_args(argv):
-    opts = {"date": None, "json": False, "table": None, "points": []}
-    i = 0
-    while i < len(argv):
-        a = argv[i]
-        if a in ("-h", "--help"):
-            opts["help"] = True
-            return opts
-        if "," in a:  # a point, even with a leading '-'
-            opts["points"].append(parse_point(a, "argument %d" % (i + 1)))
-        elif a == "--json":
-            opts["json"] = True
-        elif a in ("--date", "--table"):
-            if i + 1 >= len(argv):
-                raise UsageError("%s needs a value" % a)
-            opts[a[2:]] = argv[i + 1]
-            i += 1
-        else:
-            raise UsageError("unknown option %r (a point is LAT,LON)" % a)
-        i += 1
-    return opts
+def parser():
+    p = Parser(COMMAND, "[--date YYYY-MM-DD] [--json] [--table FILE] [LAT,LON ...]",
+               "The World Magnetic Model 2025 as the board computes it (firmware/field.py,\n"
+               "integer-only). LAT,LON in decimal degrees (north, east positive), e.g. 51.5,-0.13\n"
+               "or -33.9,151.2; without arguments, one LAT,LON per line on stdin (blank lines and\n"
+               "lines starting with # are skipped).")
+    p.positional("points", "LAT,LON", "a place in decimal degrees", required=False, many=True,
+                 kind=lambda text: parse_point(text, "LAT,LON %r" % text))
+    p.option("--date", "str", metavar="YYYY-MM-DD",
+             help="the date (default today); the model covers\n2025-01-01 .. 2030-01-01")
+    p.option("--json", "flag", help="print a JSON list: lat, lon, declination_deg (east\n"
+             "positive), inclination_deg (down positive), field_nt,\nhorizontal_nt, status")
+    p.option("--table", "path", metavar="FILE",
+             help="the table file (default firmware/wmm2025.bin)")
+    p.epilog = ("exit status: 0 done; 1 the date is outside the model's validity; 2 bad usage "
+                "or input.")
+    return p
 
 
 def stdin_points():
@@ -116,8 +94,8 @@ def run(opts):
         for lat_e7, lon_e7, text in points:
             d, i, f, status = model.at(lat_e7, lon_e7, year_e3)
             if status == STATUS_OUTSIDE:
-                print("field: %04d-%02d-%02d is outside model validity (WMM2025: 2025.0 to 2030.0)"
-                      % ymd, file=sys.stderr)
+                print(error_line(COMMAND, "%04d-%02d-%02d is outside model validity (WMM2025: "
+                                          "2025.0 to 2030.0)" % ymd), file=sys.stderr)
                 return 1
             out.append({"lat": lat_e7 / 1e7, "lon": lon_e7 / 1e7,
                         "declination_deg": d / 100, "inclination_deg": i / 100,
@@ -134,15 +112,7 @@ def run(opts):
 
 
 def main(argv):
-    try:
-        opts = parse_args(argv)
-        if opts.get("help"):
-            print(USAGE)
-            return 0
-        return run(opts)
-    except UsageError as e:
-        print("field: %s" % e, file=sys.stderr)
-        return 2
+    return parser().main(argv, run)
 
 
 if __name__ == "__main__":

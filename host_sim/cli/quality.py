@@ -4,10 +4,12 @@ Keeps every calibration's parameters (the calibrate command's --json record plus
 time), checks each against limits from a limits file or learned from the device's history and
 the fleet, and shows each parameter's history. See docs/quality.md. CPython only.
 """
-import argparse
 import csv
 import json
 import sys
+from types import SimpleNamespace
+
+from host_sim.cli.args import Parser, UsageError, error_line
 
 USAGE = """usage: python -m host_sim quality --db DB COMMAND [options]
 
@@ -30,55 +32,101 @@ unreadable or invalid input, or a database that cannot be read or written (nothi
 """
 
 
-class UsageError(Exception):
-    pass
+COMMANDS = ("ingest", "check", "export", "plot", "trend")
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message):
-        raise UsageError(message)
+def _seconds(text):
+    v = float(text)
+    if not v >= 0:
+        raise ValueError("expected seconds >= 0")
+    return v
 
 
-def _parser():
+def _sigmas(text):
+    v = float(text)
+    if not v > 0:
+        raise ValueError("expected sigmas > 0")
+    return v
+
+
+def _parser(name):
+    """The shared parser (host_sim/cli/args.py) of one command, with the database options,
+    which may also stand before the command."""
     from host_sim.cli.qualitydb.records import PARAMETERS
-    top = _Parser(prog="python -m host_sim quality", usage=USAGE, add_help=False)
-    top.add_argument("-h", "--help", action="store_true")
-    top.add_argument("--db")
-    top.add_argument("--wait", type=float, default=2.0)
-    sub = top.add_subparsers(dest="cmd", parser_class=_Parser,
-                             prog="python -m host_sim quality --db DB")
+    helps = {"ingest": "store JSON-line calibration records, all or none",
+             "check": "check every record against its limits",
+             "export": "write every record as CSV",
+             "plot": "a parameter's history chart (PNG)",
+             "trend": "per parameter: mean, sigma, repeatability, drift per month"}
+    p = Parser("quality", "--db DB %s [options]" % name, helps[name])
+    p.option("--db", "str", metavar="DB", help="an SQLite file or postgresql://...")
+    p.option("--wait", _seconds, default=2.0, metavar="SECONDS",
+             help="how long to wait for another writer's lock")
+    if name == "ingest":
+        p.positional("files", "FILE", "JSON lines; - for stdin", many=True)
+        p.option("--skip-duplicates", "flag",
+                 help="store the new records and report duplicates\ninstead of refusing")
+    elif name in ("check", "plot"):
+        if name == "plot":
+            p.positional("parameter", "PARAMETER", "one of " + ", ".join(PARAMETERS),
+                         kind="choice", choices=PARAMETERS)
+            p.option("--output", "path", short="-o", metavar="FILE.png", help="the chart")
+            p.option("--device", "str", repeat=True, metavar="D",
+                     help="only this device (repeatable)")
+        p.option("--limits", "path", metavar="FILE", help="limits file (JSON, or .toml)")
+        p.option("--k", _sigmas, metavar="SIGMAS", help="sigmas for learned limits")
+    elif name == "export":
+        p.option("--csv", "path", metavar="FILE", help="- for stdout")
+    else:
+        p.option("--device", "str", metavar="D", help="only this device")
+        p.option("--json", "flag", help="JSON lines instead of a table")
+    return p
 
-    def cmd(name, helptext):
-        p = sub.add_parser(name, help=helptext, description=helptext)
-        p.add_argument("--db", default=argparse.SUPPRESS, help="as before the command")
-        p.add_argument("--wait", type=float, default=argparse.SUPPRESS,
-                       help="as before the command")
-        return p
 
-    p = cmd("ingest", "store JSON-line calibration records, all or none")
-    p.add_argument("files", nargs="+", metavar="FILE", help="JSON lines; - for stdin")
-    p.add_argument("--skip-duplicates", action="store_true",
-                   help="store the new records and report duplicates instead of refusing")
-    p = cmd("check", "check every record against its limits")
-    p.add_argument("--limits", metavar="FILE", help="limits file (JSON, or .toml)")
-    p.add_argument("--k", type=float, metavar="SIGMAS", help="sigmas for learned limits")
-    p = cmd("export", "write every record as CSV")
-    p.add_argument("--csv", required=True, metavar="FILE", help="- for stdout")
-    p = cmd("plot", "a parameter's history chart (PNG)")
-    p.add_argument("parameter", choices=PARAMETERS, metavar="PARAMETER",
-                   help="one of " + ", ".join(PARAMETERS))
-    p.add_argument("-o", "--output", required=True, metavar="FILE.png")
-    p.add_argument("--limits", metavar="FILE")
-    p.add_argument("--k", type=float, metavar="SIGMAS")
-    p.add_argument("--device", action="append", help="only this device (repeatable)")
-    p = cmd("trend", "per parameter: mean, sigma, repeatability, drift per month")
-    p.add_argument("--device", help="only this device")
-    p.add_argument("--json", action="store_true", help="JSON lines instead of a table")
-    return top
+def _split(argv):
+    """(options before the command, the command or None, the words after it)."""
+    i = 0
+    while i < len(argv):
+        w = argv[i]
+        if w in ("--db", "--wait"):
+            i += 2
+        elif w.startswith("--db=") or w.startswith("--wait="):
+            i += 1
+        elif w.startswith("-") and w != "-":
+            return argv, None, []          # help, or an unknown option: parsed below
+        else:
+            return argv[:i], w, argv[i + 1:]
+    return argv, None, []
+
+
+def _args(argv):
+    """The parsed options as attributes, None after printing help, or UsageError."""
+    head, name, rest = _split(argv)
+    if name is None:
+        if not argv or "-h" in head or "--help" in head:
+            print(USAGE)
+            if not argv:
+                raise UsageError("no command (%s)" % ", ".join(COMMANDS))
+            return None
+        raise UsageError("no command (%s)" % ", ".join(COMMANDS))
+    if name not in COMMANDS:
+        raise UsageError("unknown command %r (%s)" % (name, ", ".join(COMMANDS)))
+    p = _parser(name)
+    opts = p.parse(head + rest)
+    if opts["help"]:
+        print(p.help_text())
+        return None
+    if not opts["db"]:
+        raise UsageError("--db DB is required (an SQLite file or postgresql://...)")
+    for req, what in (("csv", "--csv FILE"), ("output", "-o FILE.png")):
+        if req in opts and opts[req] is None:
+            raise UsageError("%s %s is required" % (name, what))
+    opts["cmd"] = name
+    return SimpleNamespace(**opts)
 
 
 def _err(msg):
-    sys.stderr.write("quality: %s\n" % msg)
+    sys.stderr.write(error_line("quality", msg) + "\n")
 
 
 def main(argv):
@@ -86,22 +134,9 @@ def main(argv):
     from host_sim.cli.qualitydb.records import RecordError
     from host_sim.cli.qualitydb.store import StoreError
     try:
-        parser = _parser()
-        try:
-            a = parser.parse_args(argv)
-        except SystemExit as e:            # a subcommand's --help
-            return e.code or 0
-        if a.help or (not argv):
-            print(USAGE)
-            return 0 if argv else 2
-        if a.cmd is None:
-            raise UsageError("no command (ingest, check, export, plot or trend)")
-        if not a.db:
-            raise UsageError("--db DB is required (an SQLite file or postgresql://...)")
-        if a.wait < 0:
-            raise UsageError("--wait %s: expected seconds >= 0" % a.wait)
-        if getattr(a, "k", None) is not None and not a.k > 0:
-            raise UsageError("--k %s: expected sigmas > 0" % a.k)
+        a = _args(argv)
+        if a is None:
+            return 0
         return _COMMANDS[a.cmd](a)
     except UsageError as e:
         _err("%s (try --help)" % e)

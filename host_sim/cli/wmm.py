@@ -39,14 +39,8 @@ import struct
 import sys
 import zlib
 
-USAGE = """usage: python -m host_sim wmm [--step DEG] [--out FILE]
+from host_sim.cli.args import Parser, UsageError, decimal_text
 
-Write the World Magnetic Model table the board's firmware/field.py reads.
-  --step DEG   grid step in degrees, dividing 180 (default 7.5)
-  --out FILE   output file (default firmware/wmm2025.bin)
-  -h, --help   this text
-exit status: 0 written; 2 bad usage or pygeomag missing.
-"""
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 DEFAULT_OUT = os.path.join(ROOT, "firmware", "wmm2025.bin")
@@ -59,10 +53,6 @@ MAIN_NT = 4
 SV_PER_NT = 8
 RECORD = 12
 HEADER = struct.Struct("<4sBBHHIIHBBBBI4s")
-
-
-class UsageError(Exception):
-    pass
 
 
 def geomag():
@@ -113,48 +103,33 @@ def build(step_e7=DEFAULT_STEP_E7):
     return head + bytes(recs)
 
 
-def parse_args(argv):
-    opts = {"step_e7": DEFAULT_STEP_E7, "out": DEFAULT_OUT}
-    i = 0
-    while i < len(argv):
-        a = argv[i]
-        if a in ("-h", "--help"):
-            opts["help"] = True
-            return opts
-        if a not in ("--step", "--out"):
-            raise UsageError("unknown option %r" % a)
-        if i + 1 >= len(argv):
-            raise UsageError("%s needs a value" % a)
-        v = argv[i + 1]
-        if a == "--out":
-            opts["out"] = v
-        else:
-            try:
-                deg = float(v)
-            except ValueError:
-                raise UsageError("--step must be degrees, e.g. 7.5; got %r" % v)
-            opts["step_e7"] = int(round(deg * 1e7))
-        i += 2
-    return opts
+def parser():
+    p = Parser("wmm", "[--step DEG] [--out FILE]",
+               "Write the World Magnetic Model table the board's firmware/field.py reads.")
+    p.option("--step", "decimal", default=(DEFAULT_STEP_E7, 7), lo="0.1", hi="180",
+             metavar="DEG", help="grid step in degrees, dividing 180 (default 7.5)")
+    p.option("--out", "path", default=DEFAULT_OUT, metavar="FILE",
+             help="output file (default firmware/wmm2025.bin)")
+    p.epilog = "exit status: 0 written; 2 bad usage or pygeomag missing."
+    return p
 
 
-def main(argv):
+def body(opts):
+    m, dec = opts["step"]
+    if dec > 7:
+        raise UsageError("--step %s: finer than 1e-7 deg" % decimal_text(opts["step"]))
     try:
-        opts = parse_args(argv)
-        if opts.get("help"):
-            print(USAGE)
-            return 0
-        data = build(opts["step_e7"])
-    except UsageError as e:
-        print("wmm: %s" % e, file=sys.stderr)
-        return 2
+        data = build(m * 10 ** (7 - dec))
     except ImportError as e:
-        print("wmm: %s (pygeomag is in requirements.txt: make venv)" % e, file=sys.stderr)
-        return 2
+        raise UsageError("%s (pygeomag is in requirements.txt: make venv)" % e)
     with open(opts["out"], "wb") as f:
         f.write(data)
     print("wmm: wrote %s (%d bytes)" % (opts["out"], len(data)))
     return 0
+
+
+def main(argv):
+    return parser().main(argv, body)
 
 
 if __name__ == "__main__":
