@@ -103,7 +103,8 @@ def assess(app):
     st = app.status
     return level(model=cal.model, fit_error=cal.fit_error, coverage=cal.coverage,
                  heading=st == "ok" or st == "interference",
-                 interference=c.interference, tilt=app.accel is not None,
+                 interference=c.interference or st == "interference",
+                 tilt=app.accel is not None,
                  extreme=c.gimbal or c.dip_high,
                  zone=loc.status if loc is not None and loc.usable else None,
                  mismatch=loc is not None and loc.cal_mismatch)
