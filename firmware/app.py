@@ -1027,6 +1027,8 @@ _HINTS = {"planar": "rotate about another axis, not only around",
           "field_out_of_range": "field implausible: a magnet near, or the wrong range?",
           "field_mismatch": "field differs from the model here: wrong range, or a magnet?",
           "soft_iron_out_of_range": "strong soft iron: move away from steel",
+          "inconsistent_samples": "the field changed while collecting (a magnet, a motor?): "
+                                  "samples dropped, keep turning",
           "no_memory": "out of memory while solving"}
 
 
