@@ -33,18 +33,21 @@ CalibrationRejected(REASON_*, detail) with the numbers in the detail:
                     (in the order they were kept) disagree about the hard iron: with the fit's
                     shape and |B|, each half's centre solves (sum b b^T) c = 1/2 sum
                     (|b|^2 - B^2) b (the sphere |b - c| = B, linearised), and the two centres
-                    are more than CONSISTENCY_PCT (4 %) of B apart and more than twice what
-                    the fit's own scatter explains (6 x fit error / sqrt(n), the RMS of that
-                    difference for noise alone). The samples mix two hard-iron states (a
-                    magnet near the sensor for part of the collection, a relay or motor
-                    switching) or a drifting one: a fit between them is off by ~2 % of B from
-                    either, ~2.3 deg of heading at 60 deg dip, and what it leaves grows with
-                    the mix (8 deg and more with a magnet during part of a first calibration).
-                    A half whose samples lie near a plane (det of its normal matrix below 1/20
-                    of (trace/3)^3) cannot place its centre: no verdict then. The 4- and
-                    7-element fits leave the soft iron they cannot model in their residual,
-                    which differs from one part of the sphere to another, so they are not
-                    judged this way. The collector then drops the held samples
+                    are more than CONSISTENCY_PCT (3 %) of B apart - a fit between them is
+                    ~1.5 % of B, ~1.7 deg of heading at 60 deg dip, off either, and what a mix
+                    leaves grows with it (8 deg and more with a magnet near the sensor for
+                    part of a first calibration, docs/faults.md) - and not by chance: the
+                    radial residuals follow from one kept sample to the next (lag-1
+                    correlation > 1/4; a board is moved continuously, noise is not), or the
+                    two centres explain the residual far beyond chance (F ratio > 10). The
+                    samples mix two hard-iron states (a magnet for part of the collection, a
+                    relay or motor switching) or a drifting one. A half whose samples lie near
+                    a plane (det of its normal matrix below 1/20 of (trace/3)^3) cannot place
+                    its centre: no verdict then. The 4- and 7-element fits leave the soft iron
+                    they cannot model in their residual, which differs from one part of the
+                    sphere to another, so they are not judged this way; states that alternate
+                    faster than half a collection put both in each half and show only as a
+                    high fit error. The collector then drops the held samples
                     (firmware.calibrator.Collector): the next fit sees one state.
 """
 from firmware.calibration import MINMAX, ORDER
