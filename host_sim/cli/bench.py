@@ -775,7 +775,7 @@ def splice_soak(section, path=None):
         text = text[:a] + section + text[b:]
     elif END in text:
         a = text.index(END)
-        text = text[:a] + section + "\n" + text[a:]
+        text = text[:a].rstrip("\n") + "\n\n" + section + "\n" + text[a:]
     else:
         text = text.rstrip("\n") + "\n\n" + section + "\n"
     with open(path, "w") as f:
