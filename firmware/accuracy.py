@@ -15,7 +15,9 @@ that applies gives the level and the reason.
   0      no_heading        the last step gave no heading (bus error, timeout, overflow,
                            zero field or gravity)
   0      uncalibrated      no calibration in force
-  0      interference      the interference flag is up now (|b| or dip off the expected)
+  0      interference      the interference flag is up now (|b| or dip off the expected), or a
+                           spell holds the status (firmware/health.py FieldWatch: a fast
+                           change of |b| or dip, a heading jump, until the field is clean)
   0      blackout_zone     the field model says H < 2000 nT here (WMM's blackout zone)
   1      minmax            the min/max calibration (hard iron from the extremes, no fit)
   1      fit_error_high    fit error above GOOD_FIT_ERROR (5 %, MotionCal's "good" limit);
@@ -102,8 +104,9 @@ def assess(app):
     loc = app.location
     st = app.status
     return level(model=cal.model, fit_error=cal.fit_error, coverage=cal.coverage,
-                 heading=st == "ok" or st == "interference",
-                 interference=c.interference, tilt=app.accel is not None,
+                 heading=st == "ok" or st == "interference" or st == "heading jumped",
+                 interference=c.interference or st == "interference" or st == "heading jumped",
+                 tilt=app.accel is not None,
                  extreme=c.gimbal or c.dip_high,
                  zone=loc.status if loc is not None and loc.usable else None,
                  mismatch=loc is not None and loc.cal_mismatch)

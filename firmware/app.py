@@ -43,9 +43,12 @@ One step, as named steps (AN4246 / AN4248 pipeline):
             drivers.
   _heading  correct (Calibration.k with InvW in Q15), map to the body frame, Compass.update:
             the heading (KANG) and its flags. Allocation-free (tests/scenarios/app_alloc.py).
-  _check    the field magnitude against the calibration's: interference (a magnet, a
-            motor, a steel table near the board) flags the heading and keeps the sample out
-            of the fit; a spell longer than _STALE_US means the board's iron changed.
+  _check    the field against the calibration's (firmware/health.py FieldWatch): |B| and
+            the dip in their windows, steady over the last samples, the heading not jumping;
+            a flag starts a spell whose status lasts until the evidence says the field is
+            clean again. Interference (a magnet, a motor, a steel table near the board)
+            keeps the sample out of the fit; flags for _STALE_US mean the board's iron
+            changed.
   _select   offer the raw sample to the collector (its SampleBuffer keeps new information).
   _solve    when a solve is running or due, a few slices of it: each slice is at most
             solve.SLICE_OPS (40) long-int operations (make bench estimates 1-2 ms on an
@@ -58,8 +61,16 @@ One step, as named steps (AN4246 / AN4248 pipeline):
             whose fit error ages) is put in force and saved to the store (.worst_save_us).
 
 Interference. The field magnitude is compared with the calibration's field_out within
-max(10 %, 3 x its fit error) - the fit's own RMS radial error is no evidence of a magnet. If
-the flag stays up for _STALE_US (with no _CLEAN_US clean spell) the calibration no longer
+max(10 %, 3 x its fit error) - the fit's own RMS radial error is no evidence of a magnet -
+and, with an accelerometer, the dip with the calibration's dip within max(3 deg, 3 x its
+fit error as an angle): the dip saved with the record, else learned from its first 0.5 s of
+steady clean samples (.dip, firmware/health.py DipCheck; an accepted fit is saved at once,
+and once more with its dip when it is learned). A fast change of |B| or the dip (a magnet
+moving in) is interference too, and a heading that jumps by > 4 deg between two samples
+while the tilt holds still is "heading jumped". Any of these starts a spell (FieldWatch):
+the status stays until the field is back where it was before, or the board has turned ~30
+deg with clean samples for 2 s, or 10 s of clean samples (docs/faults.md). If the flags
+keep coming for _STALE_US (a spell never ended meanwhile) the calibration no longer
 describes the board (its hard iron changed): collection restarts (.relearning) and any new
 accepted fit replaces the stale one.
 
@@ -89,7 +100,7 @@ from firmware import compass
 from firmware.compass import FLAG_NO_GRAVITY, Compass
 from firmware.compat import const, kernels, ticks_diff, ticks_us, sleep_us, wall_clock
 from firmware.errors import SensorNotFound, SensorOverflow, StoreError, DataReadyTimeout
-from firmware.health import Health
+from firmware.health import SPELL_FIELD, SPELL_JUMP, FieldWatch, Health
 from firmware import i2cdevice
 from firmware.trig import cdeg_to_kang, kang_to_str
 
@@ -107,6 +118,8 @@ STATUS_STALE = "stale data"           # the magnetometer repeats its last sample
 STATUS_RESET = "sensor reset"         # its control registers no longer hold our configuration
 STATUS_TILT = "tilt unavailable"      # the accelerometer is implausible: level-board heading
 STATUS_INTERNAL = "internal error"    # step() caught an unexpected exception (e.g. MemoryError)
+STATUS_JUMP = "heading jumped"        # it moved > 4 deg since the last sample: a magnet moving
+#                                       in, or a turn too fast for the sample rate to follow
 
 LOAD_BAD_PAYLOAD = "bad_payload"      # .load_reason: the record is intact, its payload is not
 LOAD_IO_ERROR = "io_error"            # .load_reason: the filesystem raised OSError
@@ -119,7 +132,6 @@ REINIT_AFTER = const(5)       # failed reads in a row before the drivers are re-
 DEFAULT_CAPACITY = const(300)  # samples held while collecting (firmware.calibrator's default)
 _REINIT_MAX_SHIFT = const(4)  # failed re-inits back off to every 2**4 x REINIT_AFTER reads
 _STALE_US = const(30000000)   # 30 s of interference: the calibration no longer fits the board
-_CLEAN_US = const(2000000)    # 2 s without interference ends an interference spell
 _STALE_AGE_S = const(1200000)  # age that makes any fit error "worse" (> 16 doublings)
 _SAVE_RETRY_US = const(60000000)  # a failed save is retried after 60 s
 _ERROR_BACKOFF_US = const(20000)  # after a bus error: do not hammer a dead bus
@@ -131,6 +143,7 @@ _FIT_SIGMAS = const(3)        # window >= 3 x the fit's RMS radial error
 _US_PER_S = const(1000000)
 CONFIG_EVERY = const(1)       # samples between configuration read-backs (docs/faults.md)
 _EVIDENCE_PERIODS = const(4)  # a step counts as at most 4 sample periods of evidence
+_GAP_CAP_US = const(0x10000000)  # the time since the last read stops counting at 268 s
 _ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
 _ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
 _HMC_OVERFLOW = const(-4096)
@@ -203,7 +216,7 @@ class CompassApp:
     body, gravity, status, calibration, calibrator (None until collecting), collector,
     last_reason, last_detail, accepted, refused, worst_stall_us, errors, stored,
     save_errors, load_reason, reinits, relearning, fast, pending, change, history_errors,
-    location, quick, accuracy."""
+    location, quick, accuracy, watch (firmware/health.py FieldWatch), dip (its DipCheck)."""
 
     location = None  # a firmware.location.Location after set_location()
     quick = None     # the firmware.quickcal.QuickCal of the last quick_calibrate()
@@ -288,7 +301,11 @@ class CompassApp:
 
         self.store = store
         self.compass = Compass(declination_kang=cdeg_to_kang(declination_cdeg))
+        self.watch = FieldWatch(self.compass, self.body)  # firmware/health.py
+        self.dip = self.watch.dip   # the calibration's dip (DipCheck)
+        self._dip_unsaved = False   # this app saved the fit in force before its dip was known
         self.collector = None
+        self.calibration = None
         self._use(self._load())
 
         self._slices_per_step = 1
@@ -296,7 +313,8 @@ class CompassApp:
         self._reinit_level = 0
         self._t_last = self._ticks()
         self._dt = 0                # us since the previous step, capped: evidence, not time
-        self._stalled = False
+        self._gap_us = 0            # us since the magnetometer was last read successfully
+        self._stalled = False       # the last read came after a gap (a stall, bus errors)
         self._dt_cap = _EVIDENCE_PERIODS * getattr(self.mag, "period_us", _DEFAULT_PERIOD_US)
         self._age_us = 0
         self._interf_us = 0
@@ -375,16 +393,19 @@ class CompassApp:
             self.load_reason = LOAD_NO_MEMORY
         return UNCALIBRATED
 
-    def _save(self):
+    def _save(self, dip_only=False):
+        # dip_only: the fit in force again, now with its dip (not counted in .stored)
         if self.store is None:
             return
         t = self._wall()
         try:
-            self.store.save(self.calibration.to_bytes())
-            self.stored += 1
+            self.store.save(self._record())
+            if not dip_only:
+                self.stored += 1
+            self._dip_unsaved = not self.dip.armed
             self._unsaved = False
             self.save_reason = None
-            if self._hist_flags:  # the history follows the store: recorded once saved
+            if self._hist_flags and not dip_only:  # the history follows the store
                 self._history_record(self.calibration, self._hist_flags)
                 self._hist_flags = 0
         except StoreError as e:
@@ -400,6 +421,7 @@ class CompassApp:
             self.worst_save_us = d
 
     def _save_failed(self, reason):
+        self._dip_unsaved = False  # the retry saves the record with the dip known then
         self.save_errors += 1
         self.save_reason = reason
         self._unsaved = True
@@ -414,6 +436,9 @@ class CompassApp:
                 and (cal.model == m or m == "auto" and cal.model != "minmax"))
 
     def _use(self, cal):
+        # another calibration: its dip (saved with it, else learned afresh), the short
+        # averages and any spell start over (firmware/health.py FieldWatch.use)
+        self.watch.use(cal)
         self.calibration = cal
         self._k = cal.k  # _heading's
         tol = _FIT_SIGMAS * cal.fit_error // 100
@@ -423,6 +448,22 @@ class CompassApp:
             tol = _FIELD_TOL_MAX_PCT
         self.compass.set_field(cal.field_out if cal.model is not None else 0, tol)
         self._locate()
+
+    def _dip_learned(self):
+        # the dip reference is armed: a fit this app saved before it knew its dip (an
+        # accepted fit, use_calibration, quick_calibrate) is saved again, once, with it; a
+        # record loaded without one (made elsewhere or by older firmware) is not rewritten
+        # at boot: its dip is learned at each boot
+        if self._dip_unsaved and not self._unsaved:
+            self._save(True)
+
+    def _record(self):
+        # the payload saved: the calibration in force with the dip it measures, when known
+        c = self.calibration
+        d = self.dip
+        if d.armed and c.model is not None and c.dip_kang != d.ref:
+            c = c.with_dip(d.ref)
+        return c.to_bytes()
 
     def use_calibration(self, cal, save=True):
         """Put `cal` (a Calibration made outside the app, e.g. from MotionCal's packet by
@@ -594,8 +635,9 @@ class CompassApp:
             self._retry_save(dt)
         if self.accel is None and self._accel_auto:
             self._look_for_accel(dt)
-        self._stalled = dt > self._dt_cap
-        if self._stalled:
+        if self._gap_us < _GAP_CAP_US:
+            self._gap_us += dt
+        if dt > self._dt_cap:
             dt = self._dt_cap  # a stalled loop saw nothing: time without samples is no evidence
         self._dt = dt
         a = self._age_us + dt
@@ -644,6 +686,8 @@ class CompassApp:
                 g.dev = acc
                 acc.sample_into(self._acc)
         if g.error is None:
+            self._stalled = self._gap_us > self._dt_cap
+            self._gap_us = 0
             return STATUS_OK
         self.last_error = g.error
         return _status_of(g.error)
@@ -657,7 +701,9 @@ class CompassApp:
         if h.mag_stale(self.raw, getattr(self.mag, "suspect", False)):
             return STATUS_STALE
         if self._stalled and getattr(self.mag, "suspect", False):
-            return STATUS_STALE  # after a stall a QMC5883L still holds the set after the last read
+            # after a gap (a stall, a run of bus errors) a QMC5883L still holds the set that
+            # followed the last read: DOR says later ones were skipped, so it is that old
+            return STATUS_STALE
         if self.accel is not None:
             self._tilt_check()
         self._since_cfg += 1
@@ -717,14 +763,36 @@ class CompassApp:
         return STATUS_OK
 
     def _check(self):
-        """Interference bookkeeping; True when the sample may go to the collector."""
-        if not self.compass.interference:
-            self.status = STATUS_OK
-            self._clean()
-            return True
+        """Interference bookkeeping (firmware/health.py FieldWatch: the windows, the dip,
+        shifts, jumps and the spell they start); True when the sample may go to the
+        collector."""
+        w = self.watch
+        k = w.sample(self.tilt and self.accel is not None, self._dt)
+        if k == SPELL_FIELD:
+            return self._interfered()
+        if w.spell:
+            return self._spelled(k)
+        self.status = STATUS_OK
+        self._interf_us = 0
+        if w.learned:
+            self._dip_learned()
+        return True
+
+    def _spelled(self, k):
+        # a spell: its status until the evidence says the field is clean. The collector
+        # still takes the samples that raise no flag, and a jump's (a fast turn while
+        # calibrating looks the same): a rough calibration in force must not stop the fit
+        # that replaces it
+        st = STATUS_JUMP if self.watch.spell == SPELL_JUMP else STATUS_INTERFERENCE
+        if k:
+            self._flag(st)
+        else:
+            self.status = st
+        return self.relearning or k == 0 or k == SPELL_JUMP
+
+    def _interfered(self):
         self._flag(STATUS_INTERFERENCE)
         self._cfg_due = True
-        self._clean_us = 0
         if self.relearning:
             return True  # the calibration in force is the one that does not fit
         self._interf_us += self._dt
@@ -740,6 +808,10 @@ class CompassApp:
 
     def _failed(self, st):
         self._flag(st)
+        w = self.watch
+        w.restart()
+        if st == STATUS_STALE:
+            w.forget(self.health.same)  # a spell begun by this run of repeats: not a field
         self._cfg_due = True  # any anomaly: read the configuration back at the next sample
         if st == STATUS_OVERFLOW:
             return  # the chip answered; re-initialising would not move the magnet
@@ -755,17 +827,11 @@ class CompassApp:
                 self._reinit_level = lvl + 1
             self.reinit()
 
-    def _clean(self):
-        if self._interf_us:
-            self._clean_us += self._dt
-            if self._clean_us >= _CLEAN_US:
-                self._interf_us = 0
-                self._clean_us = 0
-
     def _stale(self):
         # The flag has been up for _STALE_US: not a passing magnet but a board whose iron
         # changed. Collect afresh and let any new fit replace the stale one.
         self._interf_us = 0
+        self.dip.reset()  # the dip too is learned afresh
         self.calibrate().relearn(_STALE_AGE_S)
 
     def reinit(self):
@@ -922,7 +988,8 @@ class CompassApp:
                 "accepted": self.accepted, "refused": self.refused,
                 "collecting": col is not None, "solving": self.solving,
                 "solve_model": col.job_model if self.solving else None,
-                "status": self.status, "interference": self.compass.interference,
+                "status": self.status,
+                "interference": self.compass.interference or self.status == STATUS_INTERFERENCE,
                 "relearning": self.relearning, "stored": self.stored,
                 "save_errors": self.save_errors, "load_reason": self.load_reason,
                 "worst_stall_us": self.worst_stall_us, "change": self.change,
@@ -962,6 +1029,8 @@ _HINTS = {"planar": "rotate about another axis, not only around",
           "field_out_of_range": "field implausible: a magnet near, or the wrong range?",
           "field_mismatch": "field differs from the model here: wrong range, or a magnet?",
           "soft_iron_out_of_range": "strong soft iron: move away from steel",
+          "inconsistent_samples": "the field changed while collecting (a magnet, a motor?): "
+                                  "samples dropped, keep turning",
           "no_memory": "out of memory while solving"}
 
 

@@ -6,7 +6,7 @@
     cal.correct(raw, out)             # out = InvW (raw - V) >> 15: allocation-free, small ints
     Calibration.from_bytes(cal.to_bytes()) == cal
 
-Calibration(model, offset, invw, field, field_out, fit_error, samples, coverage)
+Calibration(model, offset, invw, field, field_out, fit_error, samples, coverage, dip_kang)
   model      None (uncalibrated identity), 'minmax', 4, 7 or 10 (AN4246's 4-, 7-, 10-element fits)
   offset     V, three int16 counts (AN4246 eq. 8: B_raw = W B + V)
   invw       InvW = W^-1, nine Q15 ints row-major; each row's absolute sum <= 32767
@@ -14,6 +14,11 @@ Calibration(model, offset, invw, field, field_out, fit_error, samples, coverage)
   field_out  |correct(raw)| on the calibrated sphere, in counts (B through InvW's Q15 scale)
   fit_error  hundredths of a percent (AN4246 eq. 24, in NXP's normalisation)
   samples, coverage   held samples and percent of the sphere covered, at solve time
+  dip_kang   the dip (inclination, KANG, down positive) this calibration measured where it
+             was accepted (CompassApp learns it from its first clean samples and saves it
+             with the record: firmware/health.py DipCheck), or None when not known. Stored
+             in whole degrees; it is an observation of the place, not part of the fit:
+             == compares the fits and ignores it.
 Bad values raise ValueError naming the field. .k is InvW then V as array('h'), the argument
 of correct(k, raw, out) and of its fast mirror firmware.fast.correct (same bits).
 
@@ -38,7 +43,9 @@ _IDENTITY_Q15 = (32767, 0, 0, 0, 32767, 0, 0, 0, 32767)
 _MODEL_CODE = {None: 0, MINMAX: 1, 4: 4, 7: 7, 10: 10}
 _CODE_MODEL = {0: None, 1: MINMAX, 4: 4, 7: 7, 10: 10}
 _PAYLOAD_VERSION = const(1)
-_PAYLOAD = "<BBBBHH3i9hii"  # version, model, coverage, 0, fit_error, samples, V, InvW, B, B_out
+_PAYLOAD = "<BBBBHH3i9hii"  # version, model, coverage, dip, fit_error, samples, V, InvW, B, B_out
+_DIP_UNKNOWN = const(0)     # the dip byte: 0 not known, else whole degrees + 128 (38..218)
+_DIP_BIAS = const(128)
 PAYLOAD_SIZE = const(46)
 
 
@@ -66,7 +73,7 @@ class Calibration:
     """
 
     def __init__(self, model=None, offset=(0, 0, 0), invw=_IDENTITY_Q15, field=0, field_out=0,
-                 fit_error=0, samples=0, coverage=0):
+                 fit_error=0, samples=0, coverage=0, dip_kang=None):
         if model not in _MODEL_CODE:
             raise ValueError("unknown calibration model %r" % (model,))
         if len(offset) != 3 or len(invw) != 9:
@@ -84,6 +91,9 @@ class Calibration:
                                 ("samples", samples, 0, 0x3FFFFFFF), ("coverage", coverage, 0, 100)):
             if not isinstance(v, int) or not lo <= v <= hi:
                 raise ValueError("calibration %s=%r: expected an int in %d..%d" % (name, v, lo, hi))
+        if dip_kang is not None and (type(dip_kang) is not int or not -16384 <= dip_kang <= 16384):
+            raise ValueError("calibration dip_kang=%r: expected None or an int in -16384..16384 "
+                             "(KANG, +-90 deg)" % (dip_kang,))
         if model is not None and (field == 0 or field_out == 0):
             raise ValueError("calibration model %s with field %d, field_out %d counts: a fitted "
                              "field is never 0" % (model, field, field_out))
@@ -96,17 +106,25 @@ class Calibration:
         self.fit_error = fit_error
         self.samples = samples
         self.coverage = coverage
+        self.dip_kang = dip_kang
 
     def correct(self, raw, out):
         """out[0:3] = InvW sat16(raw - V) >> 15, rounded (AN4246 section 3); see correct()."""
         correct(self.k, raw, out)
 
+    def with_dip(self, dip_kang):
+        """The same fit with the dip it measures (KANG, or None)."""
+        return Calibration(self.model, self.offset, self.invw, self.field, self.field_out,
+                           self.fit_error, self.samples, self.coverage, dip_kang)
+
     def to_bytes(self):
         """The 46-byte little-endian payload (storage adds its own header and CRC)."""
         fe = self.fit_error if self.fit_error < 65535 else 65535
         n = self.samples if self.samples < 65535 else 65535
+        d = self.dip_kang
+        d = _DIP_UNKNOWN if d is None else ((d * 360 + 32768) >> 16) + _DIP_BIAS
         return struct.pack(_PAYLOAD, _PAYLOAD_VERSION, _MODEL_CODE[self.model], self.coverage,
-                           0, fe, n, self.offset[0], self.offset[1], self.offset[2],
+                           d, fe, n, self.offset[0], self.offset[1], self.offset[2],
                            *(self.invw + (self.field, self.field_out)))
 
     @classmethod
@@ -121,17 +139,33 @@ class Calibration:
                              % (f[0], _PAYLOAD_VERSION))
         if f[1] not in _CODE_MODEL:
             raise ValueError("calibration payload model code %d unknown" % f[1])
+        d = f[3]
+        if d != _DIP_UNKNOWN:
+            d -= _DIP_BIAS
+            if not -90 <= d <= 90:
+                raise ValueError("calibration payload dip byte %d: expected 0 or 38..218"
+                                 % f[3])
+            k = ((d if d >= 0 else -d) * 65536 + 180) // 360  # whole degrees -> KANG
+            d = k if d >= 0 else -k
+        else:
+            d = None
         return cls(model=_CODE_MODEL[f[1]], offset=f[6:9], invw=f[9:18], field=f[18],
-                   field_out=f[19], fit_error=f[4], samples=f[5], coverage=f[2])
+                   field_out=f[19], fit_error=f[4], samples=f[5], coverage=f[2], dip_kang=d)
 
     def __eq__(self, other):
-        return isinstance(other, Calibration) and self.to_bytes() == other.to_bytes()
+        # the same fit: the payload but its dip byte (an observation of the place)
+        if not isinstance(other, Calibration):
+            return False
+        a = self.to_bytes()
+        b = other.to_bytes()
+        return a[:3] == b[:3] and a[4:] == b[4:]
 
     def __repr__(self):
         return ("Calibration(model=%r, offset=%r, invw=%r, field=%d, field_out=%d, "
-                "fit_error=%d, samples=%d, coverage=%d)" % (
+                "fit_error=%d, samples=%d, coverage=%d%s)" % (
                     self.model, self.offset, self.invw, self.field, self.field_out,
-                    self.fit_error, self.samples, self.coverage))
+                    self.fit_error, self.samples, self.coverage,
+                    "" if self.dip_kang is None else ", dip_kang=%d" % self.dip_kang))
 
 
 UNCALIBRATED = Calibration()

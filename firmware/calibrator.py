@@ -23,7 +23,7 @@ from array import array
 from firmware import accum, acceptance, solve
 from firmware.acceptance import (DEFAULT_MAX_FIT_ERROR, MIN_SAMPLES, MIN_SAMPLES_GEOMETRY,
                                  REASON_PLANAR, REASON_SINGULAR, reject)
-from firmware.calibration import MINMAX, MODELS, UNCALIBRATED, Calibration
+from firmware.calibration import MINMAX, MODELS, UNCALIBRATED, Calibration, correct
 from firmware.compat import const
 from firmware.errors import CalibrationRejected
 from firmware.fixedpoint import rdiv
@@ -42,6 +42,8 @@ _FIT_ERROR_DOUBLING_S = const(60000)  # aging: NXP's e-folding time of 24 h = 59
 # operations (~1 ms on an RP2040); the caller decides how many fit between samples (the app
 # runs a quarter of the sample period's worth per step, firmware/app.py).
 DEFAULT_SLICE_GROUP = const(1)
+_CONSISTENCY_CHUNK = const(2)  # samples per slice of the consistency sums (~14 long-int ops
+#                                each once the sums pass 2**30)
 
 
 def _widen(e, i, v):
@@ -366,6 +368,41 @@ class Calibrator:
         fe = r[0]
         r[0] = ([rdiv(f.v_num[i], f.v_den) for i in range(3)], w, b_q16, fe)
 
+    def _consistency(self, offset, invw, field_out, n):
+        # acceptance.check_consistency: each half's centre (older, newer in the order kept)
+        # with the fit's shape and |B|, and the residuals' correlation from one sample to
+        # the next; the sums are taken on b >> s, |B| >> s < 2**11
+        s = 0
+        while field_out >> s >= 1 << 11:
+            s += 1
+        k = array("h", tuple(invw) + tuple(offset))
+        r = [None]
+        yield from _consistency_sums(self.buffer, k, s, field_out >> s, r)
+        halves, ee, ep = r[0]
+        p = [None, None]
+        dets = [0, 0]
+        for h in range(2):
+            a, v = halves[h]
+            adj = solve.adj3(a)
+            yield
+            dets[h] = a[0][0] * adj[0][0] + a[0][1] * adj[1][0] + a[0][2] * adj[2][0]
+            if acceptance.half_is_flat(dets[h], a[0][0] + a[1][1] + a[2][2]):
+                return  # a half near a plane cannot place its centre: no verdict
+            p[h] = solve.mat_vec3(adj, v)
+            yield
+        # c_h = p_h / (2 det_h): |c_0 - c_1|^2 = d2 / (2 det_0 det_1)^2; the squared residual
+        # the two centres explain, sum_h v_h . c_h x 2, is red / (det_0 det_1)
+        d2 = 0
+        red = 0
+        for i in range(3):
+            d = p[0][i] * dets[1] - p[1][i] * dets[0]
+            d2 += d * d
+            red += halves[0][1][i] * p[0][i] * dets[1] + halves[1][1][i] * p[1][i] * dets[0]
+        yield
+        den = dets[0] * dets[1]
+        self._verify(acceptance.check_consistency, d2, 4 * den * den, field_out >> s, n, ee,
+                     ep, red, ee * den - red)
+
     def _finish(self, model, n, offset, w, b_q16, fe, accept):
         # InvW in Q15, the checks of firmware/acceptance.py in order, then the record
         r = [None]
@@ -393,6 +430,8 @@ class Calibrator:
         if self.current.model is not None:
             self._verify(acceptance.check_better, model, fe, cov, self.current,
                          self.aged_fit_error())
+        if model == 10:
+            yield from self._consistency(offset, invw, field_out, n)
         result = Calibration(model=model, offset=offset, invw=invw, field=field,
                              field_out=field_out, fit_error=fe, samples=n,
                              coverage=cov)
@@ -400,6 +439,53 @@ class Calibrator:
             self.current = result
             self._age_s = 0
         return result
+
+
+def _consistency_sums(buf, k, s, f, out):
+    """One pass over the held samples in the order kept, corrected with k (InvW, V:
+    calibration.correct) and shifted right by s; e = |b|^2 - f^2 (2 f x the radial residual).
+    out[0] = ([A, v] of the older half, [A, v] of the newer half, sum e^2, sum e e') with
+    A = sum b b^T (3x3) and v = sum e b (so A c = v / 2 for a half's centre c), e' the next
+    sample's e; _CONSISTENCY_CHUNK samples a slice."""
+    n = buf.count
+    sums = [[0, 0, 0, 0, 0, 0, 0, 0, 0], [0, 0, 0, 0, 0, 0, 0, 0, 0]]  # xx xy xz yy yz zz vx vy vz
+    raw = array("h", (0, 0, 0))
+    b = array("h", (0, 0, 0))
+    f2 = f * f
+    ee = 0
+    ep = 0
+    prev = None
+    j = 0
+    for age in range(n):
+        buf.sample(buf.slot_by_age(age), raw)
+        correct(k, raw, b)
+        x = b[0] >> s
+        y = b[1] >> s
+        z = b[2] >> s
+        t = sums[0] if age < n // 2 else sums[1]
+        t[0] += x * x
+        t[1] += x * y
+        t[2] += x * z
+        t[3] += y * y
+        t[4] += y * z
+        t[5] += z * z
+        e = x * x + y * y + z * z - f2
+        t[6] += e * x
+        t[7] += e * y
+        t[8] += e * z
+        ee += e * e
+        if prev is not None:
+            ep += e * prev
+        prev = e
+        j += 1
+        if j == _CONSISTENCY_CHUNK:
+            j = 0
+            yield
+    out[0] = ([_sym(t) for t in sums], ee, ep)
+
+
+def _sym(t):
+    return ([[t[0], t[1], t[2]], [t[1], t[3], t[4]], [t[2], t[4], t[5]]], [t[6], t[7], t[8]])
 
 
 # --- the calibration behind the app's loop ------------------------------------------------
@@ -525,7 +611,11 @@ class Collector:
         self.idle_us = 0
         m = self.job_model
         cur = self.calibrator.current.model
-        if reason == acceptance.REASON_TOO_FEW_SAMPLES:
+        if reason == acceptance.REASON_INCONSISTENT:
+            # the held samples mix two hard-iron states: drop them, the next fit sees one
+            self.calibrator.clear()
+            self._cov_dirty = True
+        elif reason == acceptance.REASON_TOO_FEW_SAMPLES:
             if (m in (7, 10) and self.fallback
                     and (cur is None or cur == MINMAX or self.relearning)):
                 self.next_model = 4

@@ -7,6 +7,8 @@
               motion=motion.figure8())
     w.field_body(t_us)                       # uT, body frame (AN4248: x fwd, y right, z down)
     w.sensor_field(t_us, (1, -2, -3))        # uT as a chip with that mounting senses it
+    w.drift_iron((0.5, 0, 0), start_s=5)     # the hard iron drifts 0.5 uT/s from t = 5 s
+    w.switch_iron((12, 8, -10), 5.0)         # ...or jumps by a vector every other 5 s
 
 Frames (AN4248): world = magnetic NED; Br = B (cos delta, 0, sin delta) with inclination delta
 positive down; Bp = Rx(phi) Ry(theta) Rz(psi) Br (eqs. 1-3); the AN4248 gravity vector
@@ -125,6 +127,8 @@ class World:
         self.seed = seed
         self.temperature_c = float(temperature_c)
         self.magnets = []
+        self.drift = None       # (rate uT/s, start us, end us or None): drift_iron()
+        self.switch = None      # (delta uT, period us, start us, end us or None): switch_iron()
         self.set_iron(hard_iron_ut, soft_iron)
         self._rot_t = None
         self._rot = None
@@ -135,6 +139,41 @@ class World:
             raise ValueError("World: hard_iron_ut is a 3-vector and soft_iron a 3x3 matrix")
         self.hard_iron_ut = (float(hard_iron_ut[0]), float(hard_iron_ut[1]), float(hard_iron_ut[2]))
         self.soft_iron = tuple(tuple(float(x) for x in row) for row in soft_iron)
+
+    def drift_iron(self, rate_ut_per_s, start_s=0.0, end_s=None):
+        """The hard iron drifts (a warming board, a slowly magnetised part): V + rate x
+        (t - start) in the sensor frame from start_s, held at its end value after end_s.
+        None stops it."""
+        if rate_ut_per_s is None:
+            self.drift = None
+            return
+        self.drift = (tuple(float(x) for x in rate_ut_per_s), int(start_s * 1000000),
+                      None if end_s is None else int(end_s * 1000000))
+
+    def switch_iron(self, delta_ut, period_s, start_s=0.0, end_s=None):
+        """Two hard-iron states (a relay, a motor, a magnetised part switched on and off):
+        V + delta during the second half of every period from start_s until end_s, V
+        otherwise. None stops it."""
+        if delta_ut is None:
+            self.switch = None
+            return
+        if period_s <= 0:
+            raise ValueError("switch_iron: period_s must be > 0")
+        self.switch = (tuple(float(x) for x in delta_ut), int(period_s * 1000000),
+                       int(start_s * 1000000), None if end_s is None else int(end_s * 1000000))
+
+    def hard_iron_at(self, t_us):
+        """V at t_us (uT, sensor frame), drift and switching included."""
+        v = self.hard_iron_ut
+        d = self.drift
+        if d is not None and t_us > d[1]:
+            t = (t_us if d[2] is None or t_us < d[2] else d[2]) - d[1]
+            v = (v[0] + d[0][0] * t / 1e6, v[1] + d[0][1] * t / 1e6, v[2] + d[0][2] * t / 1e6)
+        sw = self.switch
+        if sw is not None and t_us >= sw[2] and (sw[3] is None or t_us < sw[3]):
+            if (t_us - sw[2]) % sw[1] >= sw[1] // 2:
+                v = (v[0] + sw[0][0], v[1] + sw[0][1], v[2] + sw[0][2])
+        return v
 
     def add_magnet(self, field_ut, start_s, end_s, ramp_s=0.5, frame="sensor"):
         m = Magnet(field_ut, start_s, end_s, ramp_s, frame)
@@ -196,7 +235,7 @@ class World:
     def sensor_field(self, t_us, mount):
         """W * (M * Bp) + V + magnets, uT, in the sensor frame (AN4246 eq. 5)."""
         b = mat_vec(self.soft_iron, mount_apply(mount, self.field_body(t_us)))
-        v = self.hard_iron_ut
+        v = self.hard_iron_at(t_us)
         out = [b[0] + v[0], b[1] + v[1], b[2] + v[2]]
         if self.magnets:
             m = self.interference(t_us, mount)

@@ -151,3 +151,26 @@ def test_the_benchmark_page_is_written_whole_with_its_generated_notice(tmp_path)
 def test_wire_time_formula():
     assert bench.wire_us(6) == pytest.approx((9 * 9 + 3) * 2.5)
     assert not math.isnan(bench.wire_us(0))
+
+
+def test_the_fault_campaign_is_in_the_bench(smoke):
+    # the smoke run's campaign: tiny, but the whole path (host_sim/cli/benchmarks/soak.py)
+    d, out = smoke
+    q = d["results"]["soak"]["cpython"]
+    assert "error" not in q, q
+    assert q["exceptions"] == 0 and q["lost"] == 0 and q["wrong_but_ok"] == 0
+    assert q["report"][0].startswith("soak: %d sessions" % q["sessions"])
+    assert any(row[0].startswith("8 fault campaign") for row in d["table"])
+    section = bench.soak_section(d["results"])
+    assert section.startswith(bench.SOAK_BEGIN) and section.endswith(bench.SOAK_END)
+    assert "    wrong-but-ok" not in section and "wrong-but-ok 0" in section
+
+
+def test_the_soak_block_is_replaced_alone(tmp_path):
+    p = tmp_path / "benchmarks.md"
+    p.write_text("# Benchmarks\n\n%s\ntable\n%s\n" % (bench.BEGIN, bench.END))
+    bench.splice_soak("%s\nfirst\n%s" % (bench.SOAK_BEGIN, bench.SOAK_END), str(p))
+    bench.splice_soak("%s\nsecond\n%s" % (bench.SOAK_BEGIN, bench.SOAK_END), str(p))
+    text = p.read_text()
+    assert "second" in text and "first" not in text and "table" in text
+    assert text.index(bench.SOAK_END) < text.index(bench.END)

@@ -171,6 +171,25 @@ def test_payload_refuses_what_correct_could_not_use():
         Calibration(model=4, offset=(40000, 0, 0))
 
 
+def test_payload_carries_the_dip_in_whole_degrees_and_equality_ignores_it():
+    base = Calibration(model=10, offset=(1, 2, 3), field=500, field_out=500)
+    assert base.to_bytes()[3] == 0 and Calibration.from_bytes(base.to_bytes()).dip_kang is None
+    for deg in (-90, -60, -1, 0, 1, 33, 60, 90):
+        kang = round(deg * 65536 / 360)
+        c = base.with_dip(kang)
+        assert c.to_bytes()[3] == deg + 128          # 0 is "not known": 38..218 otherwise
+        back = Calibration.from_bytes(c.to_bytes())
+        assert back.dip_kang == kang and back == base  # the same fit, whatever its dip
+    # a dip rounds to the nearest whole degree (1 deg = 182 KANG)
+    assert Calibration.from_bytes(base.with_dip(10923 + 100).to_bytes()).dip_kang == 11105  # 61
+    bad = bytearray(base.to_bytes())
+    bad[3] = 20                                      # -108 deg
+    with pytest.raises(ValueError, match="dip byte 20"):
+        Calibration.from_bytes(bytes(bad))
+    with pytest.raises(ValueError, match="dip_kang"):
+        Calibration(model=4, field=5, field_out=5, dip_kang=20000)
+
+
 # ---- the Calibrator's sums ----------------------------------------------------------------
 
 @given(st.lists(st.tuples(i16, i16, i16), min_size=1, max_size=300),

@@ -7,9 +7,13 @@ Documented accuracy (docs/faults.md): a calibrated heading with status "ok" is w
 ACCURACY_CDEG of the truth. One sample's heading noise is ~0.8 deg RMS here (QMC5883L 2 mG,
 MPU6050 tilt noise at 60 deg dip), so 5 deg is > 6 sigma: a sample beyond it is a fault.
 """
+import math
+
 import pytest
 
-from tests.test_reliability import Good, settled
+from tests.test_reliability import POSE, Good, settled
+from host_sim.world import mat_vec, mount_apply
+from firmware.health import DIP_TOL_KANG
 from tests.scenarios import app_world as W
 from host_sim import motion
 
@@ -170,6 +174,137 @@ def test_a_brown_out_of_the_magnetometer_is_re_initialised(good):
     seen, wrong = watch(app, b, 3, turning(b))
     assert wrong == 0 and seen[-1] == "ok" and app.reinits >= 1
     assert set(seen) - {"ok"} <= {"timeout", "sensor reset"}
+
+
+# --- 4. a magnet near the board (firmware/health.py DipCheck, FieldWatch) -------------------
+def _rotate(v, k, deg):
+    # v turned by deg about the unit axis k (Rodrigues)
+    c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+    kv = sum(k[i] * v[i] for i in range(3))
+    kx = (k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2], k[0] * v[1] - k[1] * v[0])
+    return [v[i] * c + kx[i] * s + k[i] * kv * (1 - c) for i in range(3)]
+
+
+def turning_magnet(b, deg, about="vertical"):
+    """A magnet's field, in the chip's frame, that turns Earth's field as the chip sees it now
+    by `deg` about the vertical (the heading moves, |B| and the dip do not) or about the
+    horizontal axis normal to the field (the dip moves, |B| and the heading do not)."""
+    w = b.world
+    bp = w.field_body(b.clock.now_us)
+    k = w.gravity_body(b.clock.now_us)
+    if about != "vertical":
+        k = (k[1] * bp[2] - k[2] * bp[1], k[2] * bp[0] - k[0] * bp[2], k[0] * bp[1] - k[1] * bp[0])
+        n = math.sqrt(sum(x * x for x in k))
+        k = [x / n for x in k]
+    d = [a - b_ for a, b_ in zip(_rotate(bp, k, deg), bp)]
+    return mat_vec(w.soft_iron, mount_apply(b.mount, d))
+
+
+def test_a_magnet_that_turns_the_field_about_the_vertical_is_never_ok(good):
+    # |B| and the dip are what they were: no single sample can tell this magnet from a turn
+    # (docs/faults.md). The heading moves 60 deg in the 0.2 s it moves in: a spell starts,
+    # and the board held still gives no evidence to end it while the magnet stays.
+    b, app, _ = good.app()
+    settled(b, app)
+    t = b.clock.now_us / 1e6
+    b.world.add_magnet(turning_magnet(b, 60.0), t, t + 6.0, ramp_s=0.2, frame="sensor")
+    seen, wrong = watch(app, b, 1.0)
+    assert wrong == 0 and seen[-1] == "interference"
+    plateau, wrong = watch(app, b, 4.0)
+    assert wrong == 0 and "ok" not in plateau
+    c = app.compass
+    assert abs(c.magnitude - c.field) * 100 < 10 * c.field and not c.interference  # unseen
+    assert abs(W.heading_error_cdeg(app, b)) > 5000     # ...and 60 deg off
+    # the magnet goes (at t + 6 s): the field is back where it was, the spell ends at once
+    seen, wrong = watch(app, b, 1.4)
+    assert wrong == 0 and "ok" not in seen[:len(seen) // 2] and "interference" not in seen[-5:]
+    settled(b, app)
+
+
+def test_a_magnet_carried_while_the_board_turns_shows_as_it_turns(good):
+    # the same magnet, then the board turns at 10 deg/s: it acts as a hard-iron offset, |B|
+    # and the dip leave their windows as the board turns; never an "ok" heading meanwhile
+    b, app, _ = good.app()
+    settled(b, app)
+    t = b.clock.now_us / 1e6
+    b.world.add_magnet(turning_magnet(b, 60.0), t, t + 12.0, ramp_s=0.2, frame="sensor")
+    turn = turning(b, rate_dps=10.0, pose=POSE)
+    seen, wrong = watch(app, b, 12.0, turn)
+    assert wrong == 0 and "ok" not in seen
+    # gone: ok again once the board has turned ~30 deg with clean samples (3 s here)
+    seen, wrong = watch(app, b, 5.0, turn)
+    assert wrong == 0 and seen[-1] == "ok" and "ok" not in seen[:len(seen) // 2]
+
+
+def test_a_magnet_that_tilts_the_field_is_interference_by_the_dip(good):
+    # 6 deg more dip, |B| and the heading unchanged: only the dip check sees it
+    b, app, _ = good.app()
+    settled(b, app)
+    assert app.dip.armed and app.dip.tol == DIP_TOL_KANG  # learned at boot: 3 deg
+    t = b.clock.now_us / 1e6
+    b.world.add_magnet(turning_magnet(b, 6.0, about="horizontal"), t, t + 3.0, ramp_s=0.5,
+                       frame="sensor")
+    W.run_until(app, b, t + 1.0)
+    flagged = []
+    W.run_until(app, b, t + 2.5, lambda a: flagged.append(a.compass.interference))
+    c = app.compass
+    assert all(flagged) and app.status == "interference" and app.accuracy == 0
+    assert abs(c.magnitude - c.field) * 100 < 2 * c.field      # |B| says nothing
+    assert abs(c.dip_kang - app.dip.ref) > DIP_TOL_KANG          # the dip does
+    seen, wrong = watch(app, b, 2.0)
+    assert wrong == 0 and seen[-1] == "ok"
+
+
+def test_a_heading_that_jumps_while_the_tilt_holds_still_is_not_ok_until_it_turns(good_qmc):
+    # a 20 deg step between two samples: too fast to be within 5 deg at every instant (a
+    # sample can be 1.5 periods old); the status says so until the board has turned on by
+    # ~30 deg (the evidence that no offset rides along), or came back
+    b, app, _ = good_qmc.app()
+    settled(b, app)
+    W.hold(b, POSE[0] + 20.0, POSE[1], POSE[2])
+    seen, wrong = watch(app, b, 3.0)
+    assert wrong == 0 and seen[0] == "heading jumped" and set(seen) == {"heading jumped"}
+    seen, wrong = watch(app, b, 5.0, turning(b, rate_dps=15.0, pose=(POSE[0] + 20.0,) + POSE[1:]))
+    assert wrong == 0 and seen[-1] == "ok"
+
+
+def test_samples_after_a_burst_of_bus_errors_are_fresh_or_stale_data(good_qmc):
+    # a QMC5883L keeps the set that followed the last read until it is read (DOR: later sets
+    # skipped), so the first sample after a burst of 4 failed reads (0.16 s, no re-init
+    # yet) is that old: stale data, not "ok"
+    b, app, _ = good_qmc.app()
+    settled(b, app)
+    turn = turning(b, rate_dps=20.0)
+    turn(b.clock.now_us / 1e6)
+    b.bus.inject_nack(after=0, count=4)
+    seen, wrong = watch(app, b, 2.0, turn)
+    assert wrong == 0 and "stale data" in seen and seen[-1] == "ok"
+    i = seen.index("stale data")
+    assert set(seen[:i]) == {"bus_error"}
+
+
+# --- the dip is saved with the record -------------------------------------------------------
+def test_an_accepted_fit_is_saved_with_the_dip_it_measures_and_boots_with_it():
+    b = W.make_sim("gy271")                      # a figure-8 from an empty store
+    fs = W.MemFs()
+    app = W.make_app(b, store=CalStore("/", fs=fs))
+    W.run_until(app, b, 40)
+    W.hold(b, *POSE)
+    W.run_until(app, b, 42)
+    assert app.calibration.model == 10 and app.stored == app.accepted and app.dip.armed
+    rec = Calibration.from_bytes(CalStore("/", fs=fs).load())
+    assert rec == app.calibration and abs(rec.dip_kang - 10923) <= 182  # 60 deg, within 1
+    again = W.make_app(W.make_sim("gy271", m=motion.still(*POSE), seed=4),
+                       store=CalStore("/", fs=fs))
+    assert again.dip.armed and again.dip.ref == rec.dip_kang     # from the first sample on
+
+
+def test_a_record_without_a_dip_learns_it_at_boot_and_is_not_rewritten(good_qmc):
+    assert good_qmc.cal.dip_kang is None
+    b, app, fs = good_qmc.app(learn=False)
+    assert not app.dip.armed
+    W.run_until(app, b, 1.0)
+    assert app.dip.armed and abs(app.dip.ref - 10923) <= 182 and app.stored == 0
 
 
 # --- 5. accelerometer absent at boot ----------------------------------------------------------

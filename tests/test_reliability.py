@@ -174,7 +174,10 @@ def test_an_eio_burst_re_initialises_the_driver_and_recovers(good):
     settled(b, app)
     b.bus.inject_eio(after=0, count=12)
     failed = steps_while_failing(app)
-    assert set(failed) == {"bus_error"} and len(failed) >= app.reinit_after
+    # after the burst a QMC5883L's registers still hold the set that followed the last read
+    # (DOR: later ones were skipped): that first sample is old, and says so
+    assert set(failed) <= {"bus_error", "stale data"} and failed.count("bus_error") >= \
+        app.reinit_after
     assert app.last_error.errno == 5 or app.reinits  # EIO named, or already recovered
     assert app.reinits + app.reinit_failures >= 1  # a run of failures asked for re-init
     settled(b, app)
@@ -276,9 +279,10 @@ def test_a_magnet_near_the_board_raises_interference_and_is_not_fed(good):
     plateau = []  # statuses while the magnet is fully there
 
     def each(a):
-        if a.status == "interference":
-            assert a.calibrator.count == seen[-1]  # not fed
-            assert a.compass.interference and a.progress()["interference"]
+        if a.compass.interference:
+            assert a.calibrator.count == seen[-1]  # a flagged sample is not fed
+        if a.status == "interference":  # (flagged, or held: firmware/health.py FieldWatch)
+            assert a.progress()["interference"]
         seen.append(a.calibrator.count)
         if 6300000 <= b.clock.now_us <= 9700000:
             plateau.append(a.status)
@@ -455,7 +459,7 @@ def test_a_failed_save_is_retried_and_the_next_boot_loads_it(good_qmc):
 
     def watch(a):
         if a.stored and not first_save:
-            first_save.append((a.calibration.to_bytes(), CalStore("/", fs=fs).load()))
+            first_save.append((a.calibration, Calibration.from_bytes(CalStore("/", fs=fs).load())))
     W.run_until(app, b, 100, each=watch)
     # the pending save is retried (or overtaken by a newer accepted fit, saved the same way):
     # either way the calibration in force reaches the store, and no new failure occurred

@@ -247,6 +247,24 @@ def test_magnet_shows_up_in_the_chip_readings():
 
 
 # --- mountings ----------------------------------------------------------------------------
+def test_drifting_and_switching_hard_iron():
+    w = World(field_ut=50.0, hard_iron_ut=(10.0, 0.0, 0.0))
+    w.drift_iron((0.5, -1.0, 0.0), start_s=2.0, end_s=6.0)
+    assert w.hard_iron_at(1000000) == (10.0, 0.0, 0.0)
+    assert w.hard_iron_at(4000000) == pytest.approx((11.0, -2.0, 0.0))
+    assert w.hard_iron_at(9000000) == pytest.approx((12.0, -4.0, 0.0))   # held at its end
+    m = (1, -2, -3)
+    base = w.sensor_field(1000000, m)
+    assert [a - b for a, b in zip(w.sensor_field(4000000, m), base)] == pytest.approx(
+        [1.0, -2.0, 0.0], abs=1e-9)  # a still board: only the drift moves the reading
+    w.drift_iron(None)
+    w.switch_iron((0.0, 0.0, 20.0), period_s=4.0, start_s=1.0, end_s=9.0)
+    got = [w.hard_iron_at(int(t * 1e6))[2] for t in (0.5, 1.5, 3.5, 5.5, 7.5, 9.5)]
+    assert got == [0.0, 0.0, 20.0, 0.0, 20.0, 0.0]
+    with pytest.raises(ValueError):
+        w.switch_iron((1, 0, 0), 0)
+
+
 def test_check_mount_rejects_non_permutations():
     for bad in ((1, 1, 3), (1, 2), (0, 2, 3), (1, 2, 4)):
         with pytest.raises(ValueError):

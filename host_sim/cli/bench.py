@@ -8,6 +8,8 @@ run, docs/benchmarks.md (generated, dated; the README links to it).
 options:
   --smoke        the same code paths with tiny counts (seconds; the test suite runs it);
                  writes build/bench-smoke.json and leaves the README alone
+  --soak-only    only the fault campaign (host_sim/cli/benchmarks/soak.py): its table, and
+                 its block of docs/benchmarks.md refreshed alone
   --json PATH    where the JSON goes (default build/bench.json, smoke build/bench-smoke.json)
   --doc / --no-doc   write docs/benchmarks.md (default: yes for a full run, no for smoke)
   -h, --help     this text
@@ -222,7 +224,7 @@ def collect(smoke, log=print):
             log("  %-10s %s x %d" % (name, "micropython" if micro else "cpython", procs))
             res[name]["micropython" if micro else "cpython"] = run_merged(name, micro, args,
                                                                          procs)
-    for name in ("accuracy", "intcount", "quality", "fieldacc", "quickcal"):
+    for name in ("accuracy", "intcount", "quality", "fieldacc", "quickcal", "soak"):
         log("  %-10s cpython" % name)
         res[name] = {"cpython": run_script(name, False, args)}
     res["fieldheap"] = {}
@@ -772,7 +774,70 @@ def rows(res, derived):
     R.extend(rows_32bit(res))
     R.extend(rows_quality(res))
     R.extend(rows_location(res))
+    R.extend(rows_soak(res))
     return R
+
+
+def rows_soak(res):
+    """The fault campaign's outcome (host_sim/cli/benchmarks/soak.py, docs/faults.md)."""
+    q = _get(res, "soak", "cpython") or {}
+    if not q:
+        return []
+    if "error" in q:
+        return [("8 fault campaign", q["error"][:60], "", "", "ERROR")]
+    c = q["clean"]
+    ok = q["exceptions"] == 0 and q["lost"] == 0 and q["wrong_but_ok"] == 0
+    return [("8 fault campaign: %d sessions x %d s; exceptions / lost / wrong-but-ok"
+             % (q["sessions"], q["seconds_per_session"]),
+             "%d / %d / %d" % (q["exceptions"], q["lost"], q["wrong_but_ok"]), "",
+             "goal 0 / 0 / 0", verdict(ok)),
+            ("8 fault-free sessions: samples not ok (false alarms)",
+             "%d of %d" % (c["not_ok"], c["steps"]), "", "goal ~0",
+             verdict(c["not_ok"] * 1000 <= c["steps"] and c["wrong_but_ok"] == 0))]
+
+
+SOAK_BEGIN = "<!-- soak:begin -->"
+SOAK_END = "<!-- soak:end -->"
+
+
+def soak_section(res):
+    """docs/benchmarks.md's fault-campaign block: the table `make soak` prints, for the
+    bench's campaign (host_sim/cli/benchmarks/soak.py)."""
+    q = _get(res, "soak", "cpython") or {}
+    if not q or "error" in q:
+        return "%s\n%s" % (SOAK_BEGIN, SOAK_END)
+    return "\n".join([
+        SOAK_BEGIN,
+        "### Fault campaign",
+        "",
+        "`python -m host_sim soak` as `make soak` runs it (docs/faults.md), at the bench's size: "
+        "%d sessions x %d simulated s, seed %d, every fault class, and %d fault-free sessions "
+        "beside them whose non-ok samples are false alarms. Counts, not times: the same on "
+        "every machine (%.0f s here). `make soak` runs 600 sessions."
+        % (q["sessions"], q["seconds_per_session"], q["seed"], q["clean"]["sessions"],
+           q.get("elapsed_s") or 0),
+        "",
+        "    " + "\n    ".join(q["report"]),
+        SOAK_END])
+
+
+def splice_soak(section, path=None):
+    """Put `section` in place of the soak block of docs/benchmarks.md (before the end marker
+    when the page has none yet): `bench --soak-only` refreshes it alone."""
+    if path is None:
+        path = os.path.join(ROOT, "docs", "benchmarks.md")
+    text = open(path).read()
+    if SOAK_BEGIN in text and SOAK_END in text:
+        a = text.index(SOAK_BEGIN)
+        b = text.index(SOAK_END) + len(SOAK_END)
+        text = text[:a] + section + text[b:]
+    elif END in text:
+        a = text.index(END)
+        text = text[:a].rstrip("\n") + "\n\n" + section + "\n" + text[a:]
+    else:
+        text = text.rstrip("\n") + "\n\n" + section + "\n"
+    with open(path, "w") as f:
+        f.write(text)
 
 
 def _slice_ops():
@@ -900,6 +965,8 @@ def readme_section(R, m, derived, res=None):
         "overhead is not." % src,
         "",
         summary(res or {}, derived),
+        "",
+        soak_section(res or {}),
     ] + modheap_section(res or {}) + quickcal_section(res or {}) + [
         END,
     ]
@@ -952,13 +1019,16 @@ def write_doc(section, path=None):
 
 
 def parser():
-    p = Parser("bench", "[--smoke] [--json PATH] [--doc | --no-doc]",
+    p = Parser("bench", "[--smoke] [--soak-only] [--json PATH] [--doc | --no-doc]",
                "make bench: the benchmark scripts on CPython and MicroPython, a table, JSON and the\n"
                "README section (see this module's docstring).")
     p.option("--smoke", "flag",
              help="the same code paths with tiny counts (seconds; the test\n"
                   "suite runs it); writes build/bench-smoke.json and leaves the\n"
                   "README alone")
+    p.option("--soak-only", "flag",
+             help="only the fault campaign: print its table and refresh that\n"
+                  "block of docs/benchmarks.md (unless --no-doc or --smoke)")
     p.option("--json", "path", metavar="PATH",
              help="where the JSON goes (default build/bench.json, smoke\n"
                   "build/bench-smoke.json)")
@@ -988,10 +1058,30 @@ def main(argv):
     return parser().main(argv, body)
 
 
+def soak_only(opts):
+    """bench --soak-only: the fault campaign alone (CPython), its table, its block of
+    docs/benchmarks.md."""
+    print("bench --soak-only%s: %s" % (" --smoke" if opts["smoke"] else "",
+                                       machine()["date_utc"]))
+    r = run_script("soak", False, ["--smoke"] if opts["smoke"] else [], timeout=1800)
+    if "error" in r:
+        print(error_line("bench", "soak: %s" % r["error"]), file=sys.stderr)
+        return 1
+    for line in r["report"]:
+        print(line)
+    print("(%.0f s)" % r["elapsed_s"])
+    if opts["doc"]:
+        splice_soak(soak_section({"soak": {"cpython": r}}))
+        print("docs/benchmarks.md: fault campaign block written")
+    return 0
+
+
 def body(opts):
     if sys.implementation.name != "cpython":
         raise UsageError("run it with CPython (it starts MicroPython itself): make bench")
     opts = _resolve(opts)
+    if opts.get("soak_only"):
+        return soak_only(opts)
     if not os.path.exists(MICROPYTHON):
         print(error_line("bench", "no MicroPython at %s (make venv installs it)" % MICROPYTHON),
               file=sys.stderr)

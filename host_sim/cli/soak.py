@@ -1,6 +1,6 @@
 """`python -m host_sim soak`: a seeded fault campaign against the simulated board (make soak).
 
-    python -m host_sim soak [--sessions N] [--seconds S] [--seed K] [--json]
+    python -m host_sim soak [--sessions N] [--seconds S] [--seed K] [--clean C] [--json]
 
 Each session boots CompassApp from a store holding a good calibration (a GY-271 + MPU6050 or
 a GY-87, strong hard and soft iron, the board turning slowly and tilting), and injects
@@ -10,7 +10,9 @@ filesystem, sometimes with the accelerometer absent at boot). Printed: steps, fa
 reboots, exceptions out of step(), calibrations lost (a store that no longer loads a
 calibration at least as good as the good one), "wrong-but-ok" samples - status "ok", a
 calibration in force, and a heading error above ACCURACY_DEG - and, per fault class, the
-median and worst time from injection to the first non-ok status (docs/faults.md).
+median and worst time from injection to the first non-ok status (docs/faults.md). Then C
+fault-free sessions (default one in ten) on the next streams: the same boards and motions
+with no fault and no reboot, whose non-ok samples are false alarms.
 
 Fault classes: stale (output registers frozen), zeros (the chip returns 0 0 0), mag_reset
 (brown-out), range (a glitch write to the range/gain register), accel_sleep (MPU6050 asleep:
@@ -115,14 +117,23 @@ def app_on(b, store, **kw):
 
 
 def good_calibration(setup, accel):
-    """A 10-element calibration from a 40 s figure-8 session (the reference of 'lost')."""
+    """A 10-element calibration from a 40 s figure-8 session, then slow turning until the
+    store holds it with the dip it measures (the app learns it and saves it once more): the
+    calibration the store holds, the reference of 'lost'."""
     b = make_board(setup, world=world(motion.figure8()), seed=3, accel=accel)
-    app = app_on(b, None)
+    fs = MemFs()
+    app = app_on(b, CalStore("/", fs=fs))
     while b.clock.now_us < 40000000:
         app.step()
-    if app.calibration.model != 10:
-        raise RuntimeError("soak: no 10-element calibration for %s" % setup)
-    return app.calibration, app.mag.KIND, app.mag.range_code
+    b.world.motion = Turning(0.0, 10.0, 0.0)
+    cal = None
+    while b.clock.now_us < 70000000 and (cal is None or cal.dip_kang is None):
+        for _ in range(25):
+            app.step()
+        cal = Calibration.from_bytes(app.store.load())
+    if cal.model != 10 or cal.dip_kang is None:
+        raise RuntimeError("soak: no 10-element calibration with its dip for %s" % setup)
+    return cal, app.mag.KIND, app.mag.range_code
 
 
 def err_deg(app, b):
@@ -172,7 +183,10 @@ def inject(b, cls, g):
     return lambda: None
 
 
-def session(k, seed, seconds, goods, stats):
+def session(k, seed, seconds, goods, stats, trace=None, faults=True):
+    """One session (stream k of the seed); faults=False: the same board and motion with no
+    fault and no reboot, counting its non-ok samples in stats["clean"] (false alarms).
+    trace(k, board, app, last_class) is called after every step when given."""
     g = Prng(seed, stream=k)
     si = g.randrange(len(SETUPS))
     setup, accel = SETUPS[si]
@@ -182,9 +196,9 @@ def session(k, seed, seconds, goods, stats):
     fs = MemFs()
     CalStore("/", sensor=kind, range_code=rng, fs=fs).save(cal.to_bytes())
     app = app_on(b, CalStore("/", fs=fs))
-    reboot_at = seconds * 1e6 / 2 if g.randrange(3) == 0 else None
+    reboot_at = seconds * 1e6 / 2 if g.randrange(3) == 0 and faults else None
     end = seconds * 1e6
-    next_fault = 2e6 + g.randrange(8) * 1e6
+    next_fault = 2e6 + g.randrange(8) * 1e6 if faults else 2 * end
     clear = None
     clear_at = 0
     pending = None          # (class, injected at us) awaiting detection
@@ -222,6 +236,11 @@ def session(k, seed, seconds, goods, stats):
         except Exception as e:  # noqa: BLE001 - counted: step() must never raise
             stats["exceptions"] += 1
             stats["last_exception"] = repr(e)
+        if trace is not None:
+            trace(k, b, app, last)
+        if not faults:
+            clean_step(app, b, stats["clean"])
+            continue
         stats["steps"] += 1
         if app.status != "ok":
             if pending is not None:
@@ -243,18 +262,35 @@ def session(k, seed, seconds, goods, stats):
         stats["lost"] += 1
 
 
+def clean_step(app, b, st):
+    st["steps"] += 1
+    if app.status != "ok":
+        st["not_ok"] += 1
+        st["by_status"][app.status] = st["by_status"].get(app.status, 0) + 1
+    elif err_deg(app, b) > ACCURACY_DEG:
+        st["wrong_but_ok"] += 1
+
+
 def reboot(app, b, fs, stats):
     stats["reboots"] += 1
     return app_on(b, CalStore("/", fs=fs))
 
 
-def campaign(sessions, seconds, seed):
+def campaign(sessions, seconds, seed, clean=None):
+    """The campaign: `sessions` sessions with faults, then `clean` fault-free ones (None:
+    one in ten, at least 2) on streams after them, whose non-ok samples are false alarms."""
     goods = [good_calibration(s, a) for s, a in SETUPS]
+    if clean is None:
+        clean = max(2, sessions // 10)
     stats = {"sessions": sessions, "seconds_per_session": seconds, "seed": seed, "steps": 0,
              "faults": {}, "reboots": 0, "exceptions": 0, "lost": 0, "wrong_but_ok": 0,
-             "wrong_by_class": {}, "detect_ms": {}, "accuracy_deg": ACCURACY_DEG}
+             "wrong_by_class": {}, "detect_ms": {}, "accuracy_deg": ACCURACY_DEG,
+             "clean": {"sessions": clean, "steps": 0, "not_ok": 0, "by_status": {},
+                       "wrong_but_ok": 0}}
     for k in range(sessions):
         session(k, seed, seconds, goods, stats)
+    for k in range(sessions, sessions + clean):
+        session(k, seed, seconds, goods, stats, faults=False)
     det = {}
     for cls, v in sorted(stats["detect_ms"].items()):
         v = sorted(v)
@@ -285,29 +321,51 @@ def main(argv):
         return 0
     try:
         for a in argv:
-            if a.startswith("--") and a not in ("--sessions", "--seconds", "--seed", "--json"):
+            if a.startswith("--") and a not in ("--sessions", "--seconds", "--seed", "--clean",
+                                                "--json"):
                 raise UsageError("unknown option %s" % a)
         n = _int_opt(argv, "--sessions", 40, 1, 100000, "sessions")
         s = _int_opt(argv, "--seconds", 60, 5, 100000, "simulated seconds per session")
         seed = _int_opt(argv, "--seed", 1, 0, 2 ** 31 - 1, "campaign seed")
+        clean = _int_opt(argv, "--clean", max(2, n // 10), 0, 100000, "fault-free sessions")
     except UsageError as e:
         sys.stderr.write("soak: %s\n" % e)
         return 2
-    st = campaign(n, s, seed)
+    st = campaign(n, s, seed, clean)
     if "--json" in argv:
         print(json.dumps(st, sort_keys=True))
         return 0
-    print("soak: %d sessions x %d s, seed %d" % (n, s, seed))
-    print("steps %d  faults %d  reboots %d  exceptions %d  calibrations lost %d  "
-          "wrong-but-ok %d (ok and > %.0f deg)" % (st["steps"], st["total_faults"],
-                                                   st["reboots"], st["exceptions"], st["lost"],
-                                                   st["wrong_but_ok"], ACCURACY_DEG))
-    print("%-13s %7s %9s %10s %10s" % ("fault", "count", "detected", "median ms", "max ms"))
+    for line in report(st):
+        print(line)
+    return 0
+
+
+def report(st):
+    """The campaign's table as lines (make soak prints them; make bench puts them in
+    docs/benchmarks.md)."""
+    out = ["soak: %d sessions x %d s, seed %d" % (st["sessions"], st["seconds_per_session"],
+                                                  st["seed"]),
+           "steps %d  faults %d  reboots %d  exceptions %d  calibrations lost %d  "
+           "wrong-but-ok %d (ok and > %.0f deg)" % (st["steps"], st["total_faults"],
+                                                     st["reboots"], st["exceptions"],
+                                                     st["lost"], st["wrong_but_ok"],
+                                                     st["accuracy_deg"]),
+           "%-13s %7s %9s %10s %10s" % ("fault", "count", "detected", "median ms", "max ms")]
     for cls in CLASSES:
         d = st["detect_ms"].get(cls)
-        print("%-13s %7d %9s %10s %10s" % (cls, st["faults"].get(cls, 0),
-                                           d["n"] if d else "-", d["median_ms"] if d else "-",
-                                           d["max_ms"] if d else "-"))
+        out.append("%-13s %7d %9s %10s %10s" % (cls, st["faults"].get(cls, 0),
+                                                d["n"] if d else "-", d["median_ms"] if d else "-",
+                                                d["max_ms"] if d else "-"))
     if st["wrong_by_class"]:
-        print("wrong-but-ok by class: %s" % st["wrong_by_class"])
-    return 0
+        out.append("wrong-but-ok by class: %s" % st["wrong_by_class"])
+    out.append(false_alarms(st["clean"], st["seconds_per_session"]))
+    return out
+
+
+def false_alarms(c, seconds):
+    """The fault-free sessions' line: their non-ok samples are false alarms."""
+    n = c["steps"]
+    return ("fault-free: %d sessions x %d s, %d steps, %d not ok (%.3f %%%s), wrong-but-ok %d"
+            % (c["sessions"], seconds, n, c["not_ok"], 100.0 * c["not_ok"] / n if n else 0.0,
+               (": " + ", ".join("%s %d" % kv for kv in sorted(c["by_status"].items())))
+               if c["by_status"] else "", c["wrong_but_ok"]))

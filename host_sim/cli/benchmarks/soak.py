@@ -1,0 +1,33 @@
+"""The fault campaign in the bench (docs/faults.md; make soak runs the long one): BENCH_SESSIONS
+sessions of BENCH_SECONDS simulated seconds, seed 1, every fault class, and one fault-free
+session in ten beside them (false alarms). The figures are counts, not times, so they are the
+same on every machine; elapsed_s is this machine's wall clock. CPython only (the simulator
+with floats)."""
+import time
+
+from host_sim.cli import soak
+
+BENCH_SESSIONS = 120    # ~200,000 steps and ~400 faults, ~35 per class: bench-friendly (~30 s)
+BENCH_SECONDS = 60
+SMOKE_SESSIONS = 4
+SMOKE_SECONDS = 10
+
+
+def figures(sessions=BENCH_SESSIONS, seconds=BENCH_SECONDS, seed=1):
+    t0 = time.time()
+    st = soak.campaign(sessions, seconds, seed)
+    st["elapsed_s"] = round(time.time() - t0, 1)
+    st["report"] = soak.report(st)
+    return st
+
+
+def main():
+    from host_sim.cli.benchmarks import common
+    if common.smoke():
+        common.emit(figures(SMOKE_SESSIONS, SMOKE_SECONDS))
+    else:
+        common.emit(figures())
+
+
+if __name__ == "__main__":
+    main()

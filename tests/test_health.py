@@ -1,0 +1,163 @@
+"""firmware/health.py's field checks on their own: the dip reference (DipCheck) and the spells
+of FieldWatch (shift, jump, hold, and the evidence that ends one), driven with hand-made
+compass states so each rule is seen alone. The app-level scenarios are in
+tests/test_faults.py and the campaign in tests/test_soak.py."""
+from array import array
+
+from firmware.calibration import Calibration
+from firmware.compass import Compass
+from firmware.health import (DIP_TOL_KANG, SPELL_FIELD, SPELL_JUMP, SPELL_SHIFT, DipCheck,
+                             FieldWatch)
+
+DEG = 65536 / 360.0
+DIP60 = 10923
+PERIOD = 20000  # us, 50 Hz
+
+
+def k(deg):
+    return int(round(deg * DEG))
+
+
+def test_dip_check_learns_a_steady_stretch_then_flags_beyond_3_deg():
+    d = DipCheck()
+    assert not d.off(0)                         # nothing known: nothing flagged
+    armed = [d.learn(DIP60 + (i % 3) * 20, PERIOD) for i in range(30)]
+    assert armed.index(True) == 25              # 0.5 s at 50 Hz (and >= 8 samples)
+    assert abs(d.ref - (DIP60 + 20)) <= 1
+    assert not d.off(d.ref + DIP_TOL_KANG) and d.off(d.ref + DIP_TOL_KANG + 1)
+    assert d.off(d.ref - DIP_TOL_KANG - 1)
+    assert not d.learn(0, PERIOD)               # armed: held, not learned further
+
+
+def test_dip_check_restarts_on_a_sample_off_the_stretch():
+    d = DipCheck()
+    for _ in range(20):
+        d.learn(DIP60, PERIOD)
+    d.learn(DIP60 + k(2), PERIOD)               # 2 deg off the mean: a new stretch begins
+    assert not d.armed
+    got = [d.learn(DIP60 + k(2), PERIOD) for _ in range(30)]
+    assert True in got and d.ref == DIP60 + k(2)
+
+
+class Board:
+    """A Compass whose state is written by hand (the fields FieldWatch reads) and a body
+    field; field 4527 counts as the simulated GY-271's calibration."""
+
+    def __init__(self, fit_error=38, dip=None):
+        self.c = Compass()
+        self.body = array("h", (2263, 0, 3920))
+        self.w = FieldWatch(self.c, self.body)
+        self.cal = Calibration(model=10, field=6122, field_out=4527, fit_error=fit_error,
+                               dip_kang=dip)
+        self.w.use(self.cal)
+        self.set(4527, DIP60, 0)
+
+    def set(self, mag, dip, heading, pitch=0, roll=0, body=None):
+        c = self.c
+        c.magnitude = mag
+        c.dip_kang = dip
+        c.heading_kang = heading & 0xFFFF
+        c.st[12] = pitch
+        c.st[11] = roll
+        c.interference = False
+        c.flags = 0
+        if body is not None:
+            for i in range(3):
+                self.body[i] = body[i]
+
+    def run(self, n, **kw):
+        out = []
+        for _ in range(n):
+            self.set(**kw)
+            out.append(self.w.sample(True, PERIOD))
+        return out
+
+
+def test_a_calibration_saved_with_its_dip_arms_the_check_at_once():
+    b = Board(dip=DIP60)
+    assert b.w.dip.armed and b.w.dip.ref == DIP60
+    assert b.run(1, mag=4527, dip=DIP60 + k(4), heading=0) == [SPELL_FIELD]
+    assert b.c.interference and b.c.flags & 1   # the compass's flag, as for |B|
+
+
+def test_the_dip_tolerance_widens_with_the_fit_error_like_the_field_window():
+    assert Board(fit_error=38).w.dip.tol == DIP_TOL_KANG          # 3 deg floor
+    assert Board(fit_error=1000).w.dip.tol == 3 * 1000 * 10430 // 10000  # 3 x 10 %: 17.9 deg
+
+
+def test_a_fast_change_of_field_strength_is_a_shift_and_a_still_field_is_not():
+    b = Board(dip=DIP60)
+    assert b.run(20, mag=4527, dip=DIP60, heading=100) == [0] * 20
+    assert b.run(1, mag=4527 * 103 // 100, dip=DIP60, heading=100) == [0]  # 3 %: noise
+    b.run(20, mag=4527, dip=DIP60, heading=100)
+    b.w.spell = 0
+    assert b.run(1, mag=4527 * 95 // 100, dip=DIP60, heading=100) == [SPELL_SHIFT]
+    assert b.w.spell == SPELL_SHIFT
+
+
+def test_a_jump_needs_a_still_level_tilt():
+    b = Board(dip=DIP60)
+    b.run(5, mag=4527, dip=DIP60, heading=0)
+    assert b.run(1, mag=4527, dip=DIP60, heading=k(3.5)) == [0]
+    assert b.run(1, mag=4527, dip=DIP60, heading=k(8)) == [SPELL_JUMP]
+    b = Board(dip=DIP60)
+    b.run(5, mag=4527, dip=DIP60, heading=0, pitch=k(10))
+    assert b.run(1, mag=4527, dip=DIP60, heading=k(8), pitch=k(12)) == [0]  # tilting: no
+    b = Board(dip=DIP60)
+    b.run(5, mag=4527, dip=DIP60, heading=0, pitch=k(60))
+    assert b.run(1, mag=4527, dip=DIP60, heading=k(8), pitch=k(60)) == [0]  # steep: no
+
+
+def test_a_spell_ends_when_the_field_is_back_where_it_was():
+    b = Board(dip=DIP60)
+    here = (2263, 0, 3920)
+    b.run(10, mag=4527, dip=DIP60, heading=0, body=here)
+    b.run(1, mag=4527, dip=DIP60, heading=k(30), body=(1960, 1131, 3920))  # a jump
+    assert b.w.spell == SPELL_JUMP
+    b.run(5, mag=4527, dip=DIP60, heading=0, body=here)  # back (a jump again), 0.08 s clean
+    assert b.w.spell == SPELL_JUMP
+    b.run(1, mag=4527, dip=DIP60, heading=0, body=here)  # 0.1 s of clean samples
+    assert b.w.spell == 0
+
+
+def test_a_spell_ends_after_2_s_over_a_turn_or_10_s_still():
+    b = Board(dip=DIP60)
+    b.run(10, mag=4527, dip=DIP60, heading=0, body=(2263, 0, 3920))
+    b.run(1, mag=4527, dip=DIP60, heading=k(30), body=(1960, 1131, 3920))
+    b.run(100, mag=4527, dip=DIP60, heading=k(30), body=(1960, 1131, 3920))  # 2 s, still
+    assert b.w.spell == SPELL_JUMP
+    # the body field moves by B / 4 (a turn of ~29 deg about the vertical)
+    b.run(1, mag=4527, dip=DIP60, heading=k(33), body=(1131, 1960, 3920))
+    assert b.w.spell == 0
+    b = Board(dip=DIP60)
+    b.run(10, mag=4527, dip=DIP60, heading=0, body=(2263, 0, 3920))
+    b.run(1, mag=4527, dip=DIP60, heading=k(30), body=(1960, 1131, 3920))
+    b.run(499, mag=4527, dip=DIP60, heading=k(30), body=(1960, 1131, 3920))  # 9.98 s
+    assert b.w.spell == SPELL_JUMP
+    b.run(1, mag=4527, dip=DIP60, heading=k(30), body=(1960, 1131, 3920))  # 10 s
+    assert b.w.spell == 0
+
+
+def test_a_spell_begun_by_a_run_of_repeats_is_forgotten():
+    b = Board(dip=DIP60)
+    b.run(10, mag=4527, dip=DIP60, heading=0)
+    b.set(0, 0, 0)
+    b.c.interference = True
+    b.w.sample(True, PERIOD)                    # the first zero sample: |B| off
+    assert b.w.spell == SPELL_FIELD
+    b.w.forget(1)                               # the next one was a repeat: stale data
+    assert b.w.spell == 0
+    b.c.interference = True
+    b.w.sample(True, PERIOD)
+    b.run(3, mag=4527, dip=DIP60, heading=0)
+    b.w.forget(1)                               # an older spell stays
+    assert b.w.spell == SPELL_FIELD
+
+
+def test_the_field_differences_stay_small_ints():
+    # the largest body difference (int16 extremes) squared and summed, at every field size
+    for f in (200, 411, 4527, 16000, 32767):
+        b = Board()
+        b.w.use(Calibration(model=10, field=f, field_out=f))
+        d = (32767 + 32768) >> b.w.shift
+        assert 3 * d * d < 2 ** 30 and (f >> b.w.shift) < 2 ** 11
