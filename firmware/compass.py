@@ -278,6 +278,11 @@ class Compass:
     def flags(self):
         return self._failed or self.st[_FLAGS]
 
+    def mark_interference(self):
+        """Raise the interference flag of this sample from a check made outside the compass
+        (the dip against the calibration's, firmware/health.py)."""
+        self.st[_FLAGS] |= FLAG_INTERFERENCE
+
     def set_window(self, lo, hi):
         """Interference window on |b| given by its ends (b's units), e.g. one spanning the field
         model's |B| and the calibration's (firmware/location.py); set_field() replaces it."""

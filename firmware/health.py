@@ -366,8 +366,7 @@ class FieldWatch:
         c = self.c
         k = 0
         if tilt and self.dip.off(c.dip_kang):
-            c.interference = True
-            c.flags |= 1  # firmware.compass.FLAG_INTERFERENCE
+            c.mark_interference()
         if self.prev_h < 0 or tilt != self.prev_tilt:
             self.mag8 = c.magnitude << _STEADY_SHIFT  # after a gap, another calibration
             self.dip8 = c.dip_kang << _STEADY_SHIFT   # or tilt mode: start afresh

@@ -4,6 +4,7 @@ compass states so each rule is seen alone. The app-level scenarios are in
 tests/test_faults.py and the campaign in tests/test_soak.py."""
 from array import array
 
+from firmware import compass
 from firmware.calibration import Calibration
 from firmware.compass import Compass
 from firmware.health import (DIP_TOL_KANG, SPELL_FIELD, SPELL_JUMP, SPELL_SHIFT, DipCheck,
@@ -54,13 +55,13 @@ class Board:
 
     def set(self, mag, dip, heading, pitch=0, roll=0, body=None):
         c = self.c
-        c.magnitude = mag
-        c.dip_kang = dip
+        st = c.st                               # the compass's results live in its state
+        st[compass._MAG] = mag
+        st[compass._DIP] = dip
         c.heading_kang = heading & 0xFFFF
-        c.st[12] = pitch
-        c.st[11] = roll
-        c.interference = False
-        c.flags = 0
+        st[compass._PITCH] = pitch
+        st[compass._ROLL] = roll
+        st[compass._FLAGS] = 0
         if body is not None:
             for i in range(3):
                 self.body[i] = body[i]
@@ -142,12 +143,12 @@ def test_a_spell_begun_by_a_run_of_repeats_is_forgotten():
     b = Board(dip=DIP60)
     b.run(10, mag=4527, dip=DIP60, heading=0)
     b.set(0, 0, 0)
-    b.c.interference = True
+    b.c.mark_interference()
     b.w.sample(True, PERIOD)                    # the first zero sample: |B| off
     assert b.w.spell == SPELL_FIELD
     b.w.forget(1)                               # the next one was a repeat: stale data
     assert b.w.spell == 0
-    b.c.interference = True
+    b.c.mark_interference()
     b.w.sample(True, PERIOD)
     b.run(3, mag=4527, dip=DIP60, heading=0)
     b.w.forget(1)                               # an older spell stays

@@ -199,6 +199,16 @@ def test_commands_never_import_tests_and_load_numpy_matplotlib_only_where_needed
         assert not top & {"numpy", "matplotlib"}, path
 
 
+def test_every_command_parses_its_arguments_with_the_one_shared_parser():
+    from host_sim import __main__ as runner
+    for cmd in runner._COMMANDS:
+        src = open(os.path.join(ROOT, "host_sim", "cli", cmd + ".py")).read()
+        assert "parser(" in src or "Parser(" in src, cmd      # args.Parser, or demo.parser
+        assert "sys.argv" not in src.replace('sys.argv[1:]', ''), cmd
+    for path in _cli_files():
+        assert "argparse" not in _imports(path, ""), path
+
+
 def test_comments_cite_what_a_reader_can_follow():
     pat = re.compile(r"\bseed[ -]00\d|\bissue \d+\b|STYLE\.md|style guide", re.I)
     for folder in ("firmware", "host_sim", "boards"):

@@ -22,12 +22,13 @@ next boot, back later).
 """
 import json
 import math
-import sys
 
 from host_sim import motion
 from host_sim.boards import make_board
 from host_sim.prng import Prng
 from host_sim.world import World
+
+from host_sim.cli.args import Parser
 
 from firmware.app import CompassApp
 from firmware.calibration import Calibration
@@ -41,10 +42,6 @@ CLASSES = ("stale", "zeros", "mag_reset", "range", "accel_sleep", "accel_ff", "f
            "stall", "magnet", "nack", "accel_absent")
 MAG_AXES = "x,-y,-z"
 ACCEL_AXES = "-x,y,z"
-
-
-class UsageError(Exception):
-    pass
 
 
 class Turning:
@@ -300,44 +297,36 @@ def campaign(sessions, seconds, seed, clean=None):
     return stats
 
 
-def _int_opt(argv, name, default, lo, hi, unit):
-    if name not in argv:
-        return default
-    i = argv.index(name)
-    if i + 1 >= len(argv):
-        raise UsageError("%s: expected a value (%s)" % (name, unit))
-    try:
-        v = int(argv[i + 1])
-    except ValueError:
-        raise UsageError("%s=%r: expected an integer (%s)" % (name, argv[i + 1], unit))
-    if not lo <= v <= hi:
-        raise UsageError("%s=%d: expected %d..%d (%s)" % (name, v, lo, hi, unit))
-    return v
+def parser():
+    p = Parser("soak", "[--sessions N] [--seconds S] [--seed K] [--clean C] [--json]",
+               "A seeded fault campaign against the simulated board (docs/faults.md).")
+    p.option("--sessions", "int", default=40, lo=1, hi=100000, metavar="N",
+             help="sessions with faults (default 40; make soak: 600)")
+    p.option("--seconds", "int", default=60, lo=5, hi=100000, metavar="S",
+             help="simulated seconds per session (default 60)")
+    p.option("--seed", "int", default=1, lo=0, hi=2 ** 31 - 1, metavar="K",
+             help="campaign seed (default 1)")
+    p.option("--clean", "int", lo=0, hi=100000, metavar="C",
+             help="fault-free sessions (default one in ten, at least 2)")
+    p.option("--json", "flag", help="the figures as one JSON object")
+    p.epilog = "exit status: 0 done; 2 bad usage."
+    return p
 
 
-def main(argv):
-    if argv and argv[0] in ("-h", "--help"):
-        print(__doc__)
-        return 0
-    try:
-        for a in argv:
-            if a.startswith("--") and a not in ("--sessions", "--seconds", "--seed", "--clean",
-                                                "--json"):
-                raise UsageError("unknown option %s" % a)
-        n = _int_opt(argv, "--sessions", 40, 1, 100000, "sessions")
-        s = _int_opt(argv, "--seconds", 60, 5, 100000, "simulated seconds per session")
-        seed = _int_opt(argv, "--seed", 1, 0, 2 ** 31 - 1, "campaign seed")
-        clean = _int_opt(argv, "--clean", max(2, n // 10), 0, 100000, "fault-free sessions")
-    except UsageError as e:
-        sys.stderr.write("soak: %s\n" % e)
-        return 2
-    st = campaign(n, s, seed, clean)
-    if "--json" in argv:
+def body(opts):
+    n = opts["sessions"]
+    clean = opts["clean"] if opts["clean"] is not None else max(2, n // 10)
+    st = campaign(n, opts["seconds"], opts["seed"], clean)
+    if opts["json"]:
         print(json.dumps(st, sort_keys=True))
         return 0
     for line in report(st):
         print(line)
     return 0
+
+
+def main(argv):
+    return parser().main(argv, body)
 
 
 def report(st):
