@@ -283,12 +283,9 @@ class FieldWatch:
         self.g0_pitch = 0
         self.g0_roll = 0
         self.g0_ok = False
-        self.prev_h = -1                  # the previous sample: heading, tilt
-        self.prev_tilt = False
-        self.prev_pitch = 0
-        self.prev_roll = 0
-        self.mag8 = 0
-        self.dip8 = 0
+        # the previous sample: heading (-1: none), tilt; the short averages of |b| and dip (x 8)
+        self.prev_h, self.prev_tilt, self.prev_pitch, self.prev_roll = -1, False, 0, 0
+        self.mag8, self.dip8 = 0, 0
         self.shift = 2
         self.turn2 = 0
         self.back2 = 0
