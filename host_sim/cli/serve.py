@@ -25,6 +25,7 @@ import time
 
 from host_sim.cli import demo
 from host_sim.cli.args import Parser
+from host_sim.cli.memfs import MemFs
 
 PROTOCOLS = ("motioncal",)
 DEFAULT_CHIP = "gy87"
@@ -56,43 +57,6 @@ def parser():
              help="also print Adafruit's 3D viewer lines (Orientation:, Calibration:)")
     p.epilog = "exit status: 0 done; 2 bad usage."
     return p
-
-
-class MemFs:
-    """The calibration store's files in memory (firmware.store's fs interface)."""
-
-    def __init__(self):
-        self.files = {}
-
-    def open(self, path, mode):
-        if "w" in mode:
-            self.files[path] = b""
-            return _MemFile(self, path, b"")
-        if path not in self.files:
-            raise OSError(2, "ENOENT")
-        return _MemFile(None, path, self.files[path])
-
-    def remove(self, path):
-        if path not in self.files:
-            raise OSError(2, "ENOENT")
-        del self.files[path]
-
-
-class _MemFile:
-    def __init__(self, fs, path, data):
-        self.fs = fs
-        self.path = path
-        self.data = data
-
-    def read(self, n=-1):
-        return self.data if n < 0 else self.data[:n]
-
-    def write(self, b):
-        self.fs.files[self.path] += bytes(b)
-        return len(b)
-
-    def close(self):
-        pass
 
 
 class Session:

@@ -29,6 +29,7 @@ from host_sim.prng import Prng
 from host_sim.world import World
 
 from host_sim.cli.args import Parser
+from host_sim.cli.memfs import MemFs
 
 from firmware.app import CompassApp
 from firmware.calibration import Calibration
@@ -57,50 +58,6 @@ class Turning:
         t = t_us / 1e6
         return ((self.yaw0 + self.rate * t) % 360.0, 20.0 * math.sin(0.21 * t + self.phase),
                 15.0 * math.sin(0.13 * t + 2 * self.phase))
-
-
-class MemFs:
-    """A filesystem in memory for CalStore."""
-
-    def __init__(self):
-        self.files = {}
-
-    def open(self, path, mode):
-        if "w" in mode:
-            self.files[path] = b""
-            return _W(self, path)
-        if path not in self.files:
-            raise OSError(2, "ENOENT")
-        return _R(self.files[path])
-
-    def remove(self, path):
-        if path not in self.files:
-            raise OSError(2, "ENOENT")
-        del self.files[path]
-
-
-class _R:
-    def __init__(self, d):
-        self.d = d
-
-    def read(self, n=-1):
-        return self.d if n < 0 else self.d[:n]
-
-    def close(self):
-        pass
-
-
-class _W:
-    def __init__(self, fs, path):
-        self.fs = fs
-        self.path = path
-
-    def write(self, data):
-        self.fs.files[self.path] += bytes(data)
-        return len(data)
-
-    def close(self):
-        pass
 
 
 def world(m):
