@@ -106,6 +106,29 @@ class RegisterDevice:
         pass
 
 
+class MagnetometerModel(RegisterDevice):
+    """A RegisterDevice with the data-register fault hooks the magnetometer models share
+    (their docstrings say what each chip then shows): freeze() keeps the output registers as they are, constant(x, y, z)
+    makes every conversion read that sample; sticky=True survives a reset. The model reads
+    .fault, .fault_value and .sticky when it converts."""
+    fault = None
+    fault_value = (0, 0, 0)
+    sticky = False
+
+    def freeze(self, sticky=False):
+        self.fault = "freeze"
+        self.sticky = sticky
+
+    def constant(self, x=0, y=0, z=0, sticky=False):
+        self.fault = "constant"
+        self.fault_value = (int(x), int(y), int(z))
+        self.sticky = sticky
+
+    def clear_fault(self):
+        self.fault = None
+        self.sticky = False
+
+
 class RegisterFile(RegisterDevice):
     """A passive chip: fixed register contents, writes stored (e.g. a BMP180 on the GY-87)."""
 

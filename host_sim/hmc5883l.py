@@ -54,7 +54,7 @@ except ImportError:
     def const(x):
         return x
 
-from host_sim.bus import RegisterDevice
+from host_sim.bus import MagnetometerModel
 from host_sim.prng import Prng
 from host_sim.world import sensor_counts
 
@@ -89,13 +89,13 @@ _ADC_MAX = const(2047)
 _OVERFLOW = const(-4096)
 
 
-class HMC5883LSim(RegisterDevice):
+class HMC5883LSim(MagnetometerModel):
     """HMC5883L at 0x1E (see the module docstring). `world` None means zero field."""
 
     ADDRESS = 0x1E
 
     def __init__(self, world=None, mount=(1, -2, -3), seed=1, noise=True):
-        RegisterDevice.__init__(self)
+        MagnetometerModel.__init__(self)
         self.world = world
         self.mount = tuple(mount)
         self.seed = seed
@@ -147,19 +147,6 @@ class HMC5883LSim(RegisterDevice):
             self._k = 0
 
     # --- fault hooks (see the module docstring) ---------------------------------------
-    def freeze(self, sticky=False):
-        self.fault = "freeze"
-        self.sticky = sticky
-
-    def constant(self, x=0, y=0, z=0, sticky=False):
-        self.fault = "constant"
-        self.fault_value = (int(x), int(y), int(z))
-        self.sticky = sticky
-
-    def clear_fault(self):
-        self.fault = None
-        self.sticky = False
-
     def brown_out(self):
         self.power_on()
         if not self.sticky:

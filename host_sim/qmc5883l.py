@@ -50,7 +50,7 @@ except ImportError:
     def const(x):
         return x
 
-from host_sim.bus import RegisterDevice
+from host_sim.bus import MagnetometerModel
 from host_sim.prng import Prng
 from host_sim.world import sensor_counts
 
@@ -89,7 +89,7 @@ def _sat16(v):
     return v, False
 
 
-class QMC5883LSim(RegisterDevice):
+class QMC5883LSim(MagnetometerModel):
     """QMC5883L at 0x0D. `world` supplies the field (None: zero field); `mount` is the
     body -> sensor signed permutation (see host_sim.world); `noise=False` leaves only
     quantisation; `temp_offset` (counts) defaults to a seed-derived value in +-3000."""
@@ -97,7 +97,7 @@ class QMC5883LSim(RegisterDevice):
     ADDRESS = 0x0D
 
     def __init__(self, world=None, mount=(1, -2, -3), seed=1, noise=True, temp_offset=None):
-        RegisterDevice.__init__(self)
+        MagnetometerModel.__init__(self)
         self.world = world
         self.mount = tuple(mount)
         self.seed = seed
@@ -158,19 +158,6 @@ class QMC5883LSim(RegisterDevice):
             self.injected.append((int(x), int(y), int(z)))
 
     # --- fault hooks (see the module docstring) ---------------------------------------
-    def freeze(self, sticky=False):
-        self.fault = "freeze"
-        self.sticky = sticky
-
-    def constant(self, x=0, y=0, z=0, sticky=False):
-        self.fault = "constant"
-        self.fault_value = (int(x), int(y), int(z))
-        self.sticky = sticky
-
-    def clear_fault(self):
-        self.fault = None
-        self.sticky = False
-
     def _reset_cures(self):
         if not self.sticky:
             self.fault = None
