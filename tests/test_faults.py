@@ -11,7 +11,8 @@ import math
 
 import pytest
 
-from tests.test_reliability import POSE, Good, settled
+from tests.test_reliability import POSE, settled
+from tests.test_reliability import good, good_qmc  # noqa: F401  (the same fixtures)
 from host_sim.world import mat_vec, mount_apply
 from firmware.health import DIP_TOL_KANG
 from tests.scenarios import app_world as W
@@ -21,16 +22,6 @@ from firmware.calibration import Calibration
 from firmware.store import CalStore
 
 ACCURACY_CDEG = 500
-
-
-@pytest.fixture(scope="module", params=sorted(W.SETUPS))
-def good(request):
-    return Good(request.param)
-
-
-@pytest.fixture(scope="module")
-def good_qmc():
-    return Good("gy271")
 
 
 def watch(app, b, seconds, turn=None):
