@@ -34,6 +34,7 @@ import struct
 from array import array
 
 from firmware.compat import const
+from firmware.fixedpoint import rdiv
 
 MINMAX = "minmax"
 MODELS = (MINMAX, 4, 7, 10)
@@ -122,7 +123,7 @@ class Calibration:
         fe = self.fit_error if self.fit_error < 65535 else 65535
         n = self.samples if self.samples < 65535 else 65535
         d = self.dip_kang
-        d = _DIP_UNKNOWN if d is None else ((d * 360 + 32768) >> 16) + _DIP_BIAS
+        d = _DIP_UNKNOWN if d is None else rdiv(d * 45, 8192) + _DIP_BIAS  # KANG -> deg
         return struct.pack(_PAYLOAD, _PAYLOAD_VERSION, _MODEL_CODE[self.model], self.coverage,
                            d, fe, n, self.offset[0], self.offset[1], self.offset[2],
                            *(self.invw + (self.field, self.field_out)))
@@ -145,8 +146,7 @@ class Calibration:
             if not -90 <= d <= 90:
                 raise ValueError("calibration payload dip byte %d: expected 0 or 38..218"
                                  % f[3])
-            k = ((d if d >= 0 else -d) * 65536 + 180) // 360  # whole degrees -> KANG
-            d = k if d >= 0 else -k
+            d = rdiv(d * 8192, 45)  # whole degrees -> KANG (65536 / 360 = 8192 / 45)
         else:
             d = None
         return cls(model=_CODE_MODEL[f[1]], offset=f[6:9], invw=f[9:18], field=f[18],
