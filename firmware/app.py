@@ -92,17 +92,10 @@ the same jump is flagged again. .date_s: None, or a function returning the date 
 when the board knows it (e.g. after NTP), written with each entry. History errors are
 counted in .history_errors (the last one in .history_reason) and never stop the loop.
 """
-from array import array
-
-from firmware.axes import AxisMap
-from firmware.calibration import UNCALIBRATED, Calibration
-from firmware import compass
-from firmware.compass import FLAG_NO_GRAVITY, Compass
-from firmware.compat import const, kernels, ticks_diff, ticks_us, sleep_us, wall_clock
-from firmware.errors import SensorNotFound, SensorOverflow, StoreError, DataReadyTimeout
-from firmware.health import SPELL_FIELD, SPELL_JUMP, FieldWatch, Health
-from firmware import i2cdevice
-from firmware.trig import cdeg_to_kang, kang_to_str
+from firmware.compass import FLAG_NO_GRAVITY
+from firmware.compat import const, drop, ticks_diff
+from firmware.errors import SensorOverflow, DataReadyTimeout
+from firmware.health import SPELL_FIELD, SPELL_JUMP
 
 STATUS_OK = "ok"
 STATUS_INTERFERENCE = "interference"  # a heading, but |field| is off: a magnet or steel near
@@ -121,34 +114,24 @@ STATUS_INTERNAL = "internal error"    # step() caught an unexpected exception (e
 STATUS_JUMP = "heading jumped"        # it moved > 4 deg since the last sample: a magnet moving
 #                                       in, or a turn too fast for the sample rate to follow
 
-LOAD_BAD_PAYLOAD = "bad_payload"      # .load_reason: the record is intact, its payload is not
-LOAD_IO_ERROR = "io_error"            # .load_reason: the filesystem raised OSError
-LOAD_NO_MEMORY = "no_memory"          # .load_reason / .save_reason: MemoryError
-REASON_SOLVER_ERROR = "solver_error"  # .last_reason: the solver raised something unexpected
-REASON_NO_MEMORY = "no_memory"        # .last_reason: MemoryError during a solve
 
 SOLVE_EVERY = const(25)       # kept samples between solves: ~1/9 of a full sphere (225 held)
 REINIT_AFTER = const(5)       # failed reads in a row before the drivers are re-initialised
-DEFAULT_CAPACITY = const(300)  # samples held while collecting (firmware.calibrator's default)
 _REINIT_MAX_SHIFT = const(4)  # failed re-inits back off to every 2**4 x REINIT_AFTER reads
 _STALE_US = const(30000000)   # 30 s of interference: the calibration no longer fits the board
 _STALE_AGE_S = const(1200000)  # age that makes any fit error "worse" (> 16 doublings)
+_GOOD_FIT_ERROR = const(500)  # 5 %: a stored fit this good needs no collecting, and a
+#                               calibration session ends with one (MotionCal enables Send Cal
+#                               below 5 %)
 _SAVE_RETRY_US = const(60000000)  # a failed save is retried after 60 s
 _ERROR_BACKOFF_US = const(20000)  # after a bus error: do not hammer a dead bus
-_GOOD_FIT_ERROR = const(500)  # 5 %: a stored fit this good needs no collecting (MotionCal
-#                               enables Send Cal below 5 %)
 _FIELD_TOL_PCT = const(10)    # interference window floor, % (firmware.compass's default)
 _FIELD_TOL_MAX_PCT = const(50)
 _FIT_SIGMAS = const(3)        # window >= 3 x the fit's RMS radial error
 _US_PER_S = const(1000000)
-CONFIG_EVERY = const(1)       # samples between configuration read-backs (docs/faults.md)
-_EVIDENCE_PERIODS = const(4)  # a step counts as at most 4 sample periods of evidence
 _GAP_CAP_US = const(0x10000000)  # the time since the last read stops counting at 268 s
 _ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
 _ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
-_HMC_OVERFLOW = const(-4096)
-_DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
-_QUIET_HINT_US = const(3000000)  # status_line: no new direction for 3 s before "planar"
 REPORT_EVERY = const(25)      # run(): steps between reports (0.5 s at 50 Hz)
 
 
@@ -206,9 +189,10 @@ def _status_of(e):
 
 
 def _collector_attr(name, default):
-    # an app attribute that is the collector's (`default` while not collecting)
+    # an app attribute that is the collector's; when not collecting, what the last session
+    # left (firmware/session.py ENDED), else `default`
     return property(lambda self: getattr(self.collector, name) if self.collector is not None
-                    else default)
+                    else self._ended.get(name, default))
 
 
 class CompassApp:
@@ -225,207 +209,31 @@ class CompassApp:
                  model=10, declination_cdeg=0, store=None, delay_us=None, ticks_us=None,
                  capacity=None, solve_every=SOLVE_EVERY, fallback=True,
                  reinit_after=REINIT_AFTER, mag_options=None, learn=None, fast=None):
-        self.i2c = i2c
-        self._mag_map = AxisMap(mag_axes)
-        self._acc_map = AxisMap(accel_axes)
-        self._check_options(model, declination_cdeg, solve_every, reinit_after)
-        self._delay = delay_us if delay_us is not None else sleep_us
-        self._ticks, self._wrap = self._app_clock(ticks_us)
-        self._wall, self._wall_diff = wall_clock()
-        self.mag, self.accel = self._sensors(i2c, mag, accel, mag_options, delay_us)
-        self.model = model
-        self.capacity = capacity if capacity else DEFAULT_CAPACITY
-        self.solve_every = solve_every
-        self.fallback = fallback
-        self.reinit_after = reinit_after
-        self.learn = learn
-
-        kn = kernels() if fast is None or fast is True else None
-        self.fast = kn is not None
-        if kn is None:
-            from firmware import axes, calibration
-            self._correct = calibration.correct
-            self._apply = axes.apply
-        else:
-            self._correct = kn.correct
-            self._apply = kn.apply
-        compass.use_kernels(kn or False)
-        i2cdevice.use_kernels(kn or False)  # the drivers' decode
-
-        self.raw = array("h", (0, 0, 0))       # the last sample, chip axes, counts
-        self._cor = array("h", (0, 0, 0))      # corrected, sensor axes
-        self.body = array("h", (0, 0, 0))      # corrected, body frame (AN4248)
-        self._acc = array("h", (0, 0, 0))
-        self.gravity = array("h", (0, 0, 0))   # body frame, AN4248 sign (+1 g down, level)
         self._guard = _ReadGuard()
         self._step_guard = _StepGuard()
-        # the per-sample calls, looked up once: a driver's unguarded read where it has one
-        # (inside the read guard), the axis maps' arrays
-        self._mag_into = getattr(self.mag, "sample_into", None) or self.mag.read_into
-        self._mm = self._mag_map.m
-        self._am = self._acc_map.m
-        self._accel_auto = accel is None    # detected: look again later when absent
-        self.health = Health(self.mag.counts_per_gauss,
-                             _HMC_OVERFLOW if self.mag.KIND == "hmc5883l" else -32768,
-                             self.accel.counts_per_g if self.accel is not None else 16384)
-        self._mag_cfg = (getattr(self.mag, "config_matches", None)
-                         or getattr(self.mag, "config_ok", None))
-        self.tilt = self.accel is not None  # False: the level formula (no or implausible accel)
-        self._tilt_bad = 0
-        self._since_cfg = 0
-        self._cfg_due = True        # the first good sample reads the configuration back
-        self.verify_every = CONFIG_EVERY
-        self._accel_wait_us = 0
-        self.accel_retries = 0
-        self._ok = False
-        self._cfg_ok = True
-        self.heading_kang = -1
-        self.status = STATUS_STARTING
-        self.errors = {}
-        self.last_error = None      # the exception behind the last failed read
-        self.worst_stall_us = 0
-        self.slices = 0             # solver slices run
-        self.stored = 0
-        self.save_errors = 0
-        self.save_reason = None
-        self.worst_save_us = 0
-        self.reinits = 0
-        self.reinit_failures = 0
-        self.steps = 0
-        self.pending = None         # a calibration whose parameters jumped (see History)
-        self.change = None          # (parameter, value, low, high) of the jump
-        self.history_errors = 0
-        self.history_reason = None
-        self._hist = None           # firmware.history.History, from the first accept on
-        self._hist_flags = 0        # flags of the history entry due once the save succeeds
-
-        self.store = store
-        self.compass = Compass(declination_kang=cdeg_to_kang(declination_cdeg))
-        self.watch = FieldWatch(self.compass, self.body)  # firmware/health.py
-        self.dip = self.watch.dip   # the calibration's dip (DipCheck)
-        self._dip_unsaved = False   # this app saved the fit in force before its dip was known
-        self.collector = None
-        self.calibration = None
+        from firmware import appsetup  # construction only: dropped when the app is made
+        appsetup.setup(self, i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg,
+                       store, delay_us, ticks_us, capacity, solve_every, fallback,
+                       reinit_after, mag_options, learn, fast)
+        appsetup = None
+        drop("appsetup")
         self._use(self._load())
-
-        self._slices_per_step = 1
-        self._fails = 0             # failed reads in a row
-        self._reinit_level = 0
-        self._t_last = self._ticks()
-        self._dt = 0                # us since the previous step, capped: evidence, not time
-        self._gap_us = 0            # us since the magnetometer was last read successfully
-        self._stalled = False       # the last read came after a gap (a stall, bus errors)
-        self._dt_cap = _EVIDENCE_PERIODS * getattr(self.mag, "period_us", _DEFAULT_PERIOD_US)
-        self._age_us = 0
-        self._interf_us = 0
-        self._clean_us = 0
-        self._unsaved = False
-        self._save_wait_us = 0
         if learn or learn is None and not self._good_enough(self.calibration):
             self.calibrate()
 
-    @staticmethod
-    def _check_options(model, declination_cdeg, solve_every, reinit_after):
-        if model not in ("minmax", 4, 7, 10, "auto"):
-            raise ValueError("model=%r: expected 'minmax', 4, 7, 10 or 'auto'" % (model,))
-        if type(declination_cdeg) is not int:
-            raise TypeError("declination_cdeg=%r: expected an int in hundredths of a degree "
-                            "(e.g. 150 for 1.5 deg east)" % (declination_cdeg,))
-        if not -18000 <= declination_cdeg <= 18000:
-            raise ValueError("declination_cdeg=%d: expected -18000..18000 hundredths of a "
-                             "degree" % declination_cdeg)
-        if type(solve_every) is not int or solve_every < 1:
-            raise ValueError("solve_every=%r: expected an int >= 1 (kept samples)"
-                             % (solve_every,))
-        if type(reinit_after) is not int or reinit_after < 1:
-            raise ValueError("reinit_after=%r: expected an int >= 1 (failed reads)"
-                             % (reinit_after,))
-
-    def _app_clock(self, clock):
-        if self._mag_map.det != 1:
-            raise ValueError("mag_axes %r is a mirror image: a magnetometer's map is a rotation "
-                             "(chip and body frames are both right-handed)"
-                             % (self._mag_map.spec,))
-        if self._acc_map.det != -1:
-            raise ValueError("accel_axes %r is a rotation: an accelerometer's map to AN4248's "
-                             "gravity sign is a mirror (see firmware/axes.py)"
-                             % (self._acc_map.spec,))
-        if clock is None:
-            if ticks_us is None:
-                raise ValueError("ticks_us is needed off MicroPython (the simulator's clock)")
-            return ticks_us, True  # the port's ticks_us wraps: compare with ticks_diff
-        return clock, False
-
-    @staticmethod
-    def _sensors(i2c, mag, accel, mag_options, delay_us):
-        if mag is None or accel is None:
-            from firmware import detect
-            if mag is None:
-                opts = dict(mag_options or {})
-                if delay_us is not None:
-                    opts["delay_us"] = delay_us
-                mag = detect.detect(i2c, **opts)
-            if accel is None:
-                accel = detect.detect_accel(i2c)
-        return mag, (accel if accel else None)
-
-    # --- storage ----------------------------------------------------------------------
+    # --- storage (firmware/persist.py, loaded for each use) ---------------------------
     def _load(self):
-        self.load_reason = None
-        st = self.store
-        if st is None:
-            self.load_reason = "no_store"
-            return UNCALIBRATED
-        # records are tied to the sensor and its range: bind the store to the chip found
-        st.sensor = self.mag.KIND
-        st.range_code = self.mag.range_code
-        # a record that is intact but means nothing valid is skipped like a torn one
-        st.validate = Calibration.from_bytes
-        try:
-            return Calibration.from_bytes(st.load())
-        except StoreError as e:
-            self.load_reason = e.reason
-        except ValueError:
-            self.load_reason = LOAD_BAD_PAYLOAD
-        except OSError:
-            self.load_reason = LOAD_IO_ERROR
-        except MemoryError:
-            self.load_reason = LOAD_NO_MEMORY
-        return UNCALIBRATED
+        from firmware import persist
+        cal = persist.load(self)
+        persist = None
+        drop("persist", "slots")
+        return cal
 
     def _save(self, dip_only=False):
-        # dip_only: the fit in force again, now with its dip (not counted in .stored)
-        if self.store is None:
-            return
-        t = self._wall()
-        try:
-            self.store.save(self._record())
-            if not dip_only:
-                self.stored += 1
-            self._dip_unsaved = not self.dip.armed
-            self._unsaved = False
-            self.save_reason = None
-            if self._hist_flags and not dip_only:  # the history follows the store
-                self._history_record(self.calibration, self._hist_flags)
-                self._hist_flags = 0
-        except StoreError as e:
-            self._save_failed(e.reason)
-        except OSError as e:
-            self._save_failed("os_error %s" % (e.args[0] if e.args else "?"))
-        except MemoryError:
-            self._save_failed(LOAD_NO_MEMORY)
-        except ValueError as e:  # a payload the store refuses: a bug, never a crash
-            self._save_failed("bad_payload %s" % (e,))
-        d = self._wall_diff(self._wall(), t)
-        if d > self.worst_save_us:
-            self.worst_save_us = d
-
-    def _save_failed(self, reason):
-        self._dip_unsaved = False  # the retry saves the record with the dip known then
-        self.save_errors += 1
-        self.save_reason = reason
-        self._unsaved = True
-        self._save_wait_us = 0
+        from firmware import persist
+        persist.save(self, dip_only)
+        persist = None
+        drop("persist", "slots")
 
     # --- calibration in force ---------------------------------------------------------
     def _good_enough(self, cal):
@@ -457,14 +265,6 @@ class CompassApp:
         if self._dip_unsaved and not self._unsaved:
             self._save(True)
 
-    def _record(self):
-        # the payload saved: the calibration in force with the dip it measures, when known
-        c = self.calibration
-        d = self.dip
-        if d.armed and c.model is not None and c.dip_kang != d.ref:
-            c = c.with_dip(d.ref)
-        return c.to_bytes()
-
     def use_calibration(self, cal, save=True):
         """Put `cal` (a Calibration made outside the app, e.g. from MotionCal's packet by
         firmware/motioncal_mode.py) in force now, and save it to the store when `save`."""
@@ -476,13 +276,9 @@ class CompassApp:
         """Start collecting samples for a new calibration (imports the calibration machinery);
         the calibration in force stays until a better one is accepted."""
         if self.collector is None:
-            from firmware import samples
-            from firmware.calibrator import Collector
-            samples.use_kernels(compass.KERNELS or False)  # the kernel set the app chose
-            self.collector = Collector(model=self.model, capacity=self.capacity,
-                                       counts_per_gauss=self.mag.counts_per_gauss,
-                                       current=self.calibration, solve_every=self.solve_every,
-                                       fallback=self.fallback)
+            from firmware import session
+            self._session = session
+            self.collector = session.start(self)
             self._locate()
         return self.collector
 
@@ -511,55 +307,12 @@ class CompassApp:
             self.location.apply(self)
 
     def quick_calibrate(self, true_heading_cdeg, refine=False, samples=32):
-        """Hard iron from this pose and its known true heading (centidegrees, 0..35999,
-        clockwise from true north) with the field model's field: reads `samples` samples
-        (the board held still; tilt from the accelerometer, or level without one), puts the
-        result in force and saves it (firmware/quickcal.py). refine=True adds this pose to
-        those of the previous quick_calibrate() calls and averages them (poses at opposite
-        headings cancel most soft-iron error). Returns the Calibration; raises
-        CalibrationRejected (.reason: no_location, blackout_zone, no_samples,
-        offset_out_of_range, field_mismatch) and keeps the calibration in force; TypeError
-        / ValueError for bad arguments. Needs set_location() first."""
-        from firmware.quickcal import QuickCal
-        if type(true_heading_cdeg) is not int:
-            raise TypeError("true_heading_cdeg=%r: expected an int in hundredths of a degree "
-                            "(e.g. 9000 for east)" % (true_heading_cdeg,))
-        if not 0 <= true_heading_cdeg < 36000:
-            raise ValueError("true_heading_cdeg=%d: expected 0..35999 hundredths of a degree"
-                             % true_heading_cdeg)
-        if type(samples) is not int or not 1 <= samples <= 128:
-            raise ValueError("samples=%r: expected an int in 1..128 (samples averaged)"
-                             % (samples,))
-        qc = self.quick
-        if not refine or qc is None or qc.location is not self.location:
-            qc = QuickCal(self.location, self.mag.counts_per_gauss, self._mag_map)
-        n, raw, g = self._still_samples(samples)
-        qc.add(raw, g, n, cdeg_to_kang(true_heading_cdeg))
-        cal = qc.result()
-        self.quick = qc
-        self._use(cal)
-        if self.collector is not None:
-            self.collector.calibrator.current = cal  # a later full fit must beat it
-        self._save()
-        return cal
-
-    def _still_samples(self, n):
-        """Sum of n good raw samples (chip axes) and of their body gravity (None without an
-        accelerometer), read through step(); at most 4n tries."""
-        raw = [0, 0, 0]
-        g = [0, 0, 0] if self.accel is not None else None
-        k = 0
-        tries = 0
-        while k < n and tries < 4 * n:
-            tries += 1
-            if not self.step():
-                continue
-            k += 1
-            for i in range(3):
-                raw[i] += self.raw[i]
-                if g is not None:
-                    g[i] += self.gravity[i]
-        return k, raw, g
+        """Hard iron from this pose and its known true heading (firmware/quickcal.py
+        quick_calibrate has the whole story): puts the result in force, saves it and returns
+        it; raises CalibrationRejected with a reason and keeps the calibration in force.
+        Needs set_location() first."""
+        from firmware.quickcal import quick_calibrate
+        return quick_calibrate(self, true_heading_cdeg, refine, samples)
 
     @property
     def accuracy(self):
@@ -693,7 +446,7 @@ class CompassApp:
         return _status_of(g.error)
 
     def _vet(self):
-        """The sample's plausibility (firmware/health.py) and, every _CONFIG_EVERY samples or
+        """The sample's plausibility (firmware/health.py) and, every verify_every samples or
         after an anomaly, the chip's configuration read back."""
         h = self.health
         if h.saturated(self.raw):
@@ -864,64 +617,9 @@ class CompassApp:
         self._cfg_due = True  # (the runs of repeats go on: a cured chip ends them itself)
         return ok
 
-    # --- background solve -------------------------------------------------------------
+    # --- the calibration session (firmware/session.py, while collecting) ----------------
     def _solve(self):
-        t = self._wall()
-        c = self.collector
-        if c.job is None:
-            self._slices_per_step = c.start(getattr(self.mag, "period_us", _DEFAULT_PERIOD_US))
-        n = self._slices_per_step
-        while n and c.job is not None:
-            cal = c.slice()
-            if cal is not None:
-                self._accept(cal)
-            n -= 1
-        d = self._wall_diff(self._wall(), t)
-        self.slices = (self.slices + 1) & 0x3FFFFFFF
-        if d > self.worst_stall_us:
-            self.worst_stall_us = d
-
-    def _accept(self, cal):
-        jump = self._history_check(cal)
-        if jump is None:
-            self._use(cal)
-            if self._hist is not None:
-                self._hist_flags = 1  # firmware.history.FLAG_ACCEPTED
-            self._save()
-        else:
-            self.pending = cal
-            self.change = jump
-            self._history_record(cal, 2)  # FLAG_PENDING: evidence, not in force
-            # the calibration in force may not fit the board: its samples keep refining the
-            # evidence, as while relearning (firmware.calibrator.Collector.relearning)
-            self.collector.relearning = True
-
-    # --- history: a jump is not made current silently ------------------------------------
-    def _history_check(self, cal):
-        # -> None (in limits, or no history to judge by) or (parameter, value, low, high)
-        try:
-            if self._hist is None:
-                if self.store is None or not hasattr(self.store, "prefix"):
-                    return None
-                from firmware.history import History
-                self._hist = History(self.store)
-            return self._hist.check(cal, self.calibration)
-        except Exception as e:  # noqa: BLE001 - evidence only: never stop the loop for it
-            self._history_failed(e)
-        return None
-
-    def _history_record(self, cal, flags):
-        h = self._hist
-        if h is None:
-            return
-        try:
-            h.record(cal, flags, self.date_s() if self.date_s is not None else 0)
-        except Exception as e:  # noqa: BLE001 - as above
-            self._history_failed(e)
-
-    def _history_failed(self, e):
-        self.history_errors += 1
-        self.history_reason = "%s %s" % (type(e).__name__, e.args[0] if e.args else "")
+        self._session.solve(self)
 
     date_s = None  # a function returning the date in seconds, when the board knows it
 
@@ -929,16 +627,9 @@ class CompassApp:
         """Put the pending calibration in force: the hardware did change (a new mounting, a
         new chip). It is saved and starts a new baseline of the history. False when none
         is pending."""
-        cal = self.pending
-        if cal is None:
+        if self.pending is None:
             return False
-        self.pending = None
-        self.change = None
-        self.collector.relearning = False
-        self._use(cal)
-        if self._hist is not None:
-            self._hist_flags = 5  # FLAG_ACCEPTED | FLAG_BASELINE
-        self._save()
+        self._session.accept_change(self)
         if self.status == STATUS_CHANGED:
             self.status = STATUS_OK
         return True
@@ -948,10 +639,7 @@ class CompassApp:
         history); new fits are again judged against it. False when none is pending."""
         if self.pending is None:
             return False
-        self.pending = None
-        self.change = None
-        self.collector.relearning = False
-        self.collector.calibrator.current = self.calibration
+        self._session.discard_change(self)
         if self.status == STATUS_CHANGED:
             self.status = STATUS_OK
         return True
@@ -979,21 +667,9 @@ class CompassApp:
         return self.collector.coverage() if self.collector is not None else 0
 
     def progress(self):
-        c = self.calibration
-        col = self.collector
-        return {"coverage": self.coverage(),
-                "samples": col.calibrator.count if col is not None else 0,
-                "model": c.model, "fit_error": c.fit_error if c.model is not None else None,
-                "last_reason": self.last_reason, "last_detail": self.last_detail,
-                "accepted": self.accepted, "refused": self.refused,
-                "collecting": col is not None, "solving": self.solving,
-                "solve_model": col.job_model if self.solving else None,
-                "status": self.status,
-                "interference": self.compass.interference or self.status == STATUS_INTERFERENCE,
-                "relearning": self.relearning, "stored": self.stored,
-                "save_errors": self.save_errors, "load_reason": self.load_reason,
-                "worst_stall_us": self.worst_stall_us, "change": self.change,
-                "history_errors": self.history_errors}
+        """The calibration's state as a dict (firmware/status.py progress)."""
+        from firmware.status import progress
+        return progress(self)
 
     def run(self, n=None, report=None, every=REPORT_EVERY, every_us=None):
         """step() n times (None: forever); report(app) every `every` steps, or every
@@ -1017,81 +693,7 @@ class CompassApp:
         return good
 
 
-def _pct(x100):
-    return "%d.%02d %%" % (x100 // 100, x100 % 100)
-
-
-# what a refusal asks the user to do (status_line); a reason not here is shown as is
-_HINTS = {"planar": "rotate about another axis, not only around",
-          "too_few_samples": "keep turning",
-          "low_coverage": "turn through more directions",
-          "fit_error_high": "move slowly, away from metal",
-          "field_out_of_range": "field implausible: a magnet near, or the wrong range?",
-          "field_mismatch": "field differs from the model here: wrong range, or a magnet?",
-          "soft_iron_out_of_range": "strong soft iron: move away from steel",
-          "inconsistent_samples": "the field changed while collecting (a magnet, a motor?): "
-                                  "samples dropped, keep turning",
-          "no_memory": "out of memory while solving"}
-
-
-def _story(app, p):
-    """The calibration's stage in words: collecting (coverage), solving, saved (once),
-    calibrated, and why not yet."""
-    out = []
-    model = p["model"]
-    col = app.collector
-    if app.stored != app.__dict__.get("_saved_shown", 0):
-        app._saved_shown = app.stored
-        out.append("saved")  # shown once after each save
-    if col is None:
-        out.append("calibrated: model %s fit %s" % (model, _pct(p["fit_error"]))
-                   if model is not None else "uncalibrated")
-        return out
-    out.append("%s; collecting %d %% (%d samples)" % (
-        "model %s fit %s" % (model, _pct(p["fit_error"])) if model is not None
-        else "uncalibrated", p["coverage"], p["samples"]))
-    if p["solving"]:
-        out.append("solving %s" % (p["solve_model"],))
-    reason = p["last_reason"]
-    # "planar" only once the user has stopped adding new directions (the collector is quiet):
-    # the first samples of a correct figure-8 lie near a plane too
-    if reason == "planar" and col.since_kept_us < _QUIET_HINT_US:
-        reason = "too_few_samples"
-    if reason and reason != "not_better":
-        out.append(_HINTS.get(reason, reason))
-    return out
-
-
 def status_line(app):
-    """One readable line: heading (marked when not tilt-compensated), status and flags, the
-    calibration's stage in words (collecting with its coverage, solving, saved once,
-    calibrated, and what to do when a fit is refused), accuracy, location."""
-    p = app.progress()
-    h = app.heading_kang
-    parts = ["heading %s deg%s" % ("---.-" if h < 0 else kang_to_str(h),
-                                   "" if app.accel is not None and app.tilt
-                                   else " (level, no tilt)"), app.status]
-    c = app.compass
-    flags = [n for n, f in (("interference", c.interference), ("dip>75", c.dip_high),
-                            ("pitch>80", c.gimbal)) if f]
-    if flags:
-        parts.append("flags " + ",".join(flags))
-    parts.extend(_story(app, p))
-    if app.relearning:
-        parts.append("relearning")
-    if app.save_errors:
-        parts.append("save failed: %s" % app.save_reason)
-    if app.change is not None:
-        parts.append("jump: %s %d outside %d..%d, accept_change() or discard_change()"
-                     % app.change)
-    from firmware.accuracy import NAMES, assess
-    lvl, why = assess(app)
-    parts.append("accuracy %d %s%s" % (lvl, NAMES[lvl], "" if why == NAMES[lvl]
-                                       else " (%s)" % why))
-    loc = app.location
-    if loc is not None:
-        parts.append("decl %s deg (model)" % kang_to_str(loc.declination_kang, True)
-                     if loc.usable else "decl manual")
-        if loc.status != "ok":
-            parts.append("location: %s" % loc.status)
-    return " | ".join(parts)
+    """One readable line of the app's state (firmware/status.py line, docs/calibration.md)."""
+    from firmware.status import line
+    return line(app)

@@ -27,7 +27,13 @@ kernels()         the fast-path module firmware.fast (viper/native code with the
                   the first call to force the plain path (tests compare the two).
 pick(kn, name, plain)  the function `name` of kernel set kn (None: kernels()), or `plain`
                   when there is none (kn False or None): a module's use_kernels().
+drop(*names)      forget the firmware modules `names` ("detect", "calibrator", ...): out of
+                  sys.modules and off the firmware package, so their code and tables are
+                  freed at the next collection once nothing else refers to them (a
+                  capability that is done; docs/design.md, memory). The next import loads
+                  the module afresh.
 """
+import sys
 import time
 
 try:
@@ -119,3 +125,12 @@ def pick(kn, name, plain):
     if kn is None:
         kn = kernels()
     return getattr(kn, name) if kn else plain
+
+
+def drop(*names):
+    """Forget the firmware modules `names` (see the module docstring)."""
+    pkg = sys.modules.get("firmware")
+    for name in names:
+        sys.modules.pop("firmware." + name, None)
+        if pkg is not None and name in pkg.__dict__:
+            delattr(pkg, name)

@@ -6,9 +6,9 @@ field vector (PX4's `calibrate mag quick`, ArduPilot's fixed-yaw calibration), i
     qc.add(raw_sum, gravity_sum, n, true_heading_kang)  # n samples of one pose, summed
     cal = qc.result()           # a 4-element-equivalent Calibration, or CalibrationRejected
 
-CompassApp.quick_calibrate(true_heading_cdeg) reads the samples, calls these and puts the
-result in force (docs/quick_calibration.md has the measured accuracy and when a full
-calibration is needed instead).
+CompassApp.quick_calibrate(true_heading_cdeg) (quick_calibrate(app, ...) below) reads the
+samples, calls these and puts the result in force (docs/quick_calibration.md has the measured
+accuracy and when a full calibration is needed instead).
 
 How. The field model gives the geomagnetic field at the board: horizontal H and down Z, in the
 magnetometer's counts. The known true heading minus the model's declination is the magnetic
@@ -46,7 +46,7 @@ from firmware.acceptance import REASON_FIELD_MISMATCH, REASON_OFFSET_OUT_OF_RANG
 from firmware.calibration import Calibration
 from firmware.compat import const
 from firmware.fixedpoint import rdiv
-from firmware.trig import ZERO_VECTOR, atan2, cos, norm14, sin
+from firmware.trig import ZERO_VECTOR, atan2, cdeg_to_kang, cos, norm14, sin
 
 REASON_NO_LOCATION = "no_location"
 REASON_BLACKOUT_ZONE = "blackout_zone"
@@ -177,3 +177,55 @@ def _attitude(g):
     t = (v[1] * sp + v[2] * cp + _R15) >> 15
     a = atan2(-v[0], t)  # pitch theta
     return sp, cp, sin(a), cos(a)
+
+
+def quick_calibrate(app, true_heading_cdeg, refine=False, samples=32):
+    """CompassApp.quick_calibrate: hard iron from this pose and its known true heading
+    (centidegrees, 0..35999, clockwise from true north) with the field model's field: reads
+    `samples` samples (the board held still; tilt from the accelerometer, or level without
+    one), puts the result in force and saves it. refine=True adds this pose to those of the
+    previous calls and averages them (poses at opposite headings cancel most soft-iron
+    error). Returns the Calibration; raises CalibrationRejected (.reason: no_location,
+    blackout_zone, no_samples, offset_out_of_range, field_mismatch) and keeps the
+    calibration in force; TypeError / ValueError for bad arguments. Needs
+    app.set_location() first."""
+    if type(true_heading_cdeg) is not int:
+        raise TypeError("true_heading_cdeg=%r: expected an int in hundredths of a degree "
+                        "(e.g. 9000 for east)" % (true_heading_cdeg,))
+    if not 0 <= true_heading_cdeg < 36000:
+        raise ValueError("true_heading_cdeg=%d: expected 0..35999 hundredths of a degree"
+                         % true_heading_cdeg)
+    if type(samples) is not int or not 1 <= samples <= 128:
+        raise ValueError("samples=%r: expected an int in 1..128 (samples averaged)"
+                         % (samples,))
+    qc = app.quick
+    if not refine or qc is None or qc.location is not app.location:
+        qc = QuickCal(app.location, app.mag.counts_per_gauss, app._mag_map)
+    n, raw, g = _still_samples(app, samples)
+    qc.add(raw, g, n, cdeg_to_kang(true_heading_cdeg))
+    cal = qc.result()
+    app.quick = qc
+    app._use(cal)
+    if app.collector is not None:
+        app.collector.calibrator.current = cal  # a later full fit must beat it
+    app._save()
+    return cal
+
+
+def _still_samples(app, n):
+    """Sum of n good raw samples (chip axes) and of their body gravity (None without an
+    accelerometer), read through app.step(); at most 4n tries."""
+    raw = [0, 0, 0]
+    g = [0, 0, 0] if app.accel is not None else None
+    k = 0
+    tries = 0
+    while k < n and tries < 4 * n:
+        tries += 1
+        if not app.step():
+            continue
+        k += 1
+        for i in range(3):
+            raw[i] += app.raw[i]
+            if g is not None:
+                g[i] += app.gravity[i]
+    return k, raw, g

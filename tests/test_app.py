@@ -23,6 +23,7 @@ import app_world as W  # noqa: E402
 from host_sim import motion  # noqa: E402
 
 SESSION_S = 40                 # a 30 s figure8() period and then some
+END_S = 10                     # then still: the session ends once it brings no new direction
 MEAN_TOL_CDEG = 100            # mean of 16 samples within 1 deg of the true heading
 SINGLE_TOL_CDEG = 300          # any single sample within 3 deg
 HARD_IRON_TOL_UT = 1.0
@@ -38,16 +39,25 @@ class Session:
         self.app = W.make_app(self.b, store=self.store, **kw)
         self.progress = []      # (t_s, progress dict) once per simulated second
         self.accepts = []       # (t_us, Calibration) in order
+        self.collecting = None  # (progress, held samples, coverage) at the session's last step
+        self.ended_at_s = None  # when the collector left, once the board lies still
         self._next = 0
         W.run_until(self.app, self.b, SESSION_S, self._watch)
         self.final = self.app.progress()  # other tests go on stepping the app
-        self.final_count = self.app.calibrator.count
-        self.final_coverage = self.app.calibrator.coverage()
+        # then the board is put down: no new direction, and the session ends
+        W.hold(self.b, 30.0, 0.0, 0.0)
+        W.run_until(self.app, self.b, SESSION_S + END_S, self._ended)
+
+    def _ended(self, app):
+        if app.collector is None and self.ended_at_s is None:
+            self.ended_at_s = self.b.clock.now_us / 1e6
 
     def _watch(self, app):
         now = self.b.clock.now_us
         if app.accepted > len(self.accepts):
             self.accepts.append((now, app.calibration))
+        if app.collector is not None:
+            self.collecting = (app.progress(), app.calibrator.count, app.calibrator.coverage())
         if now >= self._next:
             self._next += 1000000
             self.progress.append((now // 1000000, app.progress()))
@@ -136,18 +146,33 @@ def test_progress_reports_coverage_samples_model_fit_error_and_refusals(session)
     assert before and all(p["model"] is None and p["fit_error"] is None for p in before)
     reasons = [p["last_reason"] for t, p in prog if p["last_reason"]]
     assert reasons and set(reasons) <= set(REASONS)
-    samples = [p["samples"] for t, p in prog]
+    samples = [p["samples"] for t, p in prog if p["collecting"]]
     assert samples == sorted(samples)  # the buffer only grows below its capacity
-    cov = [p["coverage"] for t, p in prog]
+    cov = [p["coverage"] for t, p in prog if p["collecting"]]
     assert all(0 <= c <= 100 for c in cov) and cov[-1] >= 50
     assert any(p["solving"] for t, p in prog)
     last = session.final
     c = session.accepts[-1][1]
     assert last["model"] == c.model == 10
     assert last["fit_error"] == c.fit_error
-    assert last["accepted"] == len(session.accepts)
-    assert last["coverage"] == session.final_coverage  # the cache is up to date
-    assert last["samples"] == session.final_count >= samples[-1]
+    assert last["accepted"] == len(session.accepts)  # kept when the session ended
+    p, count, coverage = session.collecting
+    assert p["coverage"] == coverage  # the cache is up to date
+    assert p["samples"] == count >= samples[-1]
+
+
+def test_the_calibration_session_ends_once_a_good_fit_is_saved_and_the_board_rests(session):
+    # the machinery leaves (firmware/session.py): nothing collects, the counters stay. While
+    # the figure-8 goes on the session goes on (a later fit may be better)
+    app = session.app
+    assert session.final["collecting"]
+    assert app.calibration.model == 10 and app.calibration.fit_error <= 500
+    assert app.stored >= 1 and not app._unsaved
+    # within 3 s of quiet + one solve (~2 s at 50 Hz) of being put down
+    assert SESSION_S < session.ended_at_s <= SESSION_S + 6, session.ended_at_s
+    assert app.collector is None and app.calibrator is None and not app.solving
+    assert app.progress()["samples"] == 0 and not app.progress()["collecting"]
+    assert app.accepted == len(session.accepts) and app.solves >= 2
 
 
 def test_worst_stall_is_measured_and_solves_run_in_many_slices(session):
@@ -178,7 +203,7 @@ def test_the_calibration_ages_by_measured_time():
     fe = 6000
     st.save(Calibration(model=4, offset=(5400, -4200, 3600), field=6000, field_out=6000,
                         fit_error=fe, samples=100, coverage=60).to_bytes())
-    app = W.make_app(b, store=CalStore("/", fs=fs))
+    app = W.make_app(b, store=CalStore("/", fs=fs))  # fit error > 5 %: a session starts
     t0 = b.clock.now_us
     W.run_until(app, b, 30.5)
     elapsed_s = (b.clock.now_us - t0) // 1000000

@@ -27,13 +27,13 @@ def session(setup, world_hook, seconds):
     fs = W.MemFs()
     app = W.make_app(b, store=CalStore("/", fs=fs))
     reasons, lines, fits = [], [], []
-    accept = app._accept
+    use = app._use  # every accepted fit is put in force through it (firmware/session.py)
 
     def spy(cal):
         if cal.model == 10:
             fits.append((b.clock.now_us / 1e6, cal))
-        accept(cal)
-    app._accept = spy
+        use(cal)
+    app._use = spy
 
     def each(a):
         r = a.last_reason

@@ -13,7 +13,8 @@ import sys
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from firmware.store import CalStore, encode_record
+from firmware.store import CalStore
+from firmware.slots import encode_record
 from firmware.errors import BusError, DataReadyTimeout, SensorOverflow
 from firmware.calibration import Calibration
 

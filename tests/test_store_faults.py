@@ -12,7 +12,8 @@ import pytest
 
 from firmware.calibration import Calibration
 from firmware.errors import StoreError
-from firmware.store import CalStore, decode_record, encode_record
+from firmware.store import CalStore
+from firmware.slots import decode_record, encode_record
 from tests import mp
 from tests.test_store import MODELS, FakeFs, PowerCut
 

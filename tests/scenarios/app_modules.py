@@ -1,6 +1,7 @@
 # Which firmware modules a board has loaded: after booting from a stored calibration and 100
-# steps (the heading-only runtime), then after it starts collecting. Prints two JSON lines:
-# [phase, modules, steps with a heading, collecting]. Run by tests/test_layout.py on
+# steps (the heading-only runtime), after it starts collecting, and once that session has
+# ended (the board still: no new direction). Prints three JSON lines: [phase, modules, steps
+# with a heading, collecting] (+ the steps run, in the last). Run by tests/test_layout.py on
 # CPython and MicroPython. The stored calibration is made by hand (a plausible 10-element
 # record for this world), so nothing of the calibration machinery runs before the check.
 import json
@@ -30,3 +31,9 @@ print(json.dumps(["heading_only", firmware_modules(), ok, app.collector is not N
 app.calibrate()
 ok = sum(1 for _ in range(100) if app.step())
 print(json.dumps(["collecting", firmware_modules(), ok, app.collector is not None]))
+n = 0
+ok = 0
+while app.collector is not None and n < 1500:  # 30 s at 50 Hz at the most
+    n += 1
+    ok += app.step()
+print(json.dumps(["ended", firmware_modules(), ok, app.collector is not None, n]))

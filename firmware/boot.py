@@ -1,0 +1,51 @@
+"""Boot a compass: find the chips, import a calibration file once, open the store, make the app.
+boards/main.py calls it; the memory benchmarks boot through it the same way.
+
+    from firmware.boot import start
+    app, note = start(i2c, "/", mag_axes="x,-y,-z", declination_cdeg=150)
+
+start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_options)
+  store_dir  the directory of the calibration store (firmware/store.py); None: no store
+  cal_file   a calibration file to import once (firmware/calimport.py); None:
+             store_dir + "/calibration.json"
+  returns (CompassApp, note): note is None, or what the calibration import said
+Exceptions: the drivers' OSError (SensorNotFound, BusError): wiring or power, the caller
+retries. What only boot needs (the chip scan, the import of a file) is dropped again
+(compat.drop), so a running board holds only what it runs (docs/design.md, memory).
+"""
+import os
+
+from firmware.compat import drop
+
+
+def _exists(path):
+    try:
+        os.stat(path)
+        return True
+    except OSError:
+        return False
+
+
+def start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_options):
+    from firmware.app import CompassApp
+    from firmware import detect
+    opts = dict(mag_options or {})
+    if delay_us is not None:
+        opts["delay_us"] = delay_us
+    mag = detect.detect(i2c, **opts)
+    store = None
+    note = None
+    if store_dir is not None:
+        from firmware.store import CalStore
+        store = CalStore(store_dir)
+        if cal_file is None:
+            cal_file = store_dir.rstrip("/") + "/calibration.json"
+        if _exists(cal_file):  # the importer (and its JSON parser) only when there is a file
+            from firmware.calimport import import_calibration
+            imported = import_calibration(cal_file, store, mag)
+            import_calibration = None
+            drop("calimport")
+            if imported is not None:
+                note = imported[1]
+    app = CompassApp(i2c, mag=mag, store=store, delay_us=delay_us, **app_options)
+    return app, note

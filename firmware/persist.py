@@ -1,0 +1,89 @@
+"""A CompassApp's calibration in the store: load at boot, save after each change, retry a
+failed save. Imported for each of those and dropped again (firmware.compat.drop), with the
+store's slot code (firmware/slots.py): a running board rarely saves.
+
+load(app)    -> the stored Calibration, or UNCALIBRATED with the reason in app.load_reason:
+             the newest slot whose record is intact AND whose payload Calibration.from_bytes
+             accepts (the store skips a torn, unreadable or meaningless slot and falls back to
+             an older one).
+save(app, dip_only)  the calibration in force, with the dip it measures when known
+             (firmware/health.py DipCheck). A failed save (OSError, StoreError, MemoryError)
+             is counted in app.save_errors, never raises, and is retried every
+             _SAVE_RETRY_US by CompassApp. dip_only: the fit in force again, now with its dip
+             (not counted in app.stored).
+"""
+from firmware.calibration import UNCALIBRATED, Calibration
+from firmware.errors import StoreError
+
+LOAD_BAD_PAYLOAD = "bad_payload"      # .load_reason: the record is intact, its payload is not
+LOAD_IO_ERROR = "io_error"            # .load_reason: the filesystem raised OSError
+LOAD_NO_MEMORY = "no_memory"          # .load_reason / .save_reason: MemoryError
+
+
+def load(app):
+    app.load_reason = None
+    st = app.store
+    if st is None:
+        app.load_reason = "no_store"
+        return UNCALIBRATED
+    # records are tied to the sensor and its range: bind the store to the chip found
+    st.sensor = app.mag.KIND
+    st.range_code = app.mag.range_code
+    # a record that is intact but means nothing valid is skipped like a torn one
+    st.validate = Calibration.from_bytes
+    try:
+        return Calibration.from_bytes(st.load())
+    except StoreError as e:
+        app.load_reason = e.reason
+    except ValueError:
+        app.load_reason = LOAD_BAD_PAYLOAD
+    except OSError:
+        app.load_reason = LOAD_IO_ERROR
+    except MemoryError:
+        app.load_reason = LOAD_NO_MEMORY
+    return UNCALIBRATED
+
+
+def save(app, dip_only):
+    if app.store is None:
+        return
+    t = app._wall()
+    try:
+        app.store.save(_record(app))
+        if not dip_only:
+            app.stored += 1
+        app._dip_unsaved = not app.dip.armed
+        app._unsaved = False
+        app.save_reason = None
+        if app._hist_flags and not dip_only and app.collector is not None:
+            from firmware import session  # the history follows the store
+            session.saved(app, app._hist_flags)
+            app._hist_flags = 0
+    except StoreError as e:
+        _failed(app, e.reason)
+    except OSError as e:
+        _failed(app, "os_error %s" % (e.args[0] if e.args else "?"))
+    except MemoryError:
+        _failed(app, LOAD_NO_MEMORY)
+    except ValueError as e:  # a payload the store refuses: a bug, never a crash
+        _failed(app, "bad_payload %s" % (e,))
+    d = app._wall_diff(app._wall(), t)
+    if d > app.worst_save_us:
+        app.worst_save_us = d
+
+
+def _failed(app, reason):
+    app._dip_unsaved = False  # the retry saves the record with the dip known then
+    app.save_errors += 1
+    app.save_reason = reason
+    app._unsaved = True
+    app._save_wait_us = 0
+
+
+def _record(app):
+    # the payload saved: the calibration in force with the dip it measures, when known
+    c = app.calibration
+    d = app.dip
+    if d.armed and c.model is not None and c.dip_kang != d.ref:
+        c = c.with_dip(d.ref)
+    return c.to_bytes()

@@ -1,0 +1,154 @@
+"""The calibration session of a CompassApp: collect, solve in slices, accept, judge against the
+history, save; then leave. Imported by CompassApp.calibrate(), dropped when the session ends.
+
+    app.calibrate()            # starts one (imports this module and the calibration machinery)
+    app.collector              # firmware.calibrator.Collector while it runs, None after
+
+A session ends once a calibration good enough to boot without collecting
+(CompassApp._good_enough: the configured model, fit error within 5 %) is in force and saved,
+nothing is pending, the app does not relearn, and the samples have stopped bringing new
+directions: a solve has run on every sample kept and none came for _DONE_QUIET_US (the
+user has stopped turning the board, or the buffer holds what the motion offers). Until
+then every solve may replace the fit with a better one. app.learn=True keeps it running. At the end
+the collector, the history and the modules of the calibration machinery are dropped
+(firmware.compat.drop), so the board's heap returns to what showing a heading needs
+(docs/design.md, memory; docs/benchmarks.md measures it).
+
+The steps (CompassApp._step calls solve() when a solve is running or due):
+  solve    a few slices of the running solve (firmware.calibrator.Collector.slice): each at
+           most solve.SLICE_OPS long-int operations; a step runs period / 4 ms of them.
+  accept   a calibration the Calibrator accepted (sour grapes: it beat the current one) is
+           judged against the history of accepted calibrations (firmware/history.py): inside
+           its limits it is put in force and saved; outside it is kept as .pending ("hardware
+           changed?") and not put in force until accept_change().
+"""
+from firmware import compass
+from firmware.compat import const, drop
+
+_DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
+_DONE_QUIET_US = const(3000000)  # no new direction for 3 s (the collector's quiet period)
+_FLAG_ACCEPTED = const(1)     # firmware.history's entry flags
+_FLAG_PENDING = const(2)
+_FLAG_BASELINE = const(4)
+# what a finished session leaves for CompassApp's counters (accepted, refused, ...)
+ENDED = ("accepted", "refused", "solves", "last_reason", "last_detail", "last_model")
+# the calibration machinery: loaded for a session, dropped at its end
+MACHINERY = ("session", "calibrator", "samples", "accum", "solve", "acceptance", "history")
+
+
+def start(app):
+    """A collector for `app` (firmware.calibrator.Collector), with the kernel set it chose."""
+    from firmware import samples
+    from firmware.calibrator import Collector
+    samples.use_kernels(compass.KERNELS or False)
+    c = Collector(model=app.model, capacity=app.capacity,
+                  counts_per_gauss=app.mag.counts_per_gauss, current=app.calibration,
+                  solve_every=app.solve_every, fallback=app.fallback)
+    return c
+
+
+def solve(app):
+    t = app._wall()
+    c = app.collector
+    if c.job is None:
+        app._slices_per_step = c.start(getattr(app.mag, "period_us", _DEFAULT_PERIOD_US))
+    n = app._slices_per_step
+    while n and c.job is not None:
+        cal = c.slice()
+        if cal is not None:
+            accept(app, cal)
+        n -= 1
+    d = app._wall_diff(app._wall(), t)
+    app.slices = (app.slices + 1) & 0x3FFFFFFF
+    if d > app.worst_stall_us:
+        app.worst_stall_us = d
+    if app.collector is not None and app.collector.job is None:
+        end_if_done(app)
+
+
+def accept(app, cal):
+    jump = history_check(app, cal)
+    if jump is None:
+        app._use(cal)
+        if app._hist is not None:
+            app._hist_flags = _FLAG_ACCEPTED
+        app._save()
+    else:
+        app.pending = cal
+        app.change = jump
+        history_record(app, cal, _FLAG_PENDING)  # evidence, not in force
+        # the calibration in force may not fit the board: its samples keep refining the
+        # evidence, as while relearning (firmware.calibrator.Collector.relearning)
+        app.collector.relearning = True
+
+
+def end_if_done(app):
+    """End the session when its job is done (see the module docstring): the collector, the
+    history and the calibration machinery leave. True when it ended."""
+    c = app.collector
+    if (app.learn or app.pending is not None or app._unsaved or c.relearning
+            or c.job is not None or c.kept or c.since_kept_us < _DONE_QUIET_US
+            or not app._good_enough(app.calibration)):
+        return False
+    for name in ENDED:
+        app._ended[name] = getattr(c, name)
+    app.collector = None
+    app._hist = None
+    app._session = None
+    drop(*MACHINERY)
+    return True
+
+
+def history_check(app, cal):
+    # -> None (in limits, or no history to judge by) or (parameter, value, low, high)
+    try:
+        if app._hist is None:
+            if app.store is None or not hasattr(app.store, "prefix"):
+                return None
+            from firmware.history import History
+            app._hist = History(app.store)
+        return app._hist.check(cal, app.calibration)
+    except Exception as e:  # noqa: BLE001 - evidence only: never stop the loop for it
+        history_failed(app, e)
+    return None
+
+
+def history_record(app, cal, flags):
+    h = app._hist
+    if h is None:
+        return
+    try:
+        h.record(cal, flags, app.date_s() if app.date_s is not None else 0)
+    except Exception as e:  # noqa: BLE001 - as above
+        history_failed(app, e)
+
+
+def history_failed(app, e):
+    app.history_errors += 1
+    app.history_reason = "%s %s" % (type(e).__name__, e.args[0] if e.args else "")
+
+
+def saved(app, flags):
+    """The store took the calibration in force: the history follows it."""
+    history_record(app, app.calibration, flags)
+
+
+def accept_change(app):
+    cal = app.pending
+    app.pending = None
+    app.change = None
+    app.collector.relearning = False
+    app._use(cal)
+    if app._hist is not None:
+        app._hist_flags = _FLAG_ACCEPTED | _FLAG_BASELINE
+    app._save()
+    end_if_done(app)
+
+
+def discard_change(app):
+    app.pending = None
+    app.change = None
+    c = app.collector
+    c.relearning = False
+    c.calibrator.current = app.calibration
+    end_if_done(app)

@@ -1,0 +1,103 @@
+"""MicroPython only: the live heap of what a board is doing, profile by profile, booted the way
+boards/main.py boots (detect, the store, the calibration file check, the app).
+
+    micropython -m host_sim.cli.benchmarks.profiles SESSION.bin STOREDIR PROFILE [--romfs IMG]
+
+SESSION.bin: a recorded session (bench.py writes it; mag bytes then accel bytes, 6 per sample),
+replayed by an allocation-free bus, so host_sim's simulator is never imported here. STOREDIR:
+the board's filesystem directory for the calibration store. Every figure is after
+gc.collect(), minus the heap before the first firmware import (the interpreter, this script
+and the session bytes). PROFILE:
+  calibrate  a board with an empty store: it collects, solves, accepts and saves a 10-element
+             calibration, then shows 1000 headings. Reports the live heap once the fit is
+             saved ("saved"), after the 1000 headings ("after") and the firmware modules
+             still loaded; leaves the record in STOREDIR.
+  heading    a board whose store holds that calibration: boot, then 1000 headings. Reports
+             the live heap after them ("after") and the modules loaded.
+Both then run 1000 more headings and report the bytes allocated per sample over those
+(micropython.mem_total): the steady state, once the dip a new fit measures has been saved.
+With --romfs IMAGE the firmware is imported from a ROMFS image mounted at /rom (bytecode in
+place, as frozen). With --min only "complete" is printed (the smallest-heap search runs this
+with -X heapsize=N and looks at it).
+"""
+import gc
+import sys
+
+from host_sim.cli.benchmarks import common
+
+PERIOD_US = 5000
+HEADINGS = 1000
+
+
+def live():
+    gc.collect()
+    gc.collect()
+    return gc.mem_alloc()
+
+
+def firmware_modules():
+    return sorted(n[9:] for n in sys.modules if n.startswith("firmware."))
+
+
+def boot(bus, store_dir, clock):
+    # boards/main.py's sequence, with the replay bus and the benchmark's clock
+    from firmware.boot import start
+    return start(bus, store_dir, mag_options={"odr": 200}, ticks_us=clock.ticks)[0]
+
+
+def steps(app, clock, n):
+    ok = 0
+    for _ in range(n):
+        clock.now += PERIOD_US
+        if app.step():
+            ok += 1
+    return ok
+
+
+def main():
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    if not common.IS_MP:
+        common.emit({"interpreter": common.interpreter(), "skipped": "needs gc.mem_alloc"})
+        return
+    with open(args[0], "rb") as f:
+        data = f.read()
+    n = len(data) // 12
+    mag, acc = data[:6 * n], data[6 * n:12 * n]
+    store_dir, profile = args[1], args[2]
+    if "--romfs" in sys.argv:
+        import vfs
+        with open(args[3], "rb") as f:
+            rom = f.read()
+        vfs.mount(vfs.VfsRom(rom), "/rom")
+        sys.path.insert(0, "/rom")
+    bus = common.replay_board(mag, acc)
+    clock = common.Clock()
+    base = live()
+    res = {"interpreter": common.interpreter(), "profile": profile}
+    app = boot(bus, store_dir, clock)
+    res["boot"] = live() - base
+    if profile == "calibrate":
+        for _ in range(3 * n):
+            clock.now += PERIOD_US
+            app.step()
+            if app.calibration.model == 10 and app.stored and not app.solving:
+                break
+        res["saved"] = live() - base
+        res["model"] = app.calibration.model
+    ok = steps(app, clock, HEADINGS)
+    res["after"] = live() - base
+    t = common.mem_total()  # the steady state: 1000 more (the first may save the dip once)
+    ok += steps(app, clock, HEADINGS)
+    per_sample = (common.mem_total() - t) // HEADINGS
+    res["complete"] = app.calibration.model == 10 and ok == 2 * HEADINGS
+    res["bytes_per_sample"] = per_sample
+    res["status"] = app.status
+    if "--min" in sys.argv:
+        common.emit({"complete": res["complete"]})
+        return
+    res["modules"] = firmware_modules()
+    common.emit(res)
+
+
+if __name__ == "__main__":
+    main()
