@@ -216,7 +216,7 @@ class CompassApp:
                        store, delay_us, ticks_us, capacity, solve_every, fallback,
                        reinit_after, mag_options, learn, fast)
         appsetup = None
-        drop("appsetup")
+        drop("appsetup", "devinit")  # the drivers' start-up and error texts too
         self._use(self._load())
         if learn or learn is None and not self._good_enough(self.calibration):
             self.calibrate()
@@ -615,6 +615,7 @@ class CompassApp:
         else:
             self.reinit_failures += 1
         self._cfg_due = True  # (the runs of repeats go on: a cured chip ends them itself)
+        drop("devinit")  # the drivers' start-up code and error texts
         return ok
 
     # --- the calibration session (firmware/session.py, while collecting) ----------------

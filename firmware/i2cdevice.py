@@ -39,41 +39,24 @@ first (MPU6050), sign-extended by hand. The drivers call it as `decode`, which u
 points at its mirror in firmware/fast.py where the port has the native emitter (the same
 bits; use_kernels(False): this one), as firmware.compass.use_kernels does for the heading.
 """
-from firmware.compat import const, pick, ticks_diff, ticks_us, wait_clock
-from firmware.errors import BusError, DataReadyTimeout, SensorNotFound, SensorOverflow
+from firmware.compat import pick, ticks_diff, ticks_us
+from firmware.errors import BusError, DataReadyTimeout, SensorNotFound
 
-_MIN_POLL_US = const(250)       # no faster status polling than this (an I2C status read ~100 us)
-_MAX_TIMEOUT_US = const(1 << 29)  # keeps every wait computation a small int on 32-bit ports
-
-# errno values ports raise from machine.I2C (116 is ETIMEDOUT in the ESP-IDF's newlib)
-_ERRNO_NAMES = {5: "EIO", 19: "ENODEV: no ACK", 110: "ETIMEDOUT", 116: "ETIMEDOUT"}
 _OURS = (BusError, DataReadyTimeout, SensorNotFound)  # already say what happened (a module
 #                                                      constant: a literal tuple is built per use)
 
 
-def _errno(e):
-    n = getattr(e, "errno", None)
-    if n is None and e.args:  # CPython: OSError(19).errno is None, args[0] holds it
-        n = e.args[0]
-    return n if type(n) is int else None
-
-
 def bus_error(e, address, register):
-    """The BusError for OSError `e` raised by a transaction with `address`/`register`."""
-    n = _errno(e)
-    where = "I2C error at address 0x%02X" % address if address is not None else "I2C scan error"
-    if register is not None:
-        where += ", register 0x%02X" % register
-    return BusError("%s: errno %s (%s)" % (where, n, _ERRNO_NAMES.get(n, e)),
-                    address=address, register=register, errno=n)
+    """The BusError for OSError `e` raised by a transaction with `address`/`register`
+    (firmware/devinit.py writes it)."""
+    from firmware.devinit import bus_error
+    return bus_error(e, address, register)
 
 
 def option_code(chip, name, value, table):
     """The register code of a keyword option: its index in `table`, or ValueError naming it."""
-    if value not in table:
-        raise ValueError("%s %s=%s: expected one of %s"
-                         % (chip, name, value, ", ".join(str(v) for v in table)))
-    return table.index(value)
+    from firmware.devinit import option_code
+    return option_code(chip, name, value, table)
 
 
 def int16x3_into(d, buf, msb):
@@ -87,10 +70,6 @@ def int16x3_into(d, buf, msb):
     buf[1] = v - 0x10000 if v & 0x8000 else v
     v = d[4 + h] << 8 | d[4 + msb]
     buf[2] = v - 0x10000 if v & 0x8000 else v
-
-
-def _hex(b):
-    return " ".join("0x%02X" % v for v in b)
 
 
 decode = int16x3_into  # the drivers' per-sample decode: it or its fast mirror (use_kernels)
@@ -139,20 +118,8 @@ class Device:
         self._buf = bytearray(6)        # the one scratch buffer: data block, status, config byte
         self._b1 = memoryview(self._buf)[0:1]
         self.guard = BusGuard(self)
-        self._set_timing(period_us, delay_us, timeout_us)
-
-    def _set_timing(self, period_us, delay_us, timeout_us):
-        # Default bound: two periods (the first set after a configuration write takes up to
-        # two, HMC5883L datasheet) plus 10 ms of bus latency.
-        self._delay, self._measured = wait_clock(delay_us)
-        if timeout_us is None:
-            timeout_us = 2 * period_us + 10000
-        if type(timeout_us) is not int or not 0 < timeout_us <= _MAX_TIMEOUT_US:
-            raise ValueError("timeout_us=%r: expected an int of 1..%d microseconds"
-                             % (timeout_us, _MAX_TIMEOUT_US))
-        self.timeout_us = timeout_us
-        self.period_us = period_us  # the output data period: the app sizes its work by it
-        self._poll_us = max(period_us >> 4, _MIN_POLL_US)  # latency <= 1/16 of a period
+        from firmware.devinit import set_timing
+        set_timing(self, period_us, delay_us, timeout_us)
 
     # -- transfers: raw port errors; callers sit inside `with self.guard:`
     def _read_into(self, reg, buf):
@@ -169,16 +136,9 @@ class Device:
         self._i2c.writeto_mem(self.address, reg, self._b1)
 
     def _probe(self, reg, n, name):
-        # The ID read (n bytes from reg, a view of the scratch buffer): no answer means no chip
-        # here (SensorNotFound), not a failed transfer.
-        view = memoryview(self._buf)[0:n]
-        try:
-            with self.guard:
-                self._read_into(reg, view)
-        except BusError as e:
-            raise SensorNotFound("no %s at 0x%02X: reading ID register 0x%02X failed (errno %s)"
-                                 % (name, self.address, reg, e.errno), address=self.address)
-        return view
+        # the ID read: no answer means no chip here (SensorNotFound), not a failed transfer
+        from firmware.devinit import probe
+        return probe(self, reg, n, name)
 
     def wait_ready(self, reg, mask):
         """Poll status register `reg` until a bit of `mask` is set; return the status byte."""
@@ -214,10 +174,8 @@ class Device:
                 return status
 
     def _timed_out(self, reg, status, waited):
-        raise DataReadyTimeout(
-            "no data ready from 0x%02X after %d us: status register 0x%02X = 0x%02X "
-            "(chip in standby, or not converting?)" % (self.address, waited, reg, status),
-            address=self.address, waited_us=waited)
+        from firmware.devinit import timed_out
+        timed_out(self, reg, status, waited)
 
 
 class Magnetometer(Device):
@@ -244,28 +202,13 @@ class Magnetometer(Device):
     """
 
     def __init__(self, i2c, address, delay_us, timeout_us, *values):
-        codes = [option_code(self.KIND.upper(), self.OPTIONS[i], v, self.TABLES[i])
-                 for i, v in enumerate(values)]
-        periods, counts = self.PER_CODE
-        super().__init__(i2c, address, periods[codes[1]], delay_us, timeout_us)
-        self.chip = self.KIND.upper()
-        reg, self._status, self._ready, self._data, self._config = self.REGISTERS
-        self._stale, self._alarms = self.FLAGS
-        self.range_code = codes[0]
-        self.counts_per_gauss = counts[codes[0]]
-        self.suspect = False  # the status hinted at old data on the last read (DOR, LOCK)
-        self.skipped = 0      # reads whose status said a sample set was lost (QMC5883L DOR)
-        self.expect_id(reg, self.ID)
-        self.set_config(self._config_of(codes))
-        self.configure()
+        from firmware.devinit import magnetometer
+        magnetometer(self, Device.__init__, i2c, address, delay_us, timeout_us, values)
 
     def expect_id(self, reg, want):
         """The ID probe: SensorNotFound unless the registers from `reg` on read `want` (bytes)."""
-        got = self._probe(reg, len(want), self.chip)
-        if got != want:
-            raise SensorNotFound("no %s at 0x%02X: ID register 0x%02X reads %s, expected %s"
-                                 % (self.chip, self.address, reg, _hex(got), _hex(want)),
-                                 address=self.address)
+        from firmware.devinit import expect_id
+        expect_id(self, reg, want)
 
     def set_config(self, want):
         """The bytes the configuration registers must hold from self._config on."""
@@ -279,17 +222,9 @@ class Magnetometer(Device):
             self._configure()
 
     def _check_config(self):
-        # the read-back after configuring: a chip that does not keep what was written is not
-        # the chip named (or not a chip at all)
-        if self.config_matches():
-            return
-        b = self._buf
-        i = 0
-        while b[i] == self._want[i]:
-            i += 1
-        raise SensorNotFound("no %s at 0x%02X: register 0x%02X written 0x%02X reads back 0x%02X"
-                             % (self.chip, self.address, self._config + i, self._want[i], b[i]),
-                             address=self.address)
+        # the read-back after configuring: SensorNotFound when the chip does not keep it
+        from firmware.devinit import check_config
+        check_config(self)
 
     def config_ok(self):
         """True when the configuration registers still hold this driver's configuration (one
@@ -341,14 +276,13 @@ class Magnetometer(Device):
 
     def overflow(self, raw, detail):
         """SensorOverflow for raw sample `raw` (a tuple, the chip's axes): `detail` says why."""
-        return SensorOverflow("%s at 0x%02X: %s" % (self.chip, self.address, detail),
-                              address=self.address, raw=raw)
+        from firmware.devinit import overflow
+        return overflow(self, raw, detail)
 
     def _overflow_bit(self, bit, advice):
         # the status said an axis is beyond the range: the block is read (data lock released)
-        raw = self.held(0)
-        raise self.overflow(raw, "%s set (an axis is beyond +-%d G), raw %s; %s"
-                            % (bit, self.TABLES[0][self.range_code], raw, advice))
+        from firmware.devinit import overflow_bit
+        overflow_bit(self, bit, advice)
 
 
 use_kernels()

@@ -16,8 +16,9 @@ PIPELINE = ["compat", "errors", "fixedpoint", "i2cdevice", "detect", "qmc5883l",
             "acceptance", "calibrator", "kang_tables", "trig", "compass", "store", "slots",
             "history", "health", "app", "fast",
             # the app's capabilities, each loaded for its job and dropped after it (boot,
-            # construction, the store's load and save, the calibration session, the status line)
-            "boot", "appsetup", "persist", "session", "status"]
+            # construction, the drivers' start-up and error texts, the store's load and save,
+            # the calibration session, the status line)
+            "boot", "appsetup", "devinit", "persist", "session", "status"]
 CALIBRATION_MACHINERY = {"firmware.calibrator", "firmware.solve", "firmware.accum",
                          "firmware.samples", "firmware.acceptance", "firmware.session",
                          "firmware.history"}

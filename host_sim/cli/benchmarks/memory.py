@@ -14,12 +14,12 @@ not count). Steps, each after gc.collect() (gc.mem_alloc = live heap):
              300-sample buffer and hash, Compass), before the first sample
   peak       the largest live heap seen while solves run in the first lap of the session
              (gc.collect() after every step that ran a solver slice)
-  running    after a second lap: the buffer holds what the session gives it (a distance-
-             separated buffer saturates near 3/4 of its capacity on one sphere; its arrays
-             are preallocated, so the fill hardly changes the heap)
+  running    after a second lap: the calibration session has ended once its fit was
+             saved and the replay brought no new direction (firmware/session.py), and its
+             machinery has left; "session_ended" says whether it had
   fast       + firmware.fast (the viper kernels and their tables)
 Also: bytes allocated per sample in the steady state (micropython.mem_total over 1000 steps
-once the session is calibrated, the collector still offered every sample), whether the run
+once the session is calibrated), whether the run
 was complete (a 10-element calibration accepted, then 1000 headings), and the moment sums
 that are small ints on a 64-bit port but long ints (heap objects) on a 32-bit board.
 With --min the script only runs the session (the smallest-heap search runs it with
@@ -54,6 +54,28 @@ def load(path):
         data = f.read()
     n = len(data) // 12
     return data[:6 * n], data[6 * n:12 * n]
+
+
+def machinery(app):
+    """What the calibration session holds (read while it runs: it leaves when it is done)."""
+    cal = app.calibrator
+    out = {"held": cal.count, "capacity": cal.capacity}
+    mid = 0
+    big = 0
+    for v in cal.moments.s:
+        a = v if v >= 0 else -v
+        if a >= (1 << 62):
+            big += 1
+        elif a >= (1 << 30):
+            mid += 1
+    out["moment_sums"] = {"long_on_32bit_only": mid, "long_on_both": big,
+                          "total": len(cal.moments.s)}
+    # preallocated arrays: the same bytes on every port (the rest is object words)
+    buf = cal.buffer
+    arrays = [buf.data, buf.evicted, buf._cells, buf._table, buf.region_counts, app.raw,
+              app.body, app.gravity, app._cor, app._acc]
+    out["array_bytes"] = sum(len(bytes(a)) for a in arrays)
+    return out
 
 
 def main():
@@ -91,6 +113,7 @@ def main():
     m["app"] = live()
     peak = 0
     solving = 0
+    seen = {}
     for _ in range(steps):  # first lap: the buffer fills and solves run
         clock.now += PERIOD_US
         s0 = app.slices
@@ -99,18 +122,21 @@ def main():
             solving += 1
             a = live()
             peak = a if a > peak else peak
+            if app.collector is not None:
+                seen = machinery(app)
     for _ in range(steps):
         clock.now += PERIOD_US
         app.step()
     ok = 0
     t = mem_total()
-    for _ in range(1000):  # steady state: calibrated, the collector still offered every sample
+    for _ in range(1000):  # steady state: calibrated
         clock.now += PERIOD_US
         if app.step():
             ok += 1
     per_sample = (mem_total() - t) // 1000 if t is not None else None
     res["complete"] = app.calibration.model == 10 and ok == 1000
     res["steady_bytes_per_sample"] = per_sample
+    res["session_ended"] = app.collector is None
     res["fast"] = app.fast
     if "--min" in sys.argv:
         common.emit(res)
@@ -130,24 +156,7 @@ def main():
                              "app_running": m["running"] - base,
                              "peak_solving": (peak - base) if solving else None,
                              "fast_module": m["fast"] - m["after"]}
-    res["held"] = app.calibrator.count
-    res["capacity"] = app.calibrator.capacity
-    res["solve_slices_seen"] = solving
-    mid = 0
-    big = 0
-    for v in app.calibrator.moments.s:
-        a = v if v >= 0 else -v
-        if a >= (1 << 62):
-            big += 1
-        elif a >= (1 << 30):
-            mid += 1
-    res["moment_sums"] = {"long_on_32bit_only": mid, "long_on_both": big,
-                          "total": len(app.calibrator.moments.s)}
-    # preallocated arrays: the same bytes on every port (the rest is object words)
-    buf = app.calibrator.buffer
-    arrays = [buf.data, buf.evicted, buf._cells, buf._table, buf.region_counts, app.raw,
-              app.body, app.gravity, app._cor, app._acc]
-    res["array_bytes"] = sum(len(bytes(a)) for a in arrays)
+    res.update(seen)
     res["frozen_or_mpy"] = ("romfs" if rom is not None else
                             "mpy" if firmware.app.__file__.endswith(".mpy") else "py")
     common.emit(res)

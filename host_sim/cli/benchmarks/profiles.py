@@ -9,8 +9,9 @@ the board's filesystem directory for the calibration store. Every figure is afte
 gc.collect(), minus the heap before the first firmware import (the interpreter, this script
 and the session bytes). PROFILE:
   calibrate  a board with an empty store: it collects, solves, accepts and saves a 10-element
-             calibration, then shows 1000 headings. Reports the live heap once the fit is
-             saved ("saved"), after the 1000 headings ("after") and the firmware modules
+             calibration ("saved": the live heap then, the session still running); then the
+             board is put down (it jitters about directions the buffer holds) until the
+             session ends ("ended"), then 1000 headings ("after"), and the firmware modules
              still loaded; leaves the record in STOREDIR.
   heading    a board whose store holds that calibration: boot, then 1000 headings. Reports
              the live heap after them ("after") and the modules loaded.
@@ -84,6 +85,17 @@ def main():
                 break
         res["saved"] = live() - base
         res["model"] = app.calibration.model
+        # the board put down: it jitters about the directions of the first 50 samples, which
+        # the buffer holds already, so the session ends (firmware/session.py)
+        k = 0
+        while app.collector is not None and k < 12000:  # 60 s at the most
+            if k % 50 == 0:
+                bus.rewind()
+            clock.now += PERIOD_US
+            app.step()
+            k += 1
+        res["ended"] = live() - base if app.collector is None else None
+        res["ended_after_s"] = k * PERIOD_US // 1000000
     ok = steps(app, clock, HEADINGS)
     res["after"] = live() - base
     t = common.mem_total()  # the steady state: 1000 more (the first may save the dip once)
