@@ -11,10 +11,9 @@ board.MODE = "motioncal": stream to PJRC MotionCal instead and take its Send Cal
 import time
 
 import board
-from firmware.app import CompassApp, status_line
-from firmware.calimport import import_calibration
-from firmware.detect import detect
-from firmware.store import CalStore
+from firmware.app import status_line
+from firmware.boot import start
+from firmware.compat import drop
 
 # A calibration fitted on the desktop (python -m host_sim calibrate LOG --sensor ... --out
 # calibration.json) copied here is imported once at boot (docs/calibration.md).
@@ -29,22 +28,21 @@ delay_us = getattr(board, "delay_us", None)
 while True:
     try:
         # MotionCal mode: an HMC5883L at 75 Hz for 50 Raw lines/s (the QMC chips take no rate)
-        opts = {"rate": 75} if MOTIONCAL else {}
-        mag = detect(i2c, delay_us=delay_us, **opts) if delay_us else detect(i2c, **opts)
-        store = CalStore(board.STORE_DIR)
-        imported = import_calibration(CAL_FILE, store, mag)
-        if imported is not None:
-            print("eCompass: %s" % imported[1])
-        app = CompassApp(i2c, mag=mag, mag_axes=board.MAG_AXES, accel_axes=board.ACCEL_AXES,
-                         declination_cdeg=board.DECLINATION_CDEG,
-                         store=store, delay_us=delay_us,
-                         ticks_us=getattr(board, "ticks_us", None),
-                         # MotionCal mode: its calibration, not the app's own
-                         learn=False if MOTIONCAL else None)
+        app, note = start(i2c, board.STORE_DIR, cal_file=CAL_FILE,
+                          mag_options={"rate": 75} if MOTIONCAL else None, delay_us=delay_us,
+                          mag_axes=board.MAG_AXES, accel_axes=board.ACCEL_AXES,
+                          declination_cdeg=board.DECLINATION_CDEG,
+                          ticks_us=getattr(board, "ticks_us", None),
+                          # MotionCal mode: its calibration, not the app's own
+                          learn=False if MOTIONCAL else None)
+        if note is not None:
+            print("eCompass: %s" % note)
         break
     except OSError as e:  # SensorNotFound, BusError: wiring or power; say so and retry
         print("eCompass: %s" % e)
         time.sleep(2)
+start = None
+drop("boot")  # a running board holds only what it runs (docs/design.md, memory)
 print("eCompass: %s, accelerometer %s, stored calibration: %s" % (
     app.mag.KIND, "yes" if app.accel else "no", app.load_reason or "loaded"))
 

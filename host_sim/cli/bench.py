@@ -635,8 +635,34 @@ def rows_32bit(res):
 
 
 def rows_profiles(m):
-    """The board profiles (benchmarks/profiles.py): what a board holds while it does one job."""
+    """The board profiles (benchmarks/profiles.py): what a board holds while it does one job,
+    against the issue's goal (.mpy) and the budget tests/test_budgets.py holds
+    (benchmarks/budgets.py)."""
+    from host_sim.cli.benchmarks.budgets import BUDGETS
     R = []
+    for kind in ("mpy", "romfs"):
+        h = _get(m, "profiles_" + kind, "heading") or {}
+        if "after" in h:
+            b = BUDGETS["heading_live_" + kind]
+            R.append(("4 budget: heading with a stored calibration, live heap (.%s)" % kind, "",
+                      _kbf(h["after"]), "budget <= %s" % _kbf(b),
+                      "within" if h["after"] <= b else "OVER"))
+    c = _get(m, "profiles_mpy", "calibrate") or {}
+    h = _get(m, "profiles_mpy", "heading") or {}
+    if c.get("ended") is not None and "after" in h:
+        b = BUDGETS["after_session_slack_mpy"]
+        d = c["ended"] - h["after"]
+        R.append(("4 budget: after a calibration session, minus the heading line (.mpy)", "",
+                  _kbf(d), "budget <= %s" % _kbf(b), "within" if d <= b else "OVER"))
+    sb = m.get("session_bytes") or 0
+    for kind in ("mpy", "romfs"):
+        kb = (m.get("min_heap_" + kind) or {}).get("kb")
+        if kb:
+            net = kb * 1024 - sb - ((m.get("romfs_bytes") or 0) if kind == "romfs" else 0)
+            b = BUDGETS["min_heap_calibrate_" + kind]
+            R.append(("4 budget: smallest heap, boot + first calibration + headings (.%s)"
+                      % kind, "", _kbf(net), "budget <= %s" % _kbf(b),
+                      "within" if net <= b else "OVER"))
     for kind in ("mpy", "romfs", "py"):
         p = m.get("profiles_" + kind) or {}
         h = p.get("heading") or {}
@@ -650,8 +676,8 @@ def rows_profiles(m):
                   % kind, "", _kbf(h["after"]),
                   "goal <= %d KB (.mpy)" % (GOALS["heading_live_mpy"] // 1024),
                   verdict(h["after"] <= GOALS["heading_live_mpy"]) if goal else ""))
-        R.append(("4 heap while calibrating, once the first fit is saved (.%s)" % kind, "",
-                  _kbf(c["saved"]), "", ""))
+        R.append(("4 heap while calibrating: solving peak / first fit saved (.%s)" % kind, "",
+                  "%s / %s" % (_kbf(c.get("peak_solving")), _kbf(c["saved"])), "", ""))
         ended = c.get("ended")
         slack = ended - h["after"] if ended is not None else None
         R.append(("4 heap once the calibration session has ended, minus the heading line "

@@ -9,7 +9,8 @@ the board's filesystem directory for the calibration store. Every figure is afte
 gc.collect(), minus the heap before the first firmware import (the interpreter, this script
 and the session bytes). PROFILE:
   calibrate  a board with an empty store: it collects, solves, accepts and saves a 10-element
-             calibration ("saved": the live heap then, the session still running); then the
+             calibration ("saved": the live heap then, the session still running; "peak_solving":
+             the largest live heap after a step that ran solver slices); then the
              board is put down (it jitters about directions the buffer holds) until the
              session ends ("ended"), then 1000 headings ("after"), and the firmware modules
              still loaded; leaves the record in STOREDIR.
@@ -43,7 +44,10 @@ def firmware_modules():
 def boot(bus, store_dir, clock):
     # boards/main.py's sequence, with the replay bus and the benchmark's clock
     from firmware.boot import start
-    return start(bus, store_dir, mag_options={"odr": 200}, ticks_us=clock.ticks)[0]
+    from firmware.compat import drop
+    app = start(bus, store_dir, mag_options={"odr": 200}, ticks_us=clock.ticks)[0]
+    drop("boot")
+    return app
 
 
 def steps(app, clock, n):
@@ -60,10 +64,11 @@ def main():
     if not common.IS_MP:
         common.emit({"interpreter": common.interpreter(), "skipped": "needs gc.mem_alloc"})
         return
-    with open(args[0], "rb") as f:
-        data = f.read()
-    n = len(data) // 12
-    mag, acc = data[:6 * n], data[6 * n:12 * n]
+    import os
+    n = os.stat(args[0])[6] // 12
+    with open(args[0], "rb") as f:  # the two halves, each read once (no copy of the whole)
+        mag = f.read(6 * n)
+        acc = f.read(6 * n)
     store_dir, profile = args[1], args[2]
     if "--romfs" in sys.argv:
         import vfs
@@ -78,11 +83,17 @@ def main():
     app = boot(bus, store_dir, clock)
     res["boot"] = live() - base
     if profile == "calibrate":
+        peak = 0
+        track = "--min" not in sys.argv
         for _ in range(3 * n):
             clock.now += PERIOD_US
             app.step()
+            if track and app.solving:  # the live heap while a solve runs (slow: collects)
+                a = live() - base
+                peak = a if a > peak else peak
             if app.calibration.model == 10 and app.stored and not app.solving:
                 break
+        res["peak_solving"] = peak
         res["saved"] = live() - base
         res["model"] = app.calibration.model
         # the board put down: it jitters about the directions of the first 50 samples, which
@@ -98,9 +109,10 @@ def main():
         res["ended_after_s"] = k * PERIOD_US // 1000000
     ok = steps(app, clock, HEADINGS)
     res["after"] = live() - base
-    t = common.mem_total()  # the steady state: 1000 more (the first may save the dip once)
+    total = getattr(common.micropython, "mem_total", None)  # not on the WebAssembly port
+    t = total() if total else 0  # the steady state: 1000 more (the first may save the dip)
     ok += steps(app, clock, HEADINGS)
-    per_sample = (common.mem_total() - t) // HEADINGS
+    per_sample = (total() - t) // HEADINGS if total else None
     res["complete"] = app.calibration.model == 10 and ok == 2 * HEADINGS
     res["bytes_per_sample"] = per_sample
     res["status"] = app.status

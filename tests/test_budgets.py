@@ -1,0 +1,127 @@
+"""Memory budgets that fail the build (host_sim/cli/benchmarks/budgets.py), on the 32-bit tiers
+that are here: the x86-32 build (collects as a board does: live heap and the smallest heap that
+completes) and the WebAssembly port (never collects while a script runs: what a run allocates
+in total). The board profiles boot as boards/main.py does (host_sim/cli/benchmarks/profiles.py);
+`make bench` prints the same figures beside the budgets in docs/benchmarks.md."""
+import os
+import shutil
+import subprocess
+
+import pytest
+
+from host_sim.cli import bench
+from host_sim.cli.benchmarks.budgets import BUDGETS, KB
+from tests import mp
+
+X86 = mp.TIERS["x86-32"]
+WASM = mp.TIERS["wasm"]
+# boot + 2000 headings on the WebAssembly port, .mpy files: everything allocated, transient
+# boot work included (nothing is collected there); the headings themselves add nothing
+WASM_HEADING_ALLOCATED = 112 * KB
+
+
+@pytest.fixture(scope="module")
+def build(tmp_path_factory):
+    """A recorded session, the firmware as x86 .mpy files and as a ROMFS image of them, and as
+    bytecode-only .mpy files (no native code: firmware/fast.py left out) for the WebAssembly
+    port."""
+    d = str(tmp_path_factory.mktemp("budgets"))
+    session = os.path.join(d, "session.bin")
+    bench.write_session(session, smoke=False)
+    out = {"dir": d, "session": session, "session_bytes": os.path.getsize(session)}
+    if X86.available:
+        out["mpy"] = bench.build_mpy(os.path.join(d, "mpy"), bench.MPY_CROSS_32, "x86")
+        out["rom"] = os.path.join(d, "firmware.romfs")
+        bench.romfs_image(os.path.join(out["mpy"], "firmware"), out["rom"])
+        out["rom_bytes"] = os.path.getsize(out["rom"])
+    if WASM.available:
+        pkg = os.path.join(d, "bytecode", "firmware")
+        os.makedirs(pkg)
+        for fn in sorted(os.listdir(os.path.join(mp.ROOT, "firmware"))):
+            if fn.endswith(".bin"):
+                shutil.copy(os.path.join(mp.ROOT, "firmware", fn), pkg)
+            elif fn.endswith(".py") and fn != "fast.py":
+                subprocess.run([bench.MPY_CROSS, "-o", os.path.join(pkg, fn[:-3] + ".mpy"),
+                                os.path.join(mp.ROOT, "firmware", fn)], check=True)
+        out["bytecode"] = os.path.dirname(pkg)
+    return out
+
+
+def _x86(build):
+    if not X86.available:
+        pytest.skip("x86-32 tier: %s" % X86.reason)
+    return build
+
+
+@pytest.fixture(scope="module")
+def profiles_mpy(build):
+    b = _x86(build)
+    return bench.profiles(b["session"], b["mpy"], b["dir"])
+
+
+@pytest.fixture(scope="module")
+def profiles_romfs(build):
+    b = _x86(build)
+    return bench.profiles(b["session"], None, b["dir"], [b["rom"], "--romfs"])
+
+
+def _ok(p):
+    for name in ("calibrate", "heading"):
+        assert "error" not in p[name], p[name]["error"]
+        assert p[name]["complete"], p[name]
+    return p
+
+
+def test_a_calibrated_board_stays_within_its_heap_budget_from_mpy(profiles_mpy):
+    h = _ok(profiles_mpy)["heading"]
+    assert h["after"] <= BUDGETS["heading_live_mpy"], h["after"]
+    assert h["bytes_per_sample"] == BUDGETS["bytes_per_sample"]
+
+
+def test_a_calibrated_board_stays_within_its_heap_budget_from_romfs(profiles_romfs):
+    h = _ok(profiles_romfs)["heading"]
+    assert h["after"] <= BUDGETS["heading_live_romfs"], h["after"]
+
+
+def test_the_calibration_machinery_leaves_when_the_session_ends(profiles_mpy):
+    p = _ok(profiles_mpy)
+    c, h = p["calibrate"], p["heading"]
+    assert c["model"] == 10 and c["ended"] is not None
+    assert c["saved"] > c["ended"] + 20 * KB  # the machinery was there, and is gone
+    assert c["ended"] - h["after"] <= BUDGETS["after_session_slack_mpy"], (c["ended"],
+                                                                          h["after"])
+    assert set(c["modules"]) == set(h["modules"])  # the same modules as a rebooted board
+    assert c["bytes_per_sample"] == BUDGETS["bytes_per_sample"]
+
+
+@pytest.mark.parametrize("kind", ["mpy", "romfs"])
+def test_a_first_calibration_completes_within_its_smallest_heap_budget(build, kind):
+    b = _x86(build)
+    net = BUDGETS["min_heap_calibrate_" + kind]
+    heap = net + b["session_bytes"] + (b["rom_bytes"] if kind == "romfs" else 0)
+    extra = [b["rom"], "--romfs"] if kind == "romfs" else []
+    r = bench.run_script("profiles", bench.MICROPYTHON_32,
+                         [b["session"], os.path.join(b["dir"], "st-" + kind), "calibrate"] +
+                         extra + ["--min"], extra_path=b["mpy"] if kind == "mpy" else None,
+                         cwd=b["dir"], heap="%dk" % (heap // KB))
+    assert r.get("complete") is True, r
+
+
+def test_the_webassembly_port_allocates_within_budget_for_boot_and_headings(build):
+    if not WASM.available:
+        pytest.skip("wasm tier: %s" % WASM.reason)
+    store = os.path.join(build["dir"], "st-wasm")
+    os.makedirs(store)
+    env = dict(os.environ, MICROPYPATH=build["bytecode"] + ":" + mp.ROOT + ":.frozen")
+    out = {}
+    for profile in ("calibrate", "heading"):  # the first leaves the record the second boots
+        p = subprocess.run(WASM.cmd + ["-m", "host_sim.cli.benchmarks.profiles",
+                                       build["session"], store, profile],
+                           cwd=build["dir"], env=env, capture_output=True, text=True,
+                           timeout=600)
+        assert p.returncode == 0, p.stderr[-2000:]
+        out[profile] = mp.json_lines(p.stdout)[-1]
+    h = out["heading"]
+    assert out["calibrate"]["complete"] and h["complete"]
+    assert h["after"] <= WASM_HEADING_ALLOCATED, h["after"]
+    assert h["after"] - h["boot"] <= 64  # 2000 headings: nothing (a collection is not run)
