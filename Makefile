@@ -117,8 +117,8 @@ deploy: mpy  ## copy firmware, board.py, main.py to the board at PORT
 wmm: $(STAMP)  ## regenerate firmware/wmm2025.bin
 	$(PY) -m host_sim wmm
 
-package-json: $(STAMP)  ## regenerate package.json (mip install)
-	$(PY) -m host_sim.cli.packaging > package.json
+package-json: $(STAMP)  ## regenerate package.json and the parts package-PART.json (mip install)
+	$(PY) -m host_sim.cli.packaging --write
 
 clean:  ## remove build/ and test caches
 	rm -rf build .pytest_cache .hypothesis

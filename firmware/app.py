@@ -203,6 +203,7 @@ class CompassApp:
     location, quick, accuracy, watch (firmware/health.py FieldWatch), dip (its DipCheck)."""
 
     location = None  # a firmware.location.Location after set_location()
+    not_installed = None  # "calibrate": calibrate() found no calibration machinery
     quick = None     # the firmware.quickcal.QuickCal of the last quick_calibrate()
 
     def __init__(self, i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z",
@@ -273,10 +274,16 @@ class CompassApp:
             self._save()
 
     def calibrate(self):
-        """Start collecting samples for a new calibration (imports the calibration machinery);
-        the calibration in force stays until a better one is accepted."""
+        """Start collecting samples for a new calibration (imports the calibration machinery,
+        firmware/session.py); the calibration in force stays until a better one is accepted.
+        Returns the collector; None when the calibrate part is not installed (then
+        .not_installed says so and the heading goes on with the calibration in force)."""
         if self.collector is None:
-            from firmware import session
+            try:
+                from firmware import session
+            except ImportError:  # package-calibrate.json not installed on this board
+                self.not_installed = "calibrate"
+                return None
             self._session = session
             self.collector = session.start(self)
             self._locate()
@@ -585,7 +592,9 @@ class CompassApp:
         # changed. Collect afresh and let any new fit replace the stale one.
         self._interf_us = 0
         self.dip.reset()  # the dip too is learned afresh
-        self.calibrate().relearn(_STALE_AGE_S)
+        c = self.calibrate()
+        if c is not None:
+            c.relearn(_STALE_AGE_S)
 
     def reinit(self):
         """Re-initialise the drivers (a sensor reset by a brown-out powers up in standby):

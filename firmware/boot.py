@@ -26,6 +26,17 @@ def _exists(path):
         return False
 
 
+def _import(cal_file, store, mag):
+    try:
+        from firmware.calimport import import_calibration
+    except ImportError:  # package-import.json not installed: the file waits for it
+        return "%s found, but firmware.calimport is not installed" % cal_file
+    imported = import_calibration(cal_file, store, mag)
+    import_calibration = None
+    drop("calimport")
+    return imported[1] if imported is not None else None
+
+
 def start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_options):
     from firmware.app import CompassApp
     from firmware import detect
@@ -41,11 +52,6 @@ def start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_
         if cal_file is None:
             cal_file = store_dir.rstrip("/") + "/calibration.json"
         if _exists(cal_file):  # the importer (and its JSON parser) only when there is a file
-            from firmware.calimport import import_calibration
-            imported = import_calibration(cal_file, store, mag)
-            import_calibration = None
-            drop("calimport")
-            if imported is not None:
-                note = imported[1]
+            note = _import(cal_file, store, mag)
     app = CompassApp(i2c, mag=mag, store=store, delay_us=delay_us, **app_options)
     return app, note

@@ -67,6 +67,8 @@ def _story(app, p):
     if col is None:
         out.append("calibrated: model %s fit %s" % (model, _pct(p["fit_error"]))
                    if model is not None else "uncalibrated")
+        if app.not_installed:
+            out.append("cannot calibrate: install package-%s.json" % app.not_installed)
         return out
     out.append("%s; collecting %d %% (%d samples)" % (
         "model %s fit %s" % (model, _pct(p["fit_error"])) if model is not None

@@ -3,13 +3,65 @@ import json
 import os
 import re
 
-from host_sim.cli.packaging import ROOT, package_json
+import pytest
+
+from host_sim.cli.packaging import PARTS, REQUIRES, ROOT, package_json
+from tests import mp
 
 
 def test_package_json_lists_every_firmware_module():
     with open(os.path.join(ROOT, "package.json")) as f:
         committed = json.load(f)
     assert committed == package_json(), "package.json is stale: run `make package-json`"
+
+
+def test_every_part_has_a_current_package_file_and_every_firmware_file_one_part():
+    on_disk = sorted(n for n in os.listdir(os.path.join(ROOT, "firmware"))
+                     if n.endswith((".py", ".bin")))
+    assert sorted(f for files in PARTS.values() for f in files) == on_disk
+    for part in PARTS:
+        with open(os.path.join(ROOT, "package-%s.json" % part)) as f:
+            assert json.load(f) == package_json(part), "run `make package-json`"
+        assert set(REQUIRES[part]) <= set(PARTS) and part not in REQUIRES[part]
+
+
+def _install(tmp_path, parts):
+    import shutil
+    pkg = tmp_path / "firmware"
+    pkg.mkdir()
+    for part in parts:
+        for f in PARTS[part]:
+            shutil.copy(os.path.join(ROOT, "firmware", f), str(pkg / f))
+    return str(tmp_path)
+
+
+@pytest.mark.parametrize("part", sorted(PARTS))
+def test_each_part_imports_with_only_the_parts_it_requires(tmp_path, part):
+    import subprocess
+    import sys
+    lib = _install(tmp_path, (part,) + REQUIRES[part])
+    mods = [f[:-3] for f in PARTS[part] if f.endswith(".py") and f not in (
+        "__init__.py", "fast.py", "busio_i2c.py")]  # fast: MicroPython only; busio: CircuitPython
+    code = "import sys; sys.path.insert(0, %r)\n" % lib + "".join(
+        "import firmware.%s\n" % m for m in mods) + \
+        "assert all(m.__file__.startswith(%r) for k, m in sys.modules.items() " \
+        "if k.startswith('firmware.'))\n" % lib
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       cwd=str(tmp_path))
+    assert p.returncode == 0, p.stderr
+
+
+@pytest.mark.parametrize("micro", [False, True], ids=["cpython", "micropython"])
+def test_a_board_with_the_core_part_only_shows_headings_and_says_what_is_missing(tmp_path, micro):
+    # a stored calibration: headings as usual; an empty store: raw headings, and the status
+    # line names the part that calibrating needs; a calibration file waits for its part
+    lib = _install(tmp_path, ("core",))
+    out = mp.json_lines(mp.run(["tests/scenarios/core_only.py", lib], micro=micro))
+    stored, empty = out
+    assert stored[0] == 100 and stored[2] is None  # a heading every step, nothing missing
+    assert empty[0] == 100 and empty[2] == "calibrate"
+    assert "cannot calibrate: install package-calibrate.json" in empty[3]
+    assert "firmware.calimport is not installed" in empty[4]
 
 
 def test_manifest_freezes_the_firmware_package():
