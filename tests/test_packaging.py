@@ -64,9 +64,16 @@ def test_a_board_with_the_core_part_only_shows_headings_and_says_what_is_missing
     assert "firmware.calimport is not installed" in empty[4]
 
 
-def test_manifest_freezes_the_firmware_package():
+def test_manifest_freezes_the_parts_it_names_with_the_files_of_each_part():
+    import ast
     src = open(os.path.join(ROOT, "manifest.py")).read()
-    assert re.search(r'^package\("firmware"\)', src, re.M)
+    assert re.search(r'^package\("firmware", files=', src, re.M)
+    tree = ast.parse(src)
+    values = {t.id: ast.literal_eval(n.value) for n in tree.body if isinstance(n, ast.Assign)
+              for t in n.targets}
+    assert values["_FILES"] == {p: tuple(f for f in fs if f.endswith(".py"))
+                                for p, fs in PARTS.items()}
+    assert "core" in values["PARTS"] and set(values["PARTS"]) <= set(PARTS)
 
 
 def test_make_deploy_prints_mpy_cross_and_mpremote_commands():
