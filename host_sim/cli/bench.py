@@ -1098,6 +1098,78 @@ def quickcal_section(res):
             markdown(q["rows"])]
 
 
+README_BEGIN = "<!-- boards:begin -->"
+README_END = "<!-- boards:end -->"
+
+
+def part_heap(res):
+    """{part: (bytes from .mpy, bytes from ROMFS)}: the heap each installable part adds
+    (host_sim/cli/packaging.py PARTS), summed from the per-module table (modheap)."""
+    from host_sim.cli.packaging import PARTS
+    mp = _get(res, "memory32", "modules_mpy", "modules") or {}
+    rf = _get(res, "memory32", "modules_romfs", "modules") or {}
+    out = {}
+    for part, files in PARTS.items():
+        mods = [f[:-3] for f in files if f.endswith(".py") and f[:-3] in mp]
+        if mods:
+            out[part] = (sum(mp[n] for n in mods), sum(rf.get(n, 0) for n in mods))
+    return out
+
+
+def boards_section(res):
+    """README.md's board table and parts (between README_BEGIN and README_END): what each job
+    needs on a 32-bit MicroPython, from this run's measurements."""
+    m = res.get("memory32") or {}
+    sb = m.get("session_bytes") or 0
+    rb = m.get("romfs_bytes") or 0
+
+    def fits(n):
+        return ", ".join(b for b, heap in BOARD_HEAP if n is not None and n <= heap) or "neither"
+    rows = []
+    for kind, label in (("mpy", ".mpy files"), ("romfs", "frozen / ROMFS")):
+        h = _get(m, "profiles_" + kind, "heading", "after")
+        kb = _get(m, "min_heap_" + kind, "kb")
+        net = kb * 1024 - sb - (rb if kind == "romfs" else 0) if kb else None
+        c = _get(m, "profiles_" + kind, "calibrate") or {}
+        rows.append("| %s | %s | %s | %s | %s | %s |" % (
+            label, _kbf(h), fits(h), _kbf(net), fits(net), _kbf(c.get("ended"))))
+    parts = part_heap(res)
+    names = {"core": "a calibrated board: drivers, boot, store, heading, status line",
+             "calibrate": "calibrating on the board (collect, solve, accept, history)",
+             "motioncal": "PJRC MotionCal mode", "field": "field model, set_location, "
+             "quick calibration", "import": "a desktop calibration file imported at boot",
+             "circuitpython": "CircuitPython's busio.I2C"}
+    lines = [README_BEGIN,
+             "*Measured by `make bench` on a 32-bit MicroPython (x86-32 build; "
+             "docs/benchmarks.md), %s.*" % machine()["date_utc"][:10], "",
+             "| deployment | heading from a stored calibration (live heap) | fits | "
+             "first calibration on the board (smallest heap) | fits | after that session |",
+             "|---|---|---|---|---|---|"] + rows + [
+             "", "| part (`package-PART.json`) | for | code + names on the heap, .mpy / "
+             "ROMFS |", "|---|---|---|"]
+    for part in names:
+        if part in parts:
+            lines.append("| %s | %s | %s / %s |" % (part, names[part], _kbf(parts[part][0]),
+                                                   _kbf(parts[part][1])))
+    lines.append(README_END)
+    return "\n".join(lines)
+
+
+def splice_readme(section, path=None):
+    """Replace README.md's block between README_BEGIN and README_END with `section`."""
+    if path is None:
+        path = os.path.join(ROOT, "README.md")
+    with open(path) as f:
+        text = f.read()
+    i = text.find(README_BEGIN)
+    j = text.find(README_END)
+    if i < 0 or j < i:
+        return False
+    with open(path, "w") as f:
+        f.write(text[:i] + section + text[j + len(README_END):])
+    return True
+
+
 def write_doc(section, path=None):
     """Write docs/benchmarks.md: a generated page holding `section`."""
     if path is None:
@@ -1195,6 +1267,8 @@ def body(opts):
     if opts["doc"]:
         write_doc(readme_section(R, m, derived, res))
         print("docs/benchmarks.md written")
+        if not opts["smoke"] and splice_readme(boards_section(res)):
+            print("README.md board table written")
     errors = [n for n, v in res.items() if isinstance(v, dict) and any(
         isinstance(x, dict) and "error" in x for x in v.values())]
     if errors:
