@@ -50,12 +50,19 @@ print("eCompass: %s, accelerometer %s, stored calibration: %s" % (
 def motioncal(rate_hz=50):
     """MotionCal mode on this app until Ctrl-C (firmware/motioncal_mode.py)."""
     from firmware.motioncal_mode import MotionCalMode
+    from firmware.compat import drop
     try:
         from micropython import kbd_intr  # 0x03 in MotionCal's packet is data
     except ImportError:
         kbd_intr = None
-    MotionCalMode(app, rate_hz=rate_hz, mag_axes=board.MAG_AXES, kbd_intr=kbd_intr,
-                  ticks_us=getattr(board, "ticks_us", None)).run()
+    try:
+        MotionCalMode(app, rate_hz=rate_hz, mag_axes=board.MAG_AXES, kbd_intr=kbd_intr,
+                      ticks_us=getattr(board, "ticks_us", None)).run()
+    finally:  # MotionCal mode is done: its code leaves (docs/design.md, memory)
+        if app.collector is None:
+            drop("motioncal_mode", "motioncal", "acceptance", "solve")
+        else:
+            drop("motioncal_mode", "motioncal")
 
 
 if MOTIONCAL:

@@ -312,6 +312,8 @@ class CompassApp:
     def _locate(self):
         if self.location is not None:
             self.location.apply(self)
+            if self.collector is None:  # the model's figures are kept: its table code and
+                drop("field", "acceptance")  # the field check leave (docs/design.md)
 
     def quick_calibrate(self, true_heading_cdeg, refine=False, samples=32):
         """Hard iron from this pose and its known true heading (firmware/quickcal.py

@@ -107,7 +107,7 @@ def test_the_heading_only_modules_do_not_import_the_calibration_machinery():
 @pytest.mark.parametrize("micro", [False, True], ids=["cpython", "micropython"])
 def test_a_board_booted_from_a_stored_calibration_loads_no_calibration_machinery(micro):
     out = mp.json_lines(mp.run(["tests/scenarios/app_modules.py"], micro=micro))
-    first, second, third = out
+    first, second, third, fourth = out
     assert first[0] == "heading_only" and first[2] == 100
     assert not first[3]
     # the core and nothing else: no machinery, no boot-time code (detect, construction, the
@@ -120,6 +120,9 @@ def test_a_board_booted_from_a_stored_calibration_loads_no_calibration_machinery
     # calibration in force stays: the session ends and its modules leave
     assert third[0] == "ended" and not third[3] and third[2] == third[4]
     assert set(third[1]) == CORE, sorted(set(third[1]) ^ CORE)
+    # a location: its figures stay (firmware/location.py), the model's table code leaves
+    assert fourth[0] == "located" and fourth[4] == "ok" and fourth[2] == 100
+    assert set(fourth[1]) == CORE | {"firmware.location"}, sorted(set(fourth[1]) ^ CORE)
 
 
 def test_the_field_model_is_imported_by_set_location_only():

@@ -37,3 +37,6 @@ while app.collector is not None and n < 1500:  # 30 s at 50 Hz at the most
     n += 1
     ok += app.step()
 print(json.dumps(["ended", firmware_modules(), ok, app.collector is not None, n]))
+status = app.set_location(473977000, 85456000, 2026500)  # Zurich, mid-2026
+ok = sum(1 for _ in range(100) if app.step())
+print(json.dumps(["located", firmware_modules(), ok, app.collector is not None, status]))
