@@ -50,7 +50,6 @@ print("eCompass: %s, accelerometer %s, stored calibration: %s" % (
 def motioncal(rate_hz=50):
     """MotionCal mode on this app until Ctrl-C (firmware/motioncal_mode.py)."""
     from firmware.motioncal_mode import MotionCalMode
-    from firmware.compat import drop
     try:
         from micropython import kbd_intr  # 0x03 in MotionCal's packet is data
     except ImportError:
