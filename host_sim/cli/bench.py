@@ -596,6 +596,12 @@ def rows_32bit(res):
             _f(cpu.get("ours_plain"), "%.2f"), _f(cpu.get("float"), "%.2f")),
             _f(rp, "%.2fx") + " (goal <= %.1fx)" % GOALS["app_ratio_plain"],
             verdict(rp is not None and rp <= GOALS["app_ratio_plain"])))
+        for key, what in (("core_fast", "fast"), ("core_plain", "plain")):
+            r = a.get("ratio_" + key)
+            R.append(("5 app step once the calibration session has ended / float path, %s: "
+                      "%s [us]" % (label, what), "", "%s / %s" % (
+                          _f(cpu.get(key), "%.2f"), _f(cpu.get("float"), "%.2f")),
+                      _f(r, "%.2fx"), ""))
     m = res.get("memory32") or {}
     if "error" in m:
         R.append(("4 heap 32-bit", "", m["error"][:60], "", "ERROR"))

@@ -4,9 +4,12 @@
 
 ours    CompassApp.step() on a calibrated board: QMC5883L + MPU6050 reads over an
         allocation-free replay bus, Q15 correct, axis maps, tilt-compensated heading, the
-        interference check, and the collector offered every sample (Calibrator.add): the
-        whole step, with no solve starting during the timed runs. Once with the fast path where the port has the native emitter (the app
-        picks it by itself) and once with fast=False (the plain functions).
+        interference check, and the collector offered every sample (Calibrator.add, as
+        learn=True keeps it): the whole step, with no solve starting during the timed runs.
+        Once with the fast path where the port has the native emitter (the app picks it by
+        itself) and once with fast=False (the plain functions).
+core    the same board once its calibration session has ended (firmware/session.py): the
+        step without the collector, what a calibrated board runs every sample.
 float   the heading guide's float path over the same bytes: hand decode of both sensors,
         its min/max collector (collect), ((float)raw - offset) * scale, the float tilt
         heading (host_sim/cli/benchmarks/floatpath.py).
@@ -31,13 +34,13 @@ def load(path):
     return data[:6 * n], data[6 * n:12 * n]
 
 
-def make_app(bus, fast):
+def make_app(bus, fast, learn=True):
     from firmware.app import CompassApp
     from firmware.mpu6050 import MPU6050
     from firmware.qmc5883l import QMC5883L
     clock = common.Clock()
     app = CompassApp(bus, mag=QMC5883L(bus, odr=200), accel=MPU6050(bus), ticks_us=clock.ticks,
-                     store=None, fast=fast, learn=True)
+                     store=None, fast=fast, learn=learn)
     return app, clock
 
 
@@ -70,6 +73,11 @@ def main():
         app, clock = make_app(b, fast)
         model = calibrate(app, clock, steps)
         apps[name] = (app, clock, model, b)
+    for name, fast, of in (("core_fast", None, "ours_fast"), ("core_plain", False, "ours_plain")):
+        b = common.replay_board(mag, acc)
+        app, clock = make_app(b, fast, learn=False)  # no session: the calibrated board's step
+        app.use_calibration(apps[of][0].calibration, save=False)
+        apps[name] = (app, clock, app.calibration.model, b)
     from firmware import compass, i2cdevice, samples
 
     def stepper(name):
@@ -111,7 +119,8 @@ def main():
             bus.readfrom_mem_into(0x68, 0x3B, d6)
 
     fns = (("bus", bare), ("float", flt), ("ours_fast", stepper("ours_fast")),
-           ("ours_plain", stepper("ours_plain")))
+           ("ours_plain", stepper("ours_plain")), ("core_fast", stepper("core_fast")),
+           ("core_plain", stepper("core_plain")))
     for _, fn in fns:
         fn(N)
     per = {name: [] for name, _ in fns}
@@ -119,12 +128,15 @@ def main():
         for name, fn in fns:
             per[name].append(common.timed_runs(fn, N, 1)[0])
     t = {name: common.median(per[name]) for name, _ in fns}
-    cpu = {name: t[name] - t["bus"] for name in ("float", "ours_fast", "ours_plain")}
+    cpu = {name: t[name] - t["bus"] for name in ("float", "ours_fast", "ours_plain",
+                                                  "core_fast", "core_plain")}
     res = {"interpreter": common.interpreter(), "n_per_run": N, "runs": RUNS,
            "us_per_sample": t, "cpu_us": cpu,
            "fast_available": apps["ours_fast"][0].fast,
            "ratio_fast": cpu["ours_fast"] / cpu["float"],
            "ratio_plain": cpu["ours_plain"] / cpu["float"],
+           "ratio_core_fast": cpu["core_fast"] / cpu["float"],
+           "ratio_core_plain": cpu["core_plain"] / cpu["float"],
            "models": [apps[k][2] for k in ("ours_fast", "ours_plain")]}
     if common.IS_MP:
         alloc = {}
