@@ -92,6 +92,10 @@ def run_script(name, micro, args=(), extra_path=None, timeout=600, cwd=ROOT, hea
         out = json.loads(lines[-1])
     except (IndexError, ValueError):
         return {"error": "no JSON in output: %r" % p.stdout[-300:]}
+    qstr = [ln for ln in lines if ln.startswith("qstr pool:")]  # micropython.qstr_info()
+    if qstr:
+        out["qstr_pool"] = dict((k.strip(), int(v)) for k, v in (
+            kv.split("=") for kv in qstr[-1][len("qstr pool:"):].split(",")))
     out["wall_s"] = round(time.time() - t0, 2)
     return out
 
@@ -682,6 +686,11 @@ def rows_profiles(m):
                   % kind, "", _kbf(h["after"]),
                   "goal <= %d KB (.mpy)" % (GOALS["heading_live_mpy"] // 1024),
                   verdict(h["after"] <= GOALS["heading_live_mpy"]) if goal else ""))
+        q = h.get("qstr_pool") or {}
+        if q:
+            R.append(("4 of which interned names, never freed (qstr pool, .%s): names / KB"
+                      % kind, "", "%d / %s" % (q["n_qstr"], _kbf(q["n_total_bytes"])),
+                      "the interpreter's own included", ""))
         R.append(("4 heap while calibrating: solving peak / first fit saved (.%s)" % kind, "",
                   "%s / %s" % (_kbf(c.get("peak_solving")), _kbf(c["saved"])), "", ""))
         ended = c.get("ended")

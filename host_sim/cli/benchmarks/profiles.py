@@ -18,7 +18,8 @@ and the session bytes). PROFILE:
              the live heap after them ("after") and the modules loaded.
 Both then run 1000 more headings and report the bytes allocated per sample over those
 (micropython.mem_total): the steady state, once the dip a new fit measures has been saved.
-With --romfs IMAGE the firmware is imported from a ROMFS image mounted at /rom (bytecode in
+The names interned so far (micropython.qstr_info(): never freed) are printed on a line of their
+own before the JSON. With --romfs IMAGE the firmware is imported from a ROMFS image mounted at /rom (bytecode in
 place, as frozen). With --min only "complete" is printed (the smallest-heap search runs this
 with -X heapsize=N and looks at it).
 """
@@ -120,6 +121,9 @@ def main():
         common.emit({"complete": res["complete"]})
         return
     res["modules"] = firmware_modules()
+    qstr_info = getattr(common.micropython, "qstr_info", None)
+    if qstr_info is not None:
+        qstr_info()  # one line on stdout: the pool of interned names (bench.py reads it)
     common.emit(res)
 
 
