@@ -379,25 +379,6 @@ def wire_us(n_bytes, freq=I2C_HZ):
     return (9 * (3 + n_bytes) + 3) * 1000000 / freq
 
 
-def memory_32bit(m):
-    """A 32-bit board's heap for the app's state, from the x64 figures: preallocated arrays
-    keep their bytes, every other object's words and GC blocks halve, and each moment sum
-    that is a small int here but a long int there adds an mpz object (about 2 GC blocks of
-    16 bytes). Solve temporaries are taken at x64 size (more of them are long ints on a
-    32-bit port, in smaller words): an estimate, not a measurement."""
-    fb = m.get("firmware_bytes") or {}
-    imports = fb.get("imports")
-    if imports is None or fb.get("app_running") is None:
-        return None
-    state = fb["app_running"] - imports
-    arrays = m.get("array_bytes") or 0
-    longs = (_get(m, "moment_sums", "long_on_32bit_only") or 0) * 32
-    start = arrays + (state - arrays) / 2 + longs
-    peak = fb.get("peak_solving")
-    return {"state_x64": state, "arrays": arrays, "state_32bit_est": start,
-            "peak_32bit_est": start + (peak - fb["app_running"]) if peak else None}
-
-
 def boards(res):
     """Estimates for RP2040 and ESP32 from the yardstick (see yardstick.py)."""
     from host_sim.cli.benchmarks.yardstick import PUBLISHED_MS, SOURCE
@@ -812,21 +793,8 @@ def rows(res, derived):
         R.append(("4 heap x64: firmware imported, .py / .mpy", "n/a", "%s / %s" % (
             _kb(fb["py"].get("imports")), _kb(fb["mpy"].get("imports"))),
             "armv6m .mpy code %s" % _kb(code), ""))
-        run = [fb[k].get("app_running") for k in ("py", "mpy") if fb[k]]
-        R.append(("4 heap x64: + app, buffer %s/%s, .py / .mpy" % (
-            mem["py"].get("held"), mem["py"].get("capacity")), "n/a",
-            " / ".join(_kb(v) for v in run), "budget %s (32-bit board)" % _kb(BUDGET_32BIT),
-            verdict(bool(run) and min(run) <= BUDGET_32BIT and code <= BUDGET_32BIT)))
-        est = memory_32bit(mem["py"]) or {}
-        peak = fb["py"].get("peak_solving")
-        imp = fb["py"].get("imports") or 0
-        R.append(("4 heap x64: app state only (frozen code), start / peak solving", "n/a",
-                  "%s / %s" % (_kb(est.get("state_x64")), _kb(peak - imp if peak else None)),
-                  "", ""))
-        pk = est.get("peak_32bit_est")
-        R.append(("4 heap 32-bit est.: app state, start / peak solving", "n/a", "%s / %s" % (
-            _kb(est.get("state_32bit_est")), _kb(pk)), "budget %s" % _kb(BUDGET_32BIT),
-            verdict(None if pk is None else pk <= BUDGET_32BIT, True)))
+        # what a 32-bit board holds is measured, not estimated from these: the board
+        # profiles and the smallest heaps (rows_32bit, rows_profiles)
     acc = _get(res, "accuracy", "cpython") or {}
     worst = None
     for name, row in (acc.get("logs") or {}).items():
