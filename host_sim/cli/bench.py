@@ -450,6 +450,14 @@ def boards(res):
             # the app's own figure includes whatever garbage collection fell in that step
             # (a 2 MB heap here): reported, not used for the verdict
             e["app_worst_stall_scaled_us"] = app["worst_stall_us"] * f_int
+        ap = _get(res, "apppath", "micropython", "cpu_us") or {}
+        for kind in ("fast", "plain"):
+            # the whole app step (reads, checks, heading, field watch), scaled the same way:
+            # a calibrated board's (its session ended) and one fed to a collector
+            for key, name in (("core_" + kind, "step_calibrated_%s_us"),
+                              ("ours_" + kind, "step_collecting_%s_us")):
+                if ap.get(key) is not None:
+                    e[name % kind] = wire + ap[key] * f_int
         period = 1000000 / QMC_ODR_HZ
         for kind in ("fast", "plain"):
             h = e.get("hot_%s_us" % kind)
@@ -830,6 +838,17 @@ def rows(res, derived):
         R.append(("6 %s est.: I2C + path + add(), fast / bytecode [us]" % b, "", "%s / %s" % (
             _f(e.get("per_sample_fast_us"), "%.0f"), _f(e.get("per_sample_plain_us"), "%.0f")),
             "200 Hz = 5000 us", verdict(e.get("keeps_up_fast"), True)))
+        for what, key in (("calibrated board (session ended)", "calibrated"),
+                          ("while collecting", "collecting")):
+            f = e.get("step_%s_fast_us" % key)
+            p = e.get("step_%s_plain_us" % key)
+            if f is None:
+                continue
+            goal = b == "rp2040_125mhz" and key == "calibrated"
+            R.append(("6 %s est.: whole app step, %s, fast / bytecode [ms]" % (b, what), "",
+                      "%.2f / %.2f" % (f / 1000, p / 1000),
+                      "goal <= 1.0 / 2.0 ms (RP2040, scaled est.)" if goal else "",
+                      verdict(f <= 1000 and p <= 2000, True) if goal else ""))
         R.append(("6 %s est.: that + longest solve slice [us]" % b, "",
                   _f(e.get("worst_step_fast_us"), "%.0f"),
                   "%s samples lost; %s per solve" % (e.get("samples_lost_in_worst_step_fast"),
