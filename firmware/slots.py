@@ -199,7 +199,7 @@ def _current(slots):
     return best
 
 def load(st):
-    """The newest usable payload (bytes); StoreError(reason) if no slot has one."""
+    """CalStore.load(): the newest usable payload (bytes); StoreError(reason) if none."""
     slots = _scan(st)
     best = _current(slots)
     st.last_skipped = []
@@ -243,15 +243,9 @@ def _targets(st, slots, best):
             order[j], order[j + 1] = order[j + 1], order[j]
     return [i for _, i in order]
 
-def save(st, payload):
-    """Store payload as the newest record, power-safely; returns its sequence number.
 
-    Raises ValueError for an oversized payload, OSError from the filesystem (full, read
-    only, EIO while writing), StoreError('verify_failed') if the record read back is not
-    the one written. A slot that cannot be opened is passed over for the next one; when
-    none opens, the last OSError is raised (StoreError('no_slot') if there was none to
-    try: no slot but the current record's).
-    """
+def save(st, payload):
+    """CalStore.save(payload) (firmware/store.py says what it returns and raises)."""
     slots = _scan(st)
     best = _current(slots)
     top = None

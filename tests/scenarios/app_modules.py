@@ -1,17 +1,15 @@
 # Which firmware modules a board has loaded: after booting from a stored calibration and 100
-# steps (the heading-only runtime), after it starts collecting, and once that session has
-# ended (the board still: no new direction). Prints three JSON lines: [phase, modules, steps
-# with a heading, collecting] (+ the steps run, in the last). Run by tests/test_layout.py on
-# CPython and MicroPython. The stored calibration is made by hand (a plausible 10-element
-# record for this world), so nothing of the calibration machinery runs before the check.
+# steps (the heading-only runtime), after it starts collecting, once that session has ended
+# (the board still: no new direction), and after set_location(). Prints four JSON lines:
+# [phase, modules, steps with a heading, collecting] (+ the steps run, or the location's
+# status). Run by tests/test_layout.py on CPython and MicroPython. The stored calibration is
+# made by hand (app_world.stored_calibration), so nothing of the calibration machinery runs
+# before the check.
 import json
 import sys
 
 sys.path.insert(0, "tests/scenarios")
 import app_world as W  # noqa: E402
-
-from firmware.calibration import Calibration  # noqa: E402
-from firmware.store import CalStore  # noqa: E402
 
 
 def firmware_modules():
@@ -21,11 +19,7 @@ def firmware_modules():
 
 b = W.make_sim("gy271", m=W.motion.still(30.0, 10.0, -5.0), seed=5)
 fs = W.MemFs()
-CalStore("/", sensor="qmc5883l", range_code=0, fs=fs).save(Calibration(
-    model=10, offset=(5400, -4200, 3600), invw=(27000, -2000, 1300, -2000, 29000, -1500,
-                                                1300, -1500, 28000),
-    field=6000, field_out=5900, fit_error=120, samples=220, coverage=80).to_bytes())
-app = W.make_app(b, store=CalStore("/", fs=fs))
+app = W.make_app(b, store=W.stored_calibration(fs))
 ok = sum(1 for _ in range(100) if app.step())
 print(json.dumps(["heading_only", firmware_modules(), ok, app.collector is not None]))
 app.calibrate()

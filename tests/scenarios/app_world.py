@@ -24,6 +24,17 @@ TILTED_POSES = ((30.0, 20.0, -15.0), (135.0, -25.0, 10.0), (250.0, 10.0, 30.0),
                 (300.0, -15.0, -25.0), (80.0, 0.0, 0.0))
 
 
+def stored_calibration(fs):
+    """A plausible 10-element record for this world, made by hand, saved in MemFs `fs` (so
+    nothing of the calibration machinery runs to make it)."""
+    from firmware.calibration import Calibration
+    CalStore("/", sensor="qmc5883l", range_code=0, fs=fs).save(Calibration(
+        model=10, offset=(5400, -4200, 3600), invw=(27000, -2000, 1300, -2000, 29000, -1500,
+                                                    1300, -1500, 28000),
+        field=6000, field_out=5900, fit_error=120, samples=220, coverage=80).to_bytes())
+    return CalStore("/", fs=fs)
+
+
 def make_world(m=None, hard_iron_ut=HARD_IRON_UT, soft_iron=SOFT_IRON):
     return World(field_ut=FIELD_UT, inclination_deg=INCLINATION_DEG,
                  declination_deg=DECLINATION_DEG, hard_iron_ut=hard_iron_ut,

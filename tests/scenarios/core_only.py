@@ -10,19 +10,13 @@ sys.path.insert(0, lib)
 sys.path.insert(1, "tests/scenarios")
 import app_world as W  # noqa: E402
 
-from firmware.calibration import Calibration  # noqa: E402
-from firmware.store import CalStore  # noqa: E402
 from firmware.app import status_line  # noqa: E402
 from firmware.boot import start  # noqa: E402
 
 assert sys.modules["firmware"].__file__.startswith(lib)
 b = W.make_sim("gy271", m=W.motion.still(30.0, 10.0, -5.0), seed=5)
 fs = W.MemFs()
-CalStore("/", sensor="qmc5883l", range_code=0, fs=fs).save(Calibration(
-    model=10, offset=(5400, -4200, 3600), invw=(27000, -2000, 1300, -2000, 29000, -1500,
-                                                1300, -1500, 28000),
-    field=6000, field_out=5900, fit_error=120, samples=220, coverage=80).to_bytes())
-app = W.make_app(b, store=CalStore("/", fs=fs))
+app = W.make_app(b, store=W.stored_calibration(fs))
 ok = sum(1 for _ in range(100) if app.step())
 print(json.dumps([ok, app.status, app.not_installed]))
 
