@@ -6,6 +6,7 @@ limits files, the chart, the CSV export, the trend, the detection rates on a sim
 of 1000 devices, the ingest time, and the same code on a throwaway PostgreSQL server.
 """
 import csv
+import io
 import glob
 import json
 import math
@@ -482,3 +483,69 @@ def test_postgresql_gives_the_same_answers_as_sqlite(pg_url, tmp_path, capsys):
     rc, out, _ = run(capsys, "--db", url, "check")
     s = fleet.score([json.loads(line) for line in out.splitlines()], truth)
     assert s["detection_rate"] >= 0.95 and s["false_alarm_rate"] <= 0.01
+
+
+# --- CSV export opened in a spreadsheet (OWASP: CSV injection) -----------------------------------
+FORMULA_NAMES = ('=HYPERLINK("http://x","y")', "+cmd|' /C calc'!A0", "@SUM(1+1)", "-2+3",
+                 "a=1")  # the last one is no formula: left as it is
+
+
+def _formula_db(capsys, tmp_path, db):
+    recs = [record(name, "2025-%02d-01T10:00:00Z" % (i + 1), offset=[-10.0, -5.0, 3.0])
+            for i, name in enumerate(FORMULA_NAMES)]
+    assert run(capsys, "--db", db, "ingest", write_jsonl(tmp_path / "f.jsonl", recs))[0] == 0
+    return recs
+
+
+def _export(capsys, db, *extra):
+    rc, out, err = run(capsys, "--db", db, "export", "--csv", "-", *extra)
+    assert rc == 0 and err == ""
+    return list(csv.DictReader(io.StringIO(out, newline="")))
+
+
+def _check_formula_export(capsys, db):
+    # (the server's database may hold other tests' records too: only these devices count)
+    mine = set(FORMULA_NAMES) | set("'" + n for n in FORMULA_NAMES)
+    rows = [r for r in _export(capsys, db) if r["device"] in mine]
+    devices = [r["device"] for r in rows]
+    for name in FORMULA_NAMES[:-1]:  # written as text: a leading '
+        assert "'" + name in devices and name not in devices
+    assert "a=1" in devices
+    for r in rows:  # numbers stay numbers, a negative one included
+        assert float(r["offset_x"]) == -10.0 and r["offset_x"].startswith("-")
+        assert r["time"][0].isdigit() and r["model"] == "10" and r["source"] == "cli"
+    raw = [r["device"] for r in _export(capsys, db, "--raw") if r["device"] in mine]
+    assert sorted(raw) == sorted(FORMULA_NAMES)  # --raw: the stored text
+
+
+def test_every_formula_start_gets_a_quote_and_numbers_none():
+    # a device name's leading tab or CR is stripped at ingest; any text column that keeps
+    # one (a future one) is written as text too
+    for v in ("=1", "+1", "-1", "@A1", "\t=1", "\r=1"):
+        assert quality.spreadsheet_text(v) == "'" + v
+    for v in ("1", "a-1", "", -2.5, 3, None, "'=1"):
+        assert quality.spreadsheet_text(v) == v
+
+
+def test_export_writes_formula_like_names_as_text_for_spreadsheets(tmp_path, capsys):
+    db = tmp_path / "q.db"
+    _formula_db(capsys, tmp_path, db)
+    _check_formula_export(capsys, db)
+
+
+def test_export_writes_formula_like_names_as_text_on_postgresql(pg_url, tmp_path, capsys):
+    url = pg_url[0]
+    _formula_db(capsys, tmp_path, url)
+    _check_formula_export(capsys, url)
+
+
+def test_the_chart_shows_device_names_as_typed(tmp_path, capsys):
+    # matplotlib reads $...$ as mathematics: an unknown command there would fail the plot
+    from host_sim.cli.qualitydb import chart
+    db = tmp_path / "q.db"
+    recs = history("$\\notacommand$", 3) + history('=HYPERLINK("x")', 3)
+    assert run(capsys, "--db", db, "ingest", write_jsonl(tmp_path / "c.jsonl", recs))[0] == 0
+    png = tmp_path / "c.png"
+    rc, out, err = run(capsys, "--db", db, "plot", "field", "-o", png)
+    assert rc == 0 and err == "" and png.read_bytes()[:4] == b"\x89PNG"
+    assert chart._text("$\\notacommand$") == "\\$\\notacommand\\$"

@@ -19,7 +19,9 @@ DB is an SQLite file (created by ingest) or postgresql://user@host:port/dbname
 commands:
   ingest FILE... [--skip-duplicates]   store JSON-line records (- reads stdin), all or none
   check [--limits FILE] [--k SIGMAS]   print each flagged record as a JSON line
-  export --csv FILE                    every record as CSV (- writes stdout)
+  export --csv FILE [--raw]            every record as CSV (- writes stdout); a text cell that
+                                       a spreadsheet would run as a formula gets a leading '
+                                       (--raw: as stored)
   plot PARAMETER -o FILE.png [--limits FILE] [--k SIGMAS] [--device D]...
   trend [--device D] [--json]          per parameter: mean, sigma, drift per month
 
@@ -77,6 +79,8 @@ def _parser(name):
         p.option("--k", _sigmas, metavar="SIGMAS", help="sigmas for learned limits")
     elif name == "export":
         p.option("--csv", "path", metavar="FILE", help="- for stdout")
+        p.option("--raw", "flag",
+                 help="text cells exactly as stored (no ' before a leading = + - @ tab CR)")
     else:
         p.option("--device", "str", metavar="D", help="only this device")
         p.option("--json", "flag", help="JSON lines instead of a table")
@@ -223,10 +227,24 @@ def cmd_check(a):
     return 1 if flags else 0
 
 
+# A text cell starting with one of these is a formula to a spreadsheet (OWASP: CSV injection):
+# the export writes it with a leading ' so Excel and LibreOffice Calc show it as text
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def spreadsheet_text(v):
+    """v for a CSV cell a spreadsheet opens: a str that a spreadsheet would take for a formula
+    gets a leading '; numbers (and None) stay as they are."""
+    if isinstance(v, str) and v.startswith(FORMULA_START):
+        return "'" + v
+    return v
+
+
 def cmd_export(a):
     from host_sim.cli.qualitydb.records import PARAMETERS
     cols = ("device", "time", "source", "model") + PARAMETERS + ("samples",)
     rows = _rows(a)
+    cell = (lambda v: v) if a.raw else spreadsheet_text
     try:
         f = sys.stdout if a.csv == "-" else open(a.csv, "w", newline="")
     except OSError as e:
@@ -235,7 +253,7 @@ def cmd_export(a):
         w = csv.writer(f)
         w.writerow(cols)
         for r in rows:
-            w.writerow([("" if r[c] is None else r[c]) for c in cols])
+            w.writerow([("" if r[c] is None else cell(r[c])) for c in cols])
     finally:
         if f is not sys.stdout:
             f.close()

@@ -4,6 +4,11 @@ the flagged records marked. matplotlib is imported here only."""
 import datetime
 
 
+def _text(s):
+    # matplotlib reads the text between two $ as mathematics: a device name is shown as typed
+    return s.replace("$", r"\$")
+
+
 def draw(rows, parameter, flags, fleet, fixed, out_path, mean=None, title=None):
     """rows: stored rows; flags: check() flags of this parameter; fleet: (low, high, centre)
     or None; fixed: (low or None, high or None); mean: the fleet mean (default: of rows)."""
@@ -23,7 +28,7 @@ def draw(rows, parameter, flags, fleet, fixed, out_path, mean=None, title=None):
         g.sort(key=lambda r: r["t_epoch"])
         ax.plot([when(r) for r in g], [r[parameter] for r in g], "-o",
                 lw=0.6 if many else 1.2, ms=1.5 if many else 3,
-                alpha=0.35 if many else 0.9, label=None if many else dev)
+                alpha=0.35 if many else 0.9, label=None if many else _text(dev))
     if mean is None and rows:
         mean = sum(r[parameter] for r in rows) / len(rows)
     if mean is not None:
@@ -40,7 +45,8 @@ def draw(rows, parameter, flags, fleet, fixed, out_path, mean=None, title=None):
         pts = [at[(f["device"], f["time"])] for f in flags if (f["device"], f["time"]) in at]
         ax.plot([when(r) for r in pts], [r[parameter] for r in pts], "x", color="tab:red",
                 ms=7, mew=1.5, label="flagged (%d)" % len(pts))
-    ax.set_title(title or "%s: %d records, %d devices" % (parameter, len(rows), len(groups)))
+    ax.set_title(_text(title) if title else
+                 "%s: %d records, %d devices" % (parameter, len(rows), len(groups)))
     ax.set_xlabel("calibration time (UTC)")
     ax.set_ylabel(parameter)
     ax.grid(alpha=0.3)
