@@ -10,7 +10,7 @@ BOARD  ?= rp2040
 PORT   ?= /dev/ttyACM0
 BUILD  := build/$(BOARD)
 
-.PHONY: help run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm wasm test-arm web soak
+.PHONY: help run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm wasm test-arm web soak tiers
 
 # make help: every target with one line (the `##` comment after its name)
 help:  ## list the targets
@@ -27,7 +27,7 @@ $(STAMP): requirements.txt
 run: $(STAMP)  ## the compass on the simulated board; writes build/calibration.png
 	$(PY) -m host_sim run
 
-test: $(STAMP) wasm web  ## the whole test suite on CPython and MicroPython
+test: $(STAMP) wasm web tiers  ## the whole test suite on CPython and MicroPython
 	$(PY) -m pytest -q
 
 # --- 32-bit test tiers (tests/mp.py) -------------------------------------------------------
@@ -60,9 +60,28 @@ web: $(STAMP) wasm  ## vendor the WebAssembly port into web/ for the browser cal
 	@if [ -d $(NPM_DIR)/node_modules/@micropython ]; then $(PY) -m host_sim web --vendor; \
 	else echo "web/vendor not made: $(NPM_DIR)/node_modules missing (make wasm needs node and npm)"; fi
 
-# arm: the parity scenarios on the Cortex-M qemu firmware in ../shared/tools (minutes; not in
-# `make test`). Installs qemu-system-arm from Debian when missing and run as root.
-test-arm: $(STAMP)  ## parity scenarios on the qemu Cortex-M tier (minutes)
+# tiers: the 32-bit interpreters of the x86-32 and arm tiers, in build/tools (tests/mp.py).
+# The registries carry none, so tools/build-micropython-tiers.sh builds them from a MicroPython
+# source tree (MICROPYTHON_SRC=/path/to/micropython at the pinned tag); a development machine
+# that has prebuilt ones in PREBUILT_TOOLS gets those copied. Without either, those tiers skip
+# and say why.
+TOOLS_DIR      := build/tools
+PREBUILT_TOOLS ?= ../shared/tools
+TIER_FILES     := micropython-x86-32 mpy-cross-x86-32 micropython-qemu-mps2-an385-armv6m.elf
+tiers:  ## the 32-bit tiers' MicroPython builds in build/tools (MICROPYTHON_SRC=... to build)
+	@if [ -x $(TOOLS_DIR)/micropython-x86-32 ]; then :; \
+	elif [ -n "$(MICROPYTHON_SRC)" ]; then \
+	  MICROPYTHON_SRC="$(MICROPYTHON_SRC)" tools/build-micropython-tiers.sh all \
+	    || echo "x86-32/arm tiers will skip: tools/build-micropython-tiers.sh failed"; \
+	elif [ -x $(PREBUILT_TOOLS)/micropython-x86-32 ]; then \
+	  mkdir -p $(TOOLS_DIR) && for f in $(TIER_FILES); do \
+	    [ -f $(PREBUILT_TOOLS)/$$f ] && cp -p $(PREBUILT_TOOLS)/$$f $(TOOLS_DIR)/; done; \
+	  echo "x86-32/arm tiers: prebuilt interpreters copied from $(PREBUILT_TOOLS) into $(TOOLS_DIR)"; \
+	else echo "x86-32/arm tiers will skip: no build in $(TOOLS_DIR) (MICROPYTHON_SRC=/path/to/micropython make tiers)"; fi
+
+# arm: the parity scenarios on the Cortex-M qemu firmware (build/tools, make tiers; minutes;
+# not in `make test`). Installs qemu-system-arm from Debian when missing and run as root.
+test-arm: $(STAMP) tiers  ## parity scenarios on the qemu Cortex-M tier (minutes)
 	@if ! command -v qemu-system-arm >/dev/null 2>&1; then \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
 	    apt-get update -qq && apt-get install -y -qq qemu-system-arm >/dev/null || exit 1; \
@@ -73,7 +92,7 @@ test-arm: $(STAMP)  ## parity scenarios on the qemu Cortex-M tier (minutes)
 fuzz: $(STAMP)  ## hypothesis properties with many more examples
 	HYPOTHESIS_PROFILE=fuzz $(PY) -m pytest -q tests
 
-bench: $(STAMP)  ## speed, memory, accuracy; writes docs/benchmarks.md
+bench: $(STAMP) tiers  ## speed, memory, accuracy; writes docs/benchmarks.md
 	$(PY) -m host_sim bench
 
 soak: $(STAMP)  ## the seeded fault campaign (docs/faults.md): a few minutes

@@ -7,7 +7,8 @@ not in float formatting.
 Tiers (TIERS, by name): "cpython"; "unix", the pip unix port (64-bit: 62-bit small ints);
 and two 32-bit interpreters with a board's word: "wasm", the MicroPython WebAssembly port from
 npm run by tests/wasm/run.mjs (31-bit small ints, no native emitter), and "x86-32", the 32-bit
-unix port with the native/viper emitter in ../shared/tools (its README). "arm", the Cortex-M
+unix port with the native/viper emitter (built by tools/build-micropython-tiers.sh into
+build/tools, or found in ECOMPASS_TOOLS). "arm", the Cortex-M
 qemu firmware, is opt-in (ARM_TIER=1, `make test-arm`): a run takes seconds. A tier that is
 missing has `reason`, and tests using it skip with that reason.
 """
@@ -55,10 +56,14 @@ WASM_DIR = os.path.join(ROOT, "tests", "wasm")
 NODE_MODULES = os.path.join(ROOT, "build", "npm", "node_modules")
 WASM_PKG = os.path.join(NODE_MODULES, "@micropython",
                         "micropython-webassembly-pyscript", "micropython.mjs")
-SHARED_TOOLS = os.environ.get("ECOMPASS_TOOLS", os.path.join(ROOT, "..", "shared", "tools"))
-X86_32 = os.path.join(SHARED_TOOLS, "micropython-x86-32")
-QEMU_ELF = os.path.join(SHARED_TOOLS, "micropython-qemu-mps2-an385-armv6m.elf")
-QEMU_RUN = os.path.join(SHARED_TOOLS, "run-qemu-mps2.sh")
+# the 32-bit builds (tools/build-micropython-tiers.sh makes them from a MicroPython source
+# tree): ECOMPASS_TOOLS, else build/tools in this repository
+TOOLS = os.environ.get("ECOMPASS_TOOLS", os.path.join(ROOT, "build", "tools"))
+BUILD_HINT = ("MICROPYTHON_SRC=/path/to/micropython-v1.28.0 tools/build-micropython-tiers.sh "
+              "(or ECOMPASS_TOOLS=DIR holding the builds)")
+X86_32 = os.path.join(TOOLS, "micropython-x86-32")
+QEMU_ELF = os.path.join(TOOLS, "micropython-qemu-mps2-an385-armv6m.elf")
+QEMU_RUN = os.path.join(ROOT, "tools", "run-qemu-mps2.sh")
 
 
 def _wasm_reason():
@@ -74,7 +79,7 @@ def _wasm_reason():
 
 def _x86_reason():
     if not os.access(X86_32, os.X_OK):
-        return "no 32-bit unix port at %s (see ../shared/tools/README.md)" % X86_32
+        return "no 32-bit unix port at %s: %s" % (X86_32, BUILD_HINT)
     return None
 
 
@@ -83,8 +88,8 @@ def _arm_reason():
         return "the qemu tier runs only in `make test-arm` (ARM_TIER=1)"
     if not shutil.which("qemu-system-arm"):
         return "qemu-system-arm not found (apt-get install -y qemu-system-arm)"
-    if not (os.path.exists(QEMU_ELF) and os.path.exists(QEMU_RUN)):
-        return "no qemu firmware at %s" % QEMU_ELF
+    if not os.path.exists(QEMU_ELF):
+        return "no qemu firmware at %s: %s" % (QEMU_ELF, BUILD_HINT)
     return None
 
 
@@ -101,7 +106,7 @@ TIERS = {
                  _wasm_reason(), lambda n: _xheap(n) + ["-X", "fixedheap"]),
     "x86-32": Tier("x86-32", [X86_32], True, 32, True, _x86_reason(), _xheap),
     "arm": Tier("arm", ["bash", QEMU_RUN, ROOT], True, 32, True, _arm_reason(),
-                env={"MPREMOTE": os.path.join(_BIN, "mpremote")}),
+                env={"MPREMOTE": os.path.join(_BIN, "mpremote"), "FW": QEMU_ELF}),
 }
 # the tiers parity_all compares with CPython, in this order
 PARITY_TIERS = ("unix", "wasm", "x86-32", "arm")

@@ -50,3 +50,16 @@ def test_images_exist():
             if not os.path.isfile(os.path.join(os.path.dirname(full), m.group(1))):
                 missing.append("%s: %s" % (os.path.relpath(full, ROOT), m.group(1)))
     assert seen >= 3 and not missing, missing
+
+
+def test_readme_and_docs_send_no_one_to_a_folder_outside_the_repository():
+    # what a user runs stands on the repository's own files (the 32-bit tiers: the build
+    # script and its variable, docs/design.md); a development folder beside it is not theirs
+    outside = re.compile(r"\.\./shared|\bshared/(tools|datasets|notes|seeds)\b")
+    for path in [os.path.join(ROOT, "README.md")] + sorted(
+            glob.glob(os.path.join(ROOT, "docs", "*.md"))):
+        up = 0 if os.path.dirname(path) == ROOT else 1  # docs/ may link ../README.md
+        for n, line in enumerate(open(path, encoding="utf-8"), 1):
+            assert not outside.search(line), "%s:%d: %s" % (path, n, line.strip())
+            for m in re.finditer(r"((?:\.\./)+)", line):
+                assert m.group(1).count("../") <= up, "%s:%d: %s" % (path, n, line.strip())

