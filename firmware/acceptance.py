@@ -26,6 +26,14 @@ CalibrationRejected(REASON_*, detail) with the numbers in the detail:
                     during the fit. ArduPilot's radius check is the same idea, looser: it bounds
                     the scale correction expected / fitted to 1/1.5 .. 1.5.
   fit_error_high    fit error above max_fit_error (hundredths of a percent).
+The same bar for a calibration that comes from anywhere (check_calibration: a MotionCal
+packet, a calibration file, a quick calibration, and each of the board's own fits before it
+is put in force): V in int16 (offset_out_of_range); B and the output field of the correction
+plausible (field_out_of_range: B 10 .. 90 uT at the sensor's gain; the output field at least
+1/8 of B and at most 2 B, and _MIN_FIELD_COUNTS - an InvW that scales the field to nothing
+would switch the interference check off); InvW symmetric, positive definite, eigenvalues
+within 5:1 and det(InvW) >= 2**-9 in Q15 (soft_iron_out_of_range: all zeros, minus the
+identity, a huge diagonal scaled down). docs/faults.md lists every refusal.
   not_better        the current calibration's fit error, aged, is lower ("sour grapes", Judd);
                     a higher-order model gets through at <= 3.5 % (NXP), and a fit covering
                     15 points more of the sphere at up to 3/2 the aged fit error.
@@ -107,6 +115,11 @@ CONSISTENCY_PCT = const(3)
 _RHO_DEN = const(4)
 _F_RATIO = const(10)
 _FLAT_HALF = const(20)
+
+
+_MAX_SCALE_DOWN = const(8)   # InvW shrinks |B| by at most 8 (cube root of det >= 1/8): a fit
+#                              within 5:1 soft iron scales it by >= 1/5.2 (Q15 rows <= 1)
+_MIN_DET_SHIFT = const(36)   # det(InvW) in Q15^3 >= 2**45 / 2**9: the same 1/8, cubed
 
 
 def reject(reason, detail):
@@ -247,3 +260,39 @@ def check_consistency(d2, den2, field, n, ee, ep, red, rest):
     reject(REASON_INCONSISTENT, "the older and newer halves of the %d samples put the hard "
            "iron %s of B apart (limit %d %%): the field changed while collecting (a magnet, "
            "a motor, a drifting offset)" % (n, _pct(pct), CONSISTENCY_PCT))
+
+
+def check_output_field(field, field_out):
+    """field_out_of_range unless the correction's output field (counts) is at least 1/8 of B
+    and _MIN_FIELD_COUNTS, and at most 2 B: an InvW that scales the field away would switch
+    the interference check off."""
+    if field_out < _MIN_FIELD_COUNTS or field_out * _MAX_SCALE_DOWN < field or \
+            field_out > 2 * field:
+        reject(REASON_FIELD_OUT_OF_RANGE, "the output field %d counts is not within 1/%d .. 2 "
+               "of B = %d counts: InvW would scale the field away"
+               % (field_out, _MAX_SCALE_DOWN, field))
+
+
+def check_calibration(cal, counts_per_gauss):
+    """The plausibility gate (the module docstring): CalibrationRejected(reason, detail) unless
+    `cal` (a Calibration with a model) could be put in force on a sensor of
+    counts_per_gauss (None: not known)."""
+    if cal.model is None:
+        return
+    check_offset(cal.offset)
+    f = cal.field
+    fo = cal.field_out
+    check_field(f, counts_per_gauss)
+    check_output_field(f, fo)
+    q = cal.invw
+    if q[1] != q[3] or q[2] != q[6] or q[5] != q[7]:
+        reject(REASON_SOFT_IRON_OUT_OF_RANGE, "InvW %r is not symmetric" % (tuple(q),))
+    from firmware import solve  # the gate's own: a board showing headings never loads it
+    r = [None]
+    for _ in solve.cond_steps(q, r):
+        pass
+    check_soft_iron(r[0], fo)
+    det = solve.det3([q[0:3], q[3:6], q[6:9]])
+    if det < 1 << _MIN_DET_SHIFT:
+        reject(REASON_SOFT_IRON_OUT_OF_RANGE, "det(InvW) = %d (Q15^3) < 2**%d: InvW shrinks "
+               "the field more than %d times" % (det, _MIN_DET_SHIFT, _MAX_SCALE_DOWN))

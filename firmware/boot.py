@@ -31,7 +31,7 @@ def _import(cal_file, store, mag):
         from firmware.calimport import import_calibration
     except ImportError:  # package-import.json not installed: the file waits for it
         return "%s found, but firmware.calimport is not installed" % cal_file
-    imported = import_calibration(cal_file, store, mag)
+    imported = import_calibration(cal_file, store, mag)  # never raises
     import_calibration = None
     drop("calimport")
     return imported[1] if imported is not None else None

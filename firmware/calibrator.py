@@ -30,6 +30,8 @@ from firmware.fixedpoint import rdiv
 from firmware.samples import (NOT_INT, REJECTED, REPLACED, SampleBuffer, bad_sample,
                               separation_for)
 
+_RAIL_HI = const(32767)        # int16 rails: a clipping chip reads its axis as one of them
+_RAIL_LO = const(-32768)
 DEFAULT_CAPACITY = const(300)   # samples (ArduPilot keeps 300, NXP 340): 1.8 KB of int16
 # Separation: a whole sphere saturates the buffer at 3/4 of its capacity (samples.py's
 # advice), 225 samples by default, about 0.19 R apart; one great circle then holds ~33.
@@ -78,10 +80,14 @@ class Calibrator:
     .expected_field: the field model's |B| in raw counts where the board is (set by
       firmware/location.py), or None; when set, a fit whose B is off by more than
       acceptance.FIELD_MATCH_PCT is refused (field_mismatch).
+    overflow: a chip's overflow marker (the HMC5883L's -4096), or None. A sample with an axis
+      at it or at the int16 rails (32767, -32768: a clipping chip) never enters a fit; add()
+      refuses it and counts it in .railed.
     """
 
     def __init__(self, model=10, capacity=DEFAULT_CAPACITY, separation=None,
-                 counts_per_gauss=None, current=None, max_fit_error=DEFAULT_MAX_FIT_ERROR):
+                 counts_per_gauss=None, current=None, max_fit_error=DEFAULT_MAX_FIT_ERROR,
+                 overflow=None):
         if model not in MODELS and model != "auto":
             raise ValueError("model %r: expected 'minmax', 4, 7, 10 or 'auto'" % (model,))
         _check_int("max_fit_error", max_fit_error, 1,
@@ -111,6 +117,8 @@ class Calibrator:
         self._strict = True
         self.overridden = []  # refusals a solve(checks=False) went past: (reason, detail)
         self.expected_field = None
+        self.overflow = overflow if overflow is not None else _RAIL_LO
+        self.railed = 0       # samples refused at the rails or the overflow marker
 
     @property
     def count(self):
@@ -138,7 +146,13 @@ class Calibrator:
         A rejected sample (the usual case) allocates nothing, not even a call frame: each
         step below keeps its arguments, locals and stack within the 11 words MicroPython
         keeps on the C stack. Raises ValueError for a value outside int16 and TypeError
-        naming x, y or z when one is not an int, before anything changes."""
+        naming x, y or z when one is not an int, before anything changes. A sample at a rail
+        (int16's, or the overflow marker) is refused and counted in .railed."""
+        o = self.overflow
+        if (x == _RAIL_HI or y == _RAIL_HI or z == _RAIL_HI or x == _RAIL_LO or y == _RAIL_LO
+                or z == _RAIL_LO or x == o or y == o or z == o):
+            self.railed += 1
+            return False
         r = self.buffer.offer(x, y, z)
         if r != REJECTED:
             if r == REPLACED:
@@ -520,9 +534,10 @@ class Collector:
     """
 
     def __init__(self, model=10, capacity=DEFAULT_CAPACITY, counts_per_gauss=None,
-                 current=None, solve_every=SOLVE_EVERY, fallback=True):
+                 current=None, solve_every=SOLVE_EVERY, fallback=True, overflow=None):
         self.calibrator = Calibrator(model=model, capacity=capacity,
-                                     counts_per_gauss=counts_per_gauss, current=current)
+                                     counts_per_gauss=counts_per_gauss, current=current,
+                                     overflow=overflow)
         self.model = model
         self.solve_every = solve_every
         self.fallback = fallback

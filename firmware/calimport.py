@@ -8,7 +8,9 @@ The file is what `python -m host_sim calibrate LOG.csv --sensor KIND --out FILE`
 (one JSON object; its keys are described in docs/calibration.md). import_calibration checks
 that it is that format and version, that it was made for this chip (`sensor` == mag.KIND) at
 this range (`range_code` == mag.range_code), and that the record means something (the
-Calibration constructor refuses a bad field with ValueError naming it). A valid file is saved
+Calibration constructor refuses a bad field with ValueError naming it) and that it meets the
+board's own bar (firmware.acceptance.check_calibration: plausible fields, InvW positive
+definite within 5:1, offsets in range; a refusal names its reason). A valid file is saved
 with the store's power-safe save() and renamed NAME.imported, so it is imported once; an
 invalid one is renamed NAME.rejected and the store is left as it was. If the save itself fails
 (a full or read-only filesystem), the file stays where it is and the next boot tries again.
@@ -97,15 +99,32 @@ def import_calibration(path, store, mag):
 
     Returns None when there is no file, (True, message) when it was stored (the file is
     renamed PATH.imported), (False, reason) when it was refused (renamed PATH.rejected, store
-    untouched) or could not be saved (file left in place for the next boot)."""
+    untouched) or could not be saved (file left in place for the next boot). Never raises:
+    whatever reading or parsing the file raises (a nesting too deep for the JSON parser,
+    memory, encoding, I/O) refuses the file, and the board boots with its stored calibration."""
+    try:
+        return _import(path, store, mag)
+    except Exception as e:  # noqa: BLE001 - RecursionError/RuntimeError, MemoryError, ...
+        _rename(path, REJECTED_SUFFIX)
+        return False, "rejected %s: %s %s" % (path, type(e).__name__, e)
+
+
+def _import(path, store, mag):
+    from firmware.acceptance import check_calibration
+    from firmware.errors import CalibrationRejected
     text = _read(path)
     if text is None:
         return None
     try:
         cal = parse(text, mag.KIND, mag.range_code)
+        check_calibration(cal, getattr(mag, "counts_per_gauss", None))  # the board's own bar
+    except CalibrationRejected as e:
+        _rename(path, REJECTED_SUFFIX)
+        return False, "rejected %s: %s: %s" % (path, e.reason, e.detail)
     except ValueError as e:
         _rename(path, REJECTED_SUFFIX)
         return False, "rejected %s: %s" % (path, e)
+    text = None
     store.sensor = mag.KIND
     store.range_code = mag.range_code
     try:

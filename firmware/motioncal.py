@@ -391,8 +391,12 @@ def calibration_fields(packet, counts_per_gauss):
     dq = solve.det3([invw[0:3], invw[3:6], invw[6:9]])
     # field_out in Q17 = cbrt(bc_q16**3 * 8 * dq 2**-45 / (dw 2**-72)), then rounded
     r = icbrt((bc_q16 ** 3 * dq << (3 + 3 * _INVW_FRAC_BITS - 45)) // dw)
+    field = rdiv(bc_q16, _Q16)
+    field_out = (r + (1 << 16)) >> 17
+    # a huge invW is scaled down to Q15: its output field would be ~0, the check off
+    acceptance.check_output_field(field, field_out)
     return {"model": 10, "offset": tuple(offset), "invw": invw,
-            "field": rdiv(bc_q16, _Q16), "field_out": (r + (1 << 16)) >> 17}
+            "field": field, "field_out": field_out}
 
 
 # ---- board -> MotionCal: the Cal1/Cal2 echo ---------------------------------------------------

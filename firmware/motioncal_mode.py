@@ -67,6 +67,7 @@ STATUS_APPLIED = "applied"
 STATUS_REJECTED = "rejected"
 STATUS_BAD_CRC = "bad_crc"
 STATUS_TRUNCATED = "truncated"
+REASON_NOT_A_CALIBRATION = "not_a_calibration"  # .last_reason: the record itself is refused
 
 DEFAULT_RATE_HZ = const(50)
 _MAX_RATE_HZ = const(400)          # MotionCal reads 256 bytes / 14 ms: ~400 Raw lines/s
@@ -296,6 +297,10 @@ class MotionCalMode:
             self.rejected += 1
             self._refused(STATUS_REJECTED, e.reason, e.detail)
             return None
+        except ValueError as e:  # a record Calibration refuses: refused, never a crash
+            self.rejected += 1
+            self._refused(STATUS_REJECTED, REASON_NOT_A_CALIBRATION, str(e))
+            return None
         app = self.app
         app.collector = None  # the user's choice stands (module docstring)
         stored = app.stored
@@ -316,10 +321,13 @@ class MotionCalMode:
 
     def _calibration(self, packet):
         from firmware.calibration import Calibration
+        from firmware.acceptance import check_calibration
         f = mc.calibration_fields(packet, self._cpg)
-        return Calibration(model=f["model"], offset=f["offset"], invw=f["invw"],
-                           field=f["field"], field_out=f["field_out"],
-                           fit_error=MC_FIT_ERROR, samples=MC_SAMPLES, coverage=MC_COVERAGE)
+        cal = Calibration(model=f["model"], offset=f["offset"], invw=f["invw"],
+                          field=f["field"], field_out=f["field_out"],
+                          fit_error=MC_FIT_ERROR, samples=MC_SAMPLES, coverage=MC_COVERAGE)
+        check_calibration(cal, self._cpg)  # the board's own bar (firmware/acceptance.py)
+        return cal
 
     def _refused(self, status, reason, detail):
         self.status = status

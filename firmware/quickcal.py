@@ -204,6 +204,7 @@ def quick_calibrate(app, true_heading_cdeg, refine=False, samples=32):
     n, raw, g = _still_samples(app, samples)
     qc.add(raw, g, n, cdeg_to_kang(true_heading_cdeg))
     cal = qc.result()
+    acceptance.check_calibration(cal, app.mag.counts_per_gauss)  # the board's own bar
     app.quick = qc
     app._use(cal)
     if app.collector is not None:

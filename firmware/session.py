@@ -26,6 +26,7 @@ from firmware import compass
 from firmware.compat import const, drop
 
 _DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
+_HMC_OVERFLOW = const(-4096)  # the HMC5883L's overflow marker (its datasheet, data registers)
 _DONE_QUIET_US = const(3000000)  # no new direction for 3 s (the collector's quiet period)
 _FLAG_ACCEPTED = const(1)     # firmware.history's entry flags
 _FLAG_PENDING = const(2)
@@ -43,7 +44,8 @@ def start(app):
     samples.use_kernels(compass.KERNELS or False)
     c = Collector(model=app.model, capacity=app.capacity,
                   counts_per_gauss=app.mag.counts_per_gauss, current=app.calibration,
-                  solve_every=app.solve_every, fallback=app.fallback)
+                  solve_every=app.solve_every, fallback=app.fallback,
+                  overflow=_HMC_OVERFLOW if app.mag.KIND == "hmc5883l" else None)
     return c
 
 
@@ -67,6 +69,17 @@ def solve(app):
 
 
 def accept(app, cal):
+    from firmware.acceptance import check_calibration
+    from firmware.errors import CalibrationRejected
+    try:  # the gate every calibration meets (firmware/acceptance.py); the fit passed its parts
+        check_calibration(cal, app.mag.counts_per_gauss)
+    except CalibrationRejected as e:
+        c = app.collector
+        c.accepted -= 1
+        c.refused += 1
+        c.last_reason = e.reason
+        c.last_detail = e.detail
+        return
     jump = history_check(app, cal)
     if jump is None:
         app._use(cal)

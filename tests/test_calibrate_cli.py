@@ -137,3 +137,36 @@ def test_runs_under_micropython_with_the_same_result(tmp_path):
     mpy = json.loads(mp.run(["-m", "host_sim", "calibrate", p, "--json"], micro=True))
     assert cp["invw_q15"] == mpy["invw_q15"] and cp["samples_used"] == mpy["samples_used"]
     assert np.allclose(cp["offset"], mpy["offset"]) and cp["field"] == mpy["field"]
+
+
+def _clipped_csv(tmp_path, name, centre, radius, rail_lo, rail_hi, markers=0, marker=-4096):
+    rng = np.random.default_rng(7)
+    u = rng.normal(size=(4000, 3))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    pts = np.round(u * radius + np.array(centre) + rng.normal(scale=2.0, size=u.shape))
+    pts = np.clip(pts, rail_lo, rail_hi)  # the chip clips at its rails
+    rows = [list(map(int, p)) for p in pts]
+    for k in range(markers):  # overflow markers on a whole sample, as the HMC5883L writes them
+        rows[k * 37] = [marker, marker, marker]
+    return write_csv(tmp_path / name, rows, fmt="%d"), int((np.abs(pts) >= 32767).any(axis=1).sum())
+
+
+def test_samples_at_the_int16_rails_never_enter_the_fit_and_are_counted(tmp_path, capsys):
+    # a QMC5883L at +-2 G clipping: the centre 27000 counts + 6000 reaches past 32767
+    p, n_rail = _clipped_csv(tmp_path, "clip.csv", (27000, 0, 0), 6000, -32768, 32767)
+    assert n_rail > 30
+    assert cli.main([p, "--json", "--sensor", "qmc5883l", "--units", "counts"]) == 0
+    out, err = capsys.readouterr()
+    r = json.loads(out)
+    assert abs(r["offset"][0] - 27000) < 0.005 * 6000 and abs(r["field"] - 6000) < 30
+    assert "sample(s) at the sensor's rails dropped" in err
+    n = int(err.split(" sample(s) at the sensor's rails")[0].split()[-1])
+    assert n >= n_rail  # every clipped row, one reading 32767 counted
+
+
+def test_hmc5883l_overflow_markers_are_dropped_not_a_singular_fit(tmp_path, capsys):
+    p, _ = _clipped_csv(tmp_path, "hmc.csv", (120, -80, 40), 600, -2048, 2047, markers=40)
+    assert cli.main([p, "--json", "--sensor", "hmc5883l", "--units", "counts"]) == 0
+    out, err = capsys.readouterr()
+    r = json.loads(out)
+    assert abs(r["offset"][0] - 120) < 5 and "40 sample(s) at the sensor's rails dropped" in err

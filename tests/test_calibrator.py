@@ -530,3 +530,19 @@ def test_a_fit_over_more_of_the_sphere_replaces_a_partial_one_with_a_lower_fit_e
     cal.current = same
     e = rejected(cal, 10)
     assert e.reason == acceptance.REASON_NOT_BETTER and "coverage" in e.detail
+
+
+def test_samples_at_a_chips_rails_never_enter_the_fit_and_are_counted():
+    # int16 rails (a clipping chip) always; the HMC5883L's -4096 marker when it is the chip's
+    c = Calibrator(model=10, counts_per_gauss=12000)
+    assert c.add(100, 200, 300) and c.count == 1
+    for s in ((32767, 0, 0), (0, -32768, 5), (7, 8, 32767)):
+        assert not c.add(*s)
+    assert c.count == 1 and c.railed == 3
+    assert c.add(-4096, 900, 900)  # a plain reading on a QMC chip
+    h = Calibrator(model=10, counts_per_gauss=1090, overflow=-4096)
+    assert not h.add(-4096, 12, 13) and h.railed == 1 and h.count == 0
+    from firmware.calibrator import Collector
+    col = Collector(counts_per_gauss=1090, overflow=-4096)
+    col.feed([-4096, -4096, -4096])
+    assert col.calibrator.railed == 1 and col.calibrator.count == 0

@@ -19,7 +19,7 @@ ROOT = mp.ROOT
 
 
 class _Mag:
-    KIND, range_code = "qmc5883l", 0
+    KIND, range_code, counts_per_gauss = "qmc5883l", 0, 12000
 
 
 @pytest.fixture(scope="module")
@@ -59,6 +59,13 @@ def test_import_stores_the_file_and_renames_it_once(fitted, tmp_path):
     ({"field_out_counts": 0}, "field"),
     ({"coverage_percent": 101}, "coverage"),
     (None, "not a JSON"),
+    # valid on the wire, absurd on a board (the board's own bar, firmware/acceptance.py)
+    ({"invw_q15": [0] * 9}, "soft_iron_out_of_range"),            # every heading fails
+    ({"invw_q15": [-32767, 0, 0, 0, -32767, 0, 0, 0, -32767]},     # turns it by 180 deg
+     "soft_iron_out_of_range"),
+    ({"field_out_counts": 10 ** 9}, "field_out_of_range"),         # all "interference"
+    ({"field_out_counts": 100}, "field_out_of_range"),             # the check switched off
+    ({"invw_q15": [32000, 100, 0, 0, 32000, 0, 0, 0, 32000]}, "symmetric"),
 ])
 def test_an_invalid_file_is_renamed_rejected_and_the_store_kept(fitted, tmp_path, change, why):
     store = CalStore(str(tmp_path))
@@ -117,3 +124,18 @@ def test_imported_calibration_gives_the_true_heading_on_the_simulator(fitted, tm
                 e.append((app.heading_kang * 360.0 / 65536 - true + 180) % 360 - 180)
             errors.append(abs(sum(e[2:]) / len(e[2:])))
     assert len(errors) == 16 and max(errors) < 1.0, errors
+
+
+@pytest.mark.parametrize("tier", ["cpython", "unix", "wasm", "x86-32"])
+def test_the_boot_import_never_raises_and_the_board_keeps_its_calibration(tier):
+    # a JSON nesting too deep for the parser, a file that is not UTF-8, MemoryError and EIO
+    # while reading, on every interpreter (tests/scenarios/calimport_faults.py)
+    if not mp.TIERS[tier].available:
+        pytest.skip("%s tier: %s" % (tier, mp.TIERS[tier].reason))
+    lines = mp.json_lines(mp.run(["tests/scenarios/calimport_faults.py"], tier))
+    assert [ln[0] for ln in lines] == ["deep_nesting", "not_utf8", "no_memory", "eio",
+                                       "good"]
+    for case, refused, renamed, kept, where in lines[:-1]:
+        assert refused and kept, case          # refused, and the stored calibration stays
+        assert renamed or case == "eio", case  # renamed .rejected where the file can be
+    assert lines[-1][1:4] == [False, True, False]  # then a good file is still imported

@@ -411,7 +411,7 @@ def pg_url():
     bindir = _pg_bindir()
     if bindir is None:
         pytest.skip("PostgreSQL server binaries not installed (/usr/lib/postgresql/*/bin; "
-                    "apt-get install postgresql, see docs/quality.md)")
+                    "as root: make postgres, or apt-get install -y postgresql; docs/quality.md)")
     pytest.importorskip("pg8000", reason="pg8000 not installed (requirements.txt)")
     kw = {}
     d = tempfile.mkdtemp(prefix="quality-pg-")

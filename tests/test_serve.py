@@ -170,6 +170,10 @@ def _bad_crc():
     ("soft iron 10:1", _packet(W=((3.0, 0, 0), (0, 0.3, 0), (0, 0, 1.0))),
      "rejected", "soft_iron_out_of_range"),
     ("NaN", _packet(V=(float("nan"), 0.0, 0.0)), "rejected", "not_a_number"),
+    # a correct CRC and a diagonal of 1e30: scaled to the identity in Q15, the output field
+    # would be 0 and the interference check off (firmware/acceptance.py check_calibration)
+    ("diagonal 1e30", _packet(W=((1e30, 0, 0), (0, 1e30, 0), (0, 0, 1e30))), "rejected",
+     "field_out_of_range"),
 ])
 def test_a_bad_packet_is_refused_with_a_status_and_the_stored_calibration_is_untouched(
         name, data, status, reason):
@@ -178,6 +182,7 @@ def test_a_bad_packet_is_refused_with_a_status_and_the_stored_calibration_is_unt
     assert s.mode.status == status and s.mode.last_reason == reason, (name, s.mode.last_detail)
     assert _stored(s) == files and s.app.calibration is cal
     assert ("mcmode: rejected %s" % reason).encode() in line.out
+    assert line.out.count(b"Cal1:") == 1  # the echo of the good packet only
     mc = MotionCal()
     mc.read(bytes(line.out))
     assert mc.failures == 0  # the status line does not disturb MotionCal's parser

@@ -240,14 +240,19 @@ def run(opts):
     model = _model(opts["model"])
     try:
         cal = Calibrator(model=model, capacity=opts["capacity"], separation=opts["separation"],
-                         counts_per_gauss=cpg, max_fit_error=mfe)
+                         counts_per_gauss=cpg, max_fit_error=mfe,
+                         overflow=-4096 if board.sensor == "hmc5883l" else None)
     except MemoryError:
         raise UsageError("--capacity %d: out of memory; give a smaller one" % opts["capacity"])
     olo, ohi = board.output
     used = 0
+    markers = 0  # samples holding the HMC5883L's overflow marker: dropped, not "corrupt"
     names = None
     for lineno, row in log.rows():
         v = [logfile.convert(m, d, num, den) for m, d in row]
+        if cal.overflow == -4096 and -4096 in v:
+            markers += 1
+            continue
         bad = -1
         for k in range(3):
             if not olo <= v[k] <= ohi:
@@ -261,7 +266,8 @@ def run(opts):
             continue
         used += 1
         cal.add(v[0], v[1], v[2])
-    info = {"rows": log.rows_read + log.skipped, "used": used, "skipped": log.skipped,
+    info = {"rows": log.rows_read + log.skipped, "used": used, "railed": cal.railed + markers,
+            "skipped": log.skipped,
             "warnings": log.warnings, "num": num, "den": den, "p": p, "cpg": cpg,
             "held": cal.count, "separation": cal.separation, "board": board, "log": log}
     if used == 0:
@@ -326,7 +332,10 @@ def report(c, info, date):
     return r
 
 
-def _print_warnings(log):
+def _print_warnings(log, railed=0):
+    if railed:
+        warn(COMMAND, "%s: %d sample(s) at the sensor's rails dropped (int16 limits or an "
+             "overflow marker: a clipping or overflowing chip)" % (log.path, railed))
     for ln, msg in log.warnings:
         warn(COMMAND, "%s: line %d skipped: %s" % (log.path, ln, msg))
     more = log.skipped - len(log.warnings)
@@ -364,7 +373,7 @@ def _refused(opts, rej, info):
 def body(opts):
     date = opts["date"] or calfile.iso_date()
     c, rej, info = run(opts)
-    _print_warnings(info["log"])
+    _print_warnings(info["log"], info["railed"])
     if rej is not None:
         return _refused(opts, rej, info)
     forced = info.get("forced")
