@@ -234,6 +234,7 @@ def collect(smoke, log=print):
             log("  %-10s %s x %d" % (name, "micropython" if micro else "cpython", procs))
             res[name]["micropython" if micro else "cpython"] = run_merged(name, micro, args,
                                                                          procs)
+    res["boardtime"] = boardtime(log) if not smoke else {"skipped": "not in --smoke"}
     for name in ("accuracy", "intcount", "quality", "fieldacc", "quickcal", "soak"):
         log("  %-10s cpython" % name)
         res[name] = {"cpython": run_script(name, False, args)}
@@ -265,6 +266,83 @@ def collect(smoke, log=print):
     else:
         res["memory32"] = {"error": "no 32-bit MicroPython at %s" % MICROPYTHON_32}
     return res
+
+
+QEMU_ELF = os.path.join(TOOLS, "micropython-qemu-mps2-an385-armv6m.elf")
+QEMU_RUN = os.path.join(ROOT, "tools", "run-qemu-mps2.sh")
+RP2040_HZ = 125000000
+
+
+def boardtime(log=print, timeout=900):
+    """Instruction counts in the qemu Cortex-M guest (benchmarks/boardtime.py, -icount
+    shift=0), or {'skipped': why}. The session and its calibration are written here."""
+    import shutil
+    if not shutil.which("qemu-system-arm"):
+        return {"skipped": "qemu-system-arm not installed (as root: apt-get install -y "
+                           "qemu-system-arm)"}
+    if not os.path.exists(QEMU_ELF):
+        return {"skipped": "no qemu firmware at %s (make tiers)" % QEMU_ELF}
+    from host_sim.cli.benchmarks import apppath, common
+    d = os.path.join(ROOT, "build", "boardtime")
+    os.makedirs(d, exist_ok=True)
+    n = 3000
+    mag, acc = common.session(n, dt_us=5000)
+    with open(os.path.join(d, "session.bin"), "wb") as f:
+        f.write(bytes(mag) + bytes(acc))
+    bus = common.replay_board(bytes(mag), bytes(acc))
+    app, clock = apppath.make_app(bus, False)
+    apppath.calibrate(app, clock, n)
+    with open(os.path.join(d, "cal.bin"), "wb") as f:
+        f.write(app.calibration.to_bytes())
+    log("  boardtime  qemu Cortex-M, -icount shift=0")
+    env = dict(os.environ, QEMU_ICOUNT="0", FW=QEMU_ELF, MPREMOTE=os.path.join(BIN, "mpremote"))
+    try:
+        p = subprocess.run(["bash", QEMU_RUN, ROOT, "host_sim/cli/benchmarks/boardtime.py"],
+                           cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return {"error": "qemu run timed out after %d s" % timeout}
+    lines = [ln for ln in p.stdout.replace("\r\n", "\n").splitlines() if ln.startswith("{")]
+    if p.returncode != 0 or not lines:
+        return {"error": "exit %d: %s" % (p.returncode, (p.stderr or p.stdout)[-400:])}
+    return json.loads(lines[-1])
+
+
+def rp2040_from_icount(bt):
+    """RP2040 estimates from the guest's instruction counts. The cycles a board spends per
+    instruction the guest counts are measured, not assumed: the reference loops' published
+    RP2040 times (yardstick.py) divided by their counted instructions - int_add (a bytecode
+    loop: the VM's mix) and pi_1000 (long-int arithmetic) give the two ends. That factor holds
+    together the Cortex-M0+'s cycles per instruction (loads, stores and taken branches take
+    2), the longer Thumb-1 code of an M0+ build of the runtime against the guest's Cortex-M3
+    one, and the RP2040's flash cache. The step adds the I2C wire time at 400 kHz and leaves
+    out the replay bus's own instructions."""
+    from host_sim.cli.benchmarks.yardstick import PUBLISHED_MS
+    ys = bt.get("yardstick_kinstr") or {}
+    pub = PUBLISHED_MS["rp2040_125mhz"]
+    if not ys.get("int_add_per_1000") or not ys.get("pi_1000"):
+        return None
+    k_add = pub["int_add"] / 1e6 * 1e-3 * RP2040_HZ / (ys["int_add_per_1000"] * 1000 / 1000.0)
+    k_pi = pub["pi_1000"] * 1e-3 * RP2040_HZ / (ys["pi_1000"] * 1000.0)
+    lo, hi = min(k_add, k_pi), max(k_add, k_pi)
+    wire = wire_us(1) + wire_us(6) + wire_us(6) + wire_us(2)
+    bus = bt.get("bus_kinstr") or 0
+    out = {"cycles_per_instr": {"int_add": k_add, "pi_1000": k_pi}, "wire_us": wire}
+    for kind in ("fast", "plain"):
+        for key, name in (("step_kinstr", "step"), ("collect_kinstr", "collect")):
+            ki = (bt.get(key) or {}).get(kind)
+            if ki is not None:
+                instr = (ki - bus) * 1000
+                out["%s_%s_us" % (name, kind)] = [wire + instr * k / RP2040_HZ * 1e6
+                                                  for k in (lo, hi)]
+    sv = bt.get("solve_kinstr") or {}
+    if sv.get("per_slice"):
+        step_hi = out.get("step_fast_us", [0, 0])[1]
+        over = [t for t in sv["per_slice"] if step_hi + t * 1000 * hi / RP2040_HZ * 1e6 > 5000]
+        out["solve_ms"] = [sv["total"] * 1000 * k / RP2040_HZ * 1e3 for k in (lo, hi)]
+        out["worst_slice_us"] = [sv["worst"] * 1000 * k / RP2040_HZ * 1e6 for k in (lo, hi)]
+        out["slices"] = sv["slices"]
+        out["slices_past_5ms"] = len(over)
+    return out
 
 
 def memory32(session, build, smoke, log=print):
@@ -633,6 +711,44 @@ def rows_32bit(res):
     return R
 
 
+def rows_boardtime(res):
+    """RP2040 estimates from qemu instruction counts (rp2040_from_icount)."""
+    bt = res.get("boardtime") or {}
+    if "skipped" in bt or "error" in bt:
+        return [("6 rp2040 from qemu instruction counts", "", str(bt.get("skipped") or
+                                                                  bt.get("error"))[:70], "",
+                 "" if "skipped" in bt else "ERROR")]
+    e = rp2040_from_icount(bt)
+    if e is None:
+        return [("6 rp2040 from qemu instruction counts", "", "no yardstick counts", "", "ERROR")]
+    k = e["cycles_per_instr"]
+    R = [("6 rp2040 from qemu icount: cycles per counted instruction, int loop / long ints",
+          "", "%.2f / %.2f" % (k["int_add"], k["pi_1000"]),
+          "published RP2040 loop times / their guest counts", "measured")]
+
+    def ms(v):
+        return "%.2f-%.2f" % (v[0] / 1000, v[1] / 1000)
+    for name, what in (("step", "calibrated board (session ended)"),
+                       ("collect", "while collecting")):
+        f = e.get("%s_fast_us" % name)
+        p = e.get("%s_plain_us" % name)
+        if f is None or p is None:
+            continue
+        goal = name == "step"
+        R.append(("6 rp2040 from qemu icount: app step, %s, fast / bytecode [ms]" % what, "",
+                  "%s / %s" % (ms(f), ms(p)), "goal <= 1.0 / 2.0 ms" if goal else "",
+                  verdict(f[1] <= 1000 and p[1] <= 2000) if goal else ""))
+    if "solve_ms" in e:
+        R.append(("6 rp2040 from qemu icount: one 10-element solve [ms], worst slice [us]", "",
+                  "%s; %.0f-%.0f" % (ms([x * 1000 for x in e["solve_ms"]]),
+                                     e["worst_slice_us"][0], e["worst_slice_us"][1]),
+                  "%d slices" % e["slices"], ""))
+        R.append(("6 rp2040 from qemu icount: slices that push a step past 5 ms (200 Hz)", "",
+                  "%d of %d" % (e["slices_past_5ms"], e["slices"]), "goal 0",
+                  verdict(e["slices_past_5ms"] == 0)))
+    return R
+
+
 def rows_profiles(m):
     """The board profiles (benchmarks/profiles.py): what a board holds while it does one job,
     against the issue's goal (.mpy) and the budget tests/test_budgets.py holds
@@ -859,6 +975,7 @@ def rows(res, derived):
         if s10:
             R.append(("6 %s est.: solve 10 [ms]" % b, "", "%.0f (<= %.0f)" % (
                 s10["estimate_ms"], s10["upper_ms"]), "%d long-int ops" % s10["long_ops"], ""))
+    R.extend(rows_boardtime(res))
     R.extend(rows_32bit(res))
     R.extend(rows_quality(res))
     R.extend(rows_location(res))

@@ -322,7 +322,7 @@ def report(c, info, date):
         "scale": num / den,
         "fit_error_percent": c.fit_error / 100,
         "samples_used": c.samples,
-        "rows": info["rows"], "skipped_rows": info["skipped"],
+        "rows": info["rows"], "skipped_rows": info["skipped"], "rail_samples": info["railed"],
         "warnings": ["line %d: %s" % w for w in info["warnings"]],
     })
     if info["cpg"]:
@@ -360,6 +360,7 @@ def _refused(opts, rej, info):
     if opts["json"]:
         print(json.dumps({"rejected": rej.reason, "detail": rej.detail, "hint": hint,
                           "rows": info["rows"], "skipped_rows": info["skipped"],
+                          "rail_samples": info["railed"],
                           "samples_held": info["held"]}))
     else:
         print("calibration refused: %s" % rej.reason)
