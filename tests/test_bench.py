@@ -174,3 +174,29 @@ def test_the_soak_block_is_replaced_alone(tmp_path):
     text = p.read_text()
     assert "second" in text and "first" not in text and "table" in text
     assert text.index(bench.SOAK_END) < text.index(bench.END)
+
+
+def test_board_time_from_qemu_instruction_counts_is_repeatable_and_plausible():
+    # benchmarks/boardtime.py in the Cortex-M guest under -icount shift=0: the counts are the
+    # same on a second run, and the RP2040 factors they give are those of a real board
+    from host_sim.cli import bench
+    import shutil
+    if not shutil.which("qemu-system-arm") or not os.path.exists(bench.QEMU_ELF):
+        pytest.skip("qemu-system-arm or the qemu firmware is missing (make tiers; as root: "
+                    "apt-get install -y qemu-system-arm)")
+    a = bench.boardtime()
+    b = bench.boardtime()
+    assert "error" not in a, a
+
+    def same(x, y):  # to a thousandth: the guest's clock ticks in microseconds
+        return abs(x - y) <= 1 + x / 1000
+    for k in ("int_add_per_1000", "pi_1000"):
+        assert same(a["yardstick_kinstr"][k], b["yardstick_kinstr"][k])
+    assert same(a["solve_kinstr"]["total"], b["solve_kinstr"]["total"])
+    for kind in ("fast", "plain"):
+        assert same(a["step_kinstr"][kind], b["step_kinstr"][kind])
+    assert a["step_kinstr"]["fast"] < a["step_kinstr"]["plain"] < a["collect_kinstr"]["plain"]
+    e = bench.rp2040_from_icount(a)
+    # an M0+ at 125 MHz: 1 to 3 cycles for each instruction the M3 guest counts
+    assert all(1.0 < k < 3.0 for k in e["cycles_per_instr"].values()), e["cycles_per_instr"]
+    assert 0 < e["slices_past_5ms"] <= e["slices"] and e["solve_ms"][0] > 50
