@@ -359,6 +359,7 @@ def fit_steps(c, s, model, out, check=None):
     s = yield from _recentre_steps(c, s, f)
     a, r = yield from _least_squares_steps(s, model, f)
     yield from _rho_steps(a, r, s, model, f)
+    a = r = s = None  # the elimination's numbers: the quadric needs only f from here
     if check is not None:
         check(f)
     yield
@@ -395,6 +396,8 @@ def _least_squares_steps(s, model, f):
         row = m[i] + [r[i]] + [0] * nc
         row[nc + 1 + i] = 1
         a.append(row)
+        m[i] = None  # its entries now live in a only: each is dropped as it is eliminated
+    m = None
     yield from _bareiss_steps(a, nc, 2 * nc + 1)
     yield
     d = a[nc - 1][nc - 1]
