@@ -1264,8 +1264,8 @@ def boards_section(res):
              "| deployment | heading from a stored calibration (live heap) | fits | "
              "first calibration on the board (smallest heap) | fits | after that session |",
              "|---|---|---|---|---|---|"] + rows + [
-             "", "| part (`package-PART.json`) | for | code + names on the heap, .mpy / "
-             "ROMFS |", "|---|---|---|"]
+             "", "| part (`package-PART.json`) | for | heap with all its modules loaded "
+             "(the core's boot code leaves after boot), .mpy / ROMFS |", "|---|---|---|"]
     for part in names:
         if part in parts:
             lines.append("| %s | %s | %s / %s |" % (part, names[part], _kbf(parts[part][0]),
