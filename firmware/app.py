@@ -30,10 +30,13 @@ step() reads one sample and does a bounded amount of other work; True when it pr
 heading; it never raises. run(n, report, every, every_us) calls step() n times (None: forever).
 calibrate() starts collecting now (e.g. after a new mounting).
 
-Memory: a board that boots from a stored calibration imports only the driver, the
-calibration record, the compass, the store and this module; firmware.calibrator (with the
-sample buffer, the moment sums and the solver) is imported when collecting starts
-(tests/test_layout.py checks which modules are loaded).
+Memory (docs/design.md#memory): this class is the core a calibrated board keeps. What it
+needs once in a while is imported for that and dropped after it (firmware.compat.drop): its
+construction (firmware/appsetup.py), the store's load and save (firmware/persist.py with
+firmware/slots.py), the calibration session (firmware/session.py with the calibrator, the
+sample buffer, the moment sums, the solver and the history), which ends once a good fit is
+saved and the board brings no new direction, and the status line (firmware/status.py).
+tests/test_layout.py checks which modules a board holds.
 
 One step, as named steps (AN4246 / AN4248 pipeline):
   _clock    the app's time since the last step: aging and the timers below.
