@@ -116,6 +116,8 @@ STATUS_TILT = "tilt unavailable"      # the accelerometer is implausible: level-
 STATUS_INTERNAL = "internal error"    # step() caught an unexpected exception (e.g. MemoryError)
 STATUS_JUMP = "heading jumped"        # it moved > 4 deg since the last sample: a magnet moving
 #                                       in, or a turn too fast for the sample rate to follow
+STATUS_GYRO_HELD = "gyro held"        # use_gyro(): the field is not used (interference), the
+#                                       gyroscope holds the heading and still vouches for it
 
 
 SOLVE_EVERY = const(25)       # kept samples between solves: ~1/9 of a full sphere (225 held)
@@ -138,6 +140,7 @@ _ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between i
 REPORT_EVERY = const(25)      # run(): steps between reports (0.5 s at 50 Hz)
 
 
+_GYRO_CHECK_EVERY = const(64)  # use_gyro(): steps between MPU6050 configuration read-backs
 _READ_ERRORS = (OSError, SensorOverflow)  # a module constant: a literal tuple is built per call
 
 
@@ -208,6 +211,8 @@ class CompassApp:
     location = None  # a firmware.location.Location after set_location()
     not_installed = None  # "calibrate": calibrate() found no calibration machinery
     quick = None     # the firmware.quickcal.QuickCal of the last quick_calibrate()
+    attitude = None  # the firmware.attitude.Attitude of use_gyro()
+    _gyr = None      # use_gyro(): the gyroscope's counts (sensor axes), then body axes
 
     def __init__(self, i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z",
                  model=10, declination_cdeg=0, store=None, delay_us=None, ticks_us=None,
@@ -326,6 +331,75 @@ class CompassApp:
         from firmware.quickcal import quick_calibrate
         return quick_calibrate(self, true_heading_cdeg, refine, samples)
 
+    # --- gyro-aided heading (firmware/attitude.py) ----------------------------------------
+    def use_gyro(self, **options):
+        """Let the MPU6050's gyroscope hold the heading through magnets, motors and shaking
+        (docs/gyro.md): loads firmware/attitude.py, reads the gyroscope with the accelerometer
+        (one burst) and makes the filter's heading the app's. `options` are Attitude's
+        (gain, mag_gain, bias_gain, accel_reject_cdeg, mag_reject_cdeg, recovery_us,
+        max_uncertainty_cdeg). Returns the Attitude; ValueError when there is no MPU6050."""
+        acc = self.accel
+        if acc is None or not hasattr(acc, "sample_all_into"):
+            raise ValueError("use_gyro: no gyroscope - it is the MPU6050's (GY-87, GY-521) "
+                             "and no MPU6050 answered on this bus")
+        from array import array
+        from firmware.attitude import Attitude
+        a = Attitude(array("h", (0, 0, 0)), self.gravity, self.body, self.compass,
+                     acc.counts_per_dps_x10, acc.counts_per_g, **options)
+        self._gyr = array("h", (0, 0, 0))
+        acc.gyro_into = self._gyr  # its sample_into() reads the gyroscope in the same burst
+        self.attitude = a
+        return a
+
+    def _aided(self):
+        # The filter's step, one call per sample: the gyroscope through the accelerometer's
+        # axis map negated (the map turns specific force into AN4248 gravity, Gp = -f; a
+        # rotation rate keeps its sign), then the filter's heading in place of the compass's.
+        # A field the checks flag is not used; while the filter vouches for its heading the
+        # status is "gyro held" in place of interference / heading jumped, and "ok" only
+        # when this sample's field corrected it.
+        a = self.attitude
+        g = a.gyro
+        self._apply(self._am, self._gyr, g)
+        g[0] = -g[0]
+        g[1] = -g[1]
+        g[2] = -g[2]
+        if self._gyro_bad():
+            a.reset()  # the rate is past the range or the chip lost its setting
+            return
+        st = self.status
+        f = 2  # attitude.FIELD
+        if st == STATUS_OK or st == STATUS_JUMP:
+            f = 3  # | attitude.MAG_OK: a jump the gyro confirms is a turn
+        if self.tilt:
+            f |= 4  # attitude.ACC_OK
+        h = a.update(self._dt, f)
+        if h < 0:
+            return
+        self.heading_kang = (h + self.compass.declination_kang) & 0xFFFF
+        if a.st[29] == 0:  # attitude._SINCE: this sample's field corrected the heading
+            if st == STATUS_JUMP:
+                self.status = STATUS_OK
+        elif st == STATUS_OK or st == STATUS_INTERFERENCE or st == STATUS_JUMP:
+            self.status = STATUS_GYRO_HELD if a.vouched else STATUS_INTERFERENCE
+
+    def _gyro_bad(self):
+        g = self._gyr
+        if (g[0] == 32767 or g[0] == -32768 or g[1] == 32767 or g[1] == -32768
+                or g[2] == 32767 or g[2] == -32768):
+            return True
+        if self.steps % _GYRO_CHECK_EVERY:
+            return False
+        ok = False
+        r = self._guard
+        with r:
+            r.dev = self.accel
+            ok = self.accel.config_ok()
+            if not ok:
+                self.accel.configure()
+                self.reinits += 1
+        return not ok
+
     @property
     def accuracy(self):
         """Accuracy level 0..3, Android's meaning (firmware/accuracy.py has the table)."""
@@ -365,6 +439,8 @@ class CompassApp:
             self._reinit_level = 0
             if self._check():
                 self._select()
+            if self.attitude is not None:
+                self._aided()
             if not self.tilt and (self.accel is not None or self._accel_auto) \
                     and self.status == STATUS_OK:
                 self._flag(STATUS_TILT)
@@ -449,7 +525,7 @@ class CompassApp:
             self._mag_into(self.raw)
             if acc is not None:
                 g.dev = acc
-                acc.sample_into(self._acc)
+                acc.sample_into(self._acc)  # and the gyroscope after use_gyro()
         if g.error is None:
             self._stalled = self._gap_us > self._dt_cap
             self._gap_us = 0

@@ -63,9 +63,10 @@ def _graph(lazy=True):
 def test_firmware_reads_as_the_pipeline_one_module_per_job():
     # beside the pipeline: the field model, where the board is (location, quick calibration),
     # the accuracy level, the MotionCal codec and mode, importing a calibration file at boot,
-    # CircuitPython's bus adapter
+    # CircuitPython's bus adapter, the gyro-aided heading's attitude filter
     assert set(_modules(FW)) - {"field", "motioncal", "motioncal_mode", "location", "quickcal",
-                                "accuracy", "calimport", "busio_i2c"} == set(PIPELINE)
+                                "accuracy", "calimport", "busio_i2c",
+                                "attitude"} == set(PIPELINE)
 
 
 def test_no_import_cycles_in_firmware():

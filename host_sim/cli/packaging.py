@@ -46,12 +46,14 @@ PARTS = {
     "field": ("field.py", "wmm2025.bin", "location.py", "quickcal.py"),
     # a calibration file fitted on the desktop, imported at boot
     "import": ("calimport.py",),
+    # the gyro-aided heading: the MPU6050's gyroscope in an attitude filter (use_gyro())
+    "gyro": ("attitude.py",),
     # CircuitPython's busio.I2C behind the machine.I2C calls the drivers make
     "circuitpython": ("busio_i2c.py",),
 }
 # the parts each part needs installed beside it
 REQUIRES = {"core": (), "calibrate": ("core",), "motioncal": ("core", "calibrate"),
-            "field": ("core", "calibrate"), "import": ("core",),
+            "field": ("core", "calibrate"), "import": ("core",), "gyro": ("core",),
             "circuitpython": ("core",)}
 
 

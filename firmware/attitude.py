@@ -1,0 +1,589 @@
+"""Gyro-aided heading: an integer attitude filter that integrates the MPU6050's gyroscope and
+is corrected by gravity and by the calibrated magnetic field (docs/gyro.md).
+
+    att = app.use_gyro()               # firmware/app.py: loads this module, one call per step
+    att.heading_kang, att.source, att.since_mag_us, att.uncertainty_cdeg
+
+Attitude(gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g, gain=500,
+         mag_gain=500, bias_gain=125, accel_reject_cdeg=1000, mag_reject_cdeg=1000,
+         recovery_us=5000000, max_uncertainty_cdeg=500)
+  gyro, gravity, field  the app's body-frame arrays (AN4248 frame: x forward, y right, z
+                 down): gyroscope counts, gravity (AN4248 Gp sign, +1 g down when level),
+                 the calibrated field; read by update(), never copied.
+  compass        the app's Compass: its roll, pitch and heading of the first good sample
+                 start the filter.
+  gain           accelerometer correction, 1/1000 rad/s per rad of tilt error (500: a 2 s
+                 time constant); mag_gain the same for the heading error.
+  bias_gain      the integral term, 1/1000 of the correction fed into the gyro bias each
+                 second (0: off); the bias is also measured while the board is still.
+  accel_reject_cdeg, mag_reject_cdeg  an accelerometer whose gravity direction differs
+                 from the filter's by more (or whose |a| is off 1 g by more than 10 %), and a
+                 field whose heading differs by more, are not used; after recovery_us of
+                 continuous rejection they are used again (the filter, not the sensor, is
+                 then the suspect: x-io's Fusion recovers the same way).
+  max_uncertainty_cdeg  the gyro-held heading is vouched for while its uncertainty is
+                 within this (5 deg).
+
+update(dt_us, flags) -> heading (KANG, magnetic); flags: MAG_OK (the app's field checks pass
+this sample), FIELD (a calibrated field was read), ACC_OK (a plausible accelerometer).
+After it: heading_kang, pitch_kang, roll_kang (KANG, AN4248 theta and phi), source
+(SOURCE_MAG: the last sample's field corrected the heading; SOURCE_GYRO: held by the gyro
+alone), since_mag_us (since the last magnetic correction), uncertainty_cdeg (grows while
+the field is not used, by the gyro bias uncertainty), vouched (the uncertainty is within
+max_uncertainty_cdeg), bias (gyro bias per body axis, 1/4096 count), bias_estimates (still
+spells measured), accel_rejected (the last sample's accelerometer was not used).
+
+The filter (Mahony's complementary filter on a quaternion; the kinematics q' = q (0, w) / 2):
+  state    q, body -> world (NED), Q28 in st[0..3]; the rotation matrix C (AN4248's R
+           transposed) is built from q >> 14 (Q14) each sample.
+  gyro     u = 16 x counts - bias (1/16 count), plus the corrections below as rates; the half
+           angle of each axis h = u x dt x k, k from the range's counts per deg/s, with dt in
+           chunks of < 16384 us (a slow loop integrates in several chunks); q += q (0, h).
+  gravity  e = g x d (d = C's third row, the down direction the filter believes): the
+           rotation that turns the belief toward the measurement, times gain.
+  field    m = C b, the field in the filter's level frame; its direction atan2(my, mx) is the
+           heading error, corrected by a rotation about the down axis, times mag_gain.
+  bias     the integral of the corrections (bias_gain), and while the board is still (1 s
+           windows in which the gyro moves < 1 deg/s, gravity < 2 % and the field < 1 %) the
+           window's mean rate: the first window sets it, later ones move it a quarter of the
+           way.
+Every intermediate stays below 2**30 (a product a x b of a Q28 and a Q14 is taken as
+(a >> 14) b + ((a & 0x3FFF) b >> 14), exact); the per-sample path allocates nothing: its
+functions keep their frames within MicroPython's 11 words (see firmware/compass.py).
+"""
+from array import array
+
+from firmware.compat import const
+from firmware.trig import ZERO_VECTOR, atan2, isqrt, norm14, sin
+
+MAG_OK = const(1)
+FIELD = const(2)
+ACC_OK = const(4)
+SOURCE_MAG = "magnetometer"
+SOURCE_GYRO = "gyro"
+
+_ONE28 = const(0x10000000)
+_M14 = const(0x3FFF)
+_CHUNK_US = const(16383)
+_KANG_90 = const(16384)
+_STILL_US = const(1000000)
+_SINCE_CAP = const(0x20000000)
+_DT_MAX = const(1000000)  # a longer gap counts as 1 s
+_BIAS_MAX = const(1 << 25)  # 2**13 counts in 1/4096 count: 62 deg/s at +-250 deg/s
+_WINDOW_MAX = const(4096)  # samples in a still window (the sums stay small)
+
+# state slots (array 'i')
+_Q = const(0)      # 0..3 q (w, x, y, z), Q28
+_BIAS = const(4)   # 4..6 gyro bias, body frame, 1/4096 count
+_U = const(7)      # 7..9 rate: 1/16 count, bias removed, corrections added
+_R = const(10)     # 10..12 half angle per 16384 us, Q28 rad
+_QH = const(13)    # 13..16 q >> 14
+_D = const(17)     # 17..19 C's third row: down in the body frame, Q14
+_G = const(20)     # 20..22 gravity / field scaled by norm14
+_KI = const(23)    # rate scale: integer part...
+_KF = const(24)    # ...and fraction / 16384
+_KA = const(25)    # gain: (1/16 count rate) per Q14 error, Q12
+_KM = const(26)    # mag_gain: (1/16 count rate) per KANG of heading error, Q12
+_KB = const(27)    # bias_gain: bias (1/4096 count) per correction x 16384 us, Q6
+_E = const(28)     # last heading error (KANG)
+_SINCE = const(29)  # us since the last magnetic correction
+_AREJ = const(30)  # us of accelerometer rejection in a row
+_MREJ = const(31)  # us of the filter's own field rejection in a row
+_WN = const(32)    # still window: samples
+_WT = const(33)    # still window: us
+_WS = const(34)    # 34..36 still window: gyro sums (counts)
+_WG = const(37)    # 37..39 still window: gyro at its start
+_WA = const(40)    # 40..42 still window: gravity at its start (scaled)
+_WB = const(43)    # 43..45 still window: field at its start (scaled)
+_ACC_LIM = const(46)  # sin of accel_reject, Q14, squared
+_MAG_LIM = const(47)  # mag_reject, KANG
+_CPG = const(48)   # counts per g
+_STILL_G = const(49)  # gyro counts of 1 deg/s
+_HEAD = const(50)
+_PITCH = const(51)
+_ROLL = const(52)
+_SCR = const(53)   # 53..55 scratch
+_C = const(56)     # 56..58 the corrections (1/16 count) for the next sample's rates
+_SIZE = const(59)
+
+
+def mul14(a, b):
+    """floor(a * b / 2**14) for |a| < 2**30, |b| <= 2**14 without leaving the small ints."""
+    return (a >> 14) * b + (((a & _M14) * b) >> 14)
+
+
+def rates(st, gyro):
+    """u = 16 x gyro - bias + the corrections (1/16 count)."""
+    st[_U] = (gyro[0] << 4) - (st[_BIAS] >> 8) + st[_C]
+    st[_U + 1] = (gyro[1] << 4) - (st[_BIAS + 1] >> 8) + st[_C + 1]
+    st[_U + 2] = (gyro[2] << 4) - (st[_BIAS + 2] >> 8) + st[_C + 2]
+
+
+def q_hi(st):
+    st[_QH] = st[_Q] >> 14
+    st[_QH + 1] = st[_Q + 1] >> 14
+    st[_QH + 2] = st[_Q + 2] >> 14
+    st[_QH + 3] = st[_Q + 3] >> 14
+
+
+def down(st):
+    """d = (C31, C32, C33), the down direction in the body frame, Q14."""
+    w = st[_QH]
+    x = st[_QH + 1]
+    y = st[_QH + 2]
+    z = st[_QH + 3]
+    st[_D] = (x * z - w * y) >> 13
+    st[_D + 1] = (y * z + w * x) >> 13
+    st[_D + 2] = 16384 - ((x * x + y * y) >> 13)
+
+
+def tilt_error(st):
+    """e = g x d (Q14 x Q14 >> 14), g the scaled gravity in st[_G..]; returns |e|^2 relative
+    to |g|^2 in Q28 (sin^2 of the angle between them)."""
+    g0 = st[_G]
+    g1 = st[_G + 1]
+    g2 = st[_G + 2]
+    st[_SCR] = (g1 * st[_D + 2] - g2 * st[_D + 1]) >> 14
+    st[_SCR + 1] = (g2 * st[_D] - g0 * st[_D + 2]) >> 14
+    st[_SCR + 2] = (g0 * st[_D + 1] - g1 * st[_D]) >> 14
+    return g0 * g0 + g1 * g1 + g2 * g2
+
+
+def tilt_sine(st, n):
+    """e = (g x d) / |g| in st[_SCR..] (Q14: the sine of the tilt error); n = |g| scaled."""
+    st[_SCR] = (st[_SCR] << 14) // n
+    st[_SCR + 1] = (st[_SCR + 1] << 14) // n
+    st[_SCR + 2] = (st[_SCR + 2] << 14) // n
+
+
+def accel_apply(st):
+    """Add gain x e to the rates; False (nothing added) when e is past accel_reject."""
+    e = st[_SCR]
+    m = e * e
+    e = st[_SCR + 1]
+    m += e * e
+    e = st[_SCR + 2]
+    if m + e * e > st[_ACC_LIM]:
+        return False
+    k = st[_KA]
+    st[_U] += (st[_SCR] * k) >> 12
+    st[_U + 1] += (st[_SCR + 1] * k) >> 12
+    st[_U + 2] += (e * k) >> 12
+    return True
+
+
+def field_error(st):
+    """The heading error (KANG): the direction of m = C b in the filter's level frame, b the
+    scaled field in st[_G..] (C's first two rows from q >> 14)."""
+    w = st[_QH]
+    x = st[_QH + 1]
+    y = st[_QH + 2]
+    z = st[_QH + 3]
+    st[_SCR] = 16384 - ((y * y + z * z) >> 13)  # C11
+    st[_SCR + 1] = (x * y - w * z) >> 13        # C12
+    st[_SCR + 2] = (x * z + w * y) >> 13        # C13
+    mx = (st[_SCR] * st[_G] + st[_SCR + 1] * st[_G + 1] + st[_SCR + 2] * st[_G + 2]) >> 14
+    st[_SCR] = (x * y + w * z) >> 13            # C21
+    st[_SCR + 1] = 16384 - ((x * x + z * z) >> 13)  # C22
+    st[_SCR + 2] = (y * z - w * x) >> 13        # C23
+    return atan2((st[_SCR] * st[_G] + st[_SCR + 1] * st[_G + 1]
+                  + st[_SCR + 2] * st[_G + 2]) >> 14, mx)
+
+
+def yaw_rate(st, e):
+    """Turn the rates about the down axis by mag_gain x the heading error e (KANG)."""
+    c = -((e * st[_KM]) >> 12)
+    st[_U] += (c * st[_D]) >> 14
+    st[_U + 1] += (c * st[_D + 1]) >> 14
+    st[_U + 2] += (c * st[_D + 2]) >> 14
+
+
+def integral(st, dt):
+    """The bias takes bias_gain of the corrections over dt (within +-2**13 counts)."""
+    bias_step(st, 0, (mul14(st[_C], dt) * st[_KB]) >> 6)
+    bias_step(st, 1, (mul14(st[_C + 1], dt) * st[_KB]) >> 6)
+    bias_step(st, 2, (mul14(st[_C + 2], dt) * st[_KB]) >> 6)
+
+
+def bias_step(st, i, d):
+    d = st[_BIAS + i] - d
+    st[_BIAS + i] = d if -_BIAS_MAX <= d <= _BIAS_MAX else (_BIAS_MAX if d > 0 else -_BIAS_MAX)
+
+
+def half_angles(st):
+    """r = u x k: the half angle per 16384 us, Q28 rad."""
+    i = st[_KI]
+    f = st[_KF]
+    u = st[_U]
+    st[_R] = u * i + mul14(u, f)
+    u = st[_U + 1]
+    st[_R + 1] = u * i + mul14(u, f)
+    u = st[_U + 2]
+    st[_R + 2] = u * i + mul14(u, f)
+
+
+def integrate(st, dt):
+    """q += q (0, h) with h = r x dt / 16384 (dt < 16384 us): Q28."""
+    st[_SCR] = mul14(st[_R], dt)
+    st[_SCR + 1] = mul14(st[_R + 1], dt)
+    st[_SCR + 2] = mul14(st[_R + 2], dt)
+    q_hi(st)
+    dq_wx(st)
+    dq_yz(st)
+
+
+def dq_wx(st):
+    # w -= x h0 + y h1 + z h2;  x += w h0 + y h2 - z h1  (q (0, h): q before the step)
+    h0 = st[_SCR]
+    h1 = st[_SCR + 1]
+    h2 = st[_SCR + 2]
+    d = mul14(h0, st[_QH + 1]) + mul14(h1, st[_QH + 2]) + mul14(h2, st[_QH + 3])
+    st[_Q] -= d
+    d = mul14(h0, st[_QH]) + mul14(h2, st[_QH + 2]) - mul14(h1, st[_QH + 3])
+    st[_Q + 1] += d
+
+
+def dq_yz(st):
+    # y += w h1 + z h0 - x h2;  z += w h2 + x h1 - y h0
+    h0 = st[_SCR]
+    h1 = st[_SCR + 1]
+    h2 = st[_SCR + 2]
+    d = mul14(h1, st[_QH]) + mul14(h0, st[_QH + 3]) - mul14(h2, st[_QH + 1])
+    st[_Q + 2] += d
+    d = mul14(h2, st[_QH]) + mul14(h1, st[_QH + 1]) - mul14(h0, st[_QH + 2])
+    st[_Q + 3] += d
+
+
+def normalise(st):
+    """q x (3 - |q|^2) / 2 (one Newton step toward |q| = 1; the drift per sample is tiny)."""
+    q_hi(st)
+    e = st[_QH]
+    n = e * e
+    e = st[_QH + 1]
+    n += e * e
+    e = st[_QH + 2]
+    n += e * e
+    e = st[_QH + 3]
+    e = (_ONE28 - n - e * e) >> 15  # (1 - |q|^2) / 2, Q14
+    if e > 8191:
+        e = 8191
+    elif e < -8191:
+        e = -8191
+    st[_Q] += mul14(st[_Q], e)
+    st[_Q + 1] += mul14(st[_Q + 1], e)
+    st[_Q + 2] += mul14(st[_Q + 2], e)
+    st[_Q + 3] += mul14(st[_Q + 3], e)
+
+
+def advance(st, dt):
+    """The gyro step over dt in chunks below 16384 us (the integral term with each), then
+    |q| back to 1."""
+    half_angles(st)
+    while dt > 0:
+        c = dt if dt < _CHUNK_US else _CHUNK_US
+        integrate(st, c)
+        if st[_KB]:
+            integral(st, c)
+        dt -= c
+    normalise(st)
+
+
+def euler(st):
+    """Heading, pitch and roll (KANG, AN4248 psi, theta, phi) of q."""
+    q_hi(st)
+    heading(st)
+    down(st)
+    d = st[_D + 1]
+    e = st[_D + 2]
+    st[_ROLL] = atan2(d, e)
+    st[_PITCH] = atan2(-st[_D], isqrt(d * d + e * e))
+
+
+def heading(st):
+    # psi = atan2(C21, C11)
+    w = st[_QH]
+    x = st[_QH + 1]
+    y = st[_QH + 2]
+    z = st[_QH + 3]
+    st[_HEAD] = atan2((x * y + w * z) >> 13, 16384 - ((y * y + z * z) >> 13)) & 0xFFFF
+
+
+def set_euler(st, yaw, pitch, roll):
+    """q = qz(yaw) qy(pitch) qx(roll) (KANG): the filter's start from the compass."""
+    ca = sin((roll >> 1) + _KANG_90)
+    sa = sin(roll >> 1)
+    cb = sin((pitch >> 1) + _KANG_90)
+    sb = sin(pitch >> 1)
+    cc = sin((yaw >> 1) + _KANG_90)
+    sc = sin(yaw >> 1)
+    st[_SCR] = (cc * cb) >> 15
+    st[_SCR + 1] = (sc * sb) >> 15
+    st[_SCR + 2] = (cc * sb) >> 15
+    st[_QH] = (sc * cb) >> 15
+    st[_Q] = (st[_SCR] * ca + st[_SCR + 1] * sa) >> 2
+    st[_Q + 1] = (st[_SCR] * sa - st[_SCR + 1] * ca) >> 2
+    st[_Q + 2] = (st[_SCR + 2] * ca + st[_QH] * sa) >> 2
+    st[_Q + 3] = (st[_QH] * ca - st[_SCR + 2] * sa) >> 2
+
+
+def turn(st, e):
+    """q = qz(-e) q: the heading turned by -e (KANG), exactly (the recovery's snap)."""
+    c = sin(_KANG_90 - (e >> 1)) >> 1  # Q14
+    s = -sin(e >> 1) >> 1
+    w = st[_Q]
+    x = st[_Q + 1]
+    st[_Q] = mul14(w, c) - mul14(st[_Q + 3], s)
+    st[_Q + 3] = mul14(st[_Q + 3], c) + mul14(w, s)
+    st[_Q + 1] = mul14(x, c) - mul14(st[_Q + 2], s)
+    st[_Q + 2] = mul14(st[_Q + 2], c) + mul14(x, s)
+
+
+def _near(a, b, o, lim):
+    # |a[i] - b[o + i]| <= lim on every axis
+    d = a[0] - b[o]
+    if d > lim or d < -lim:
+        return False
+    d = a[1] - b[o + 1]
+    if d > lim or d < -lim:
+        return False
+    d = a[2] - b[o + 2]
+    return -lim <= d <= lim
+
+
+def _copy3(a, b, o):
+    b[o] = a[0]
+    b[o + 1] = a[1]
+    b[o + 2] = a[2]
+
+
+def _near_st(st, o, p, lim):
+    # |st[o + i] - st[p + i]| <= lim on every axis
+    d = st[o] - st[p]
+    if d > lim or d < -lim:
+        return False
+    d = st[o + 1] - st[p + 1]
+    if d > lim or d < -lim:
+        return False
+    d = st[o + 2] - st[p + 2]
+    return -lim <= d <= lim
+
+
+def _bias_from_window(st, first):
+    # the window's mean rate (1/4096 count): the bias, or a quarter of the way to it
+    n = st[_WN]
+    _blend(st, 0, n, first)
+    _blend(st, 1, n, first)
+    _blend(st, 2, n, first)
+
+
+def _blend(st, i, n, first):
+    m = st[_WS + i]
+    m = ((m // n) << 12) + (((m % n) << 12) // n)  # the mean, 1/4096 count
+    if not first:
+        m = st[_BIAS + i] + ((m - st[_BIAS + i]) >> 2)
+    st[_BIAS + i] = m if -_BIAS_MAX <= m <= _BIAS_MAX else (_BIAS_MAX if m > 0 else -_BIAS_MAX)
+
+
+class Attitude:
+    """See the module docstring."""
+
+    def __init__(self, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g,
+                 gain=500, mag_gain=500, bias_gain=125, accel_reject_cdeg=1000,
+                 mag_reject_cdeg=1000, recovery_us=5000000, max_uncertainty_cdeg=500):
+        for name, v, lo, hi in (("gain", gain, 0, 1000), ("mag_gain", mag_gain, 0, 1000),
+                                ("bias_gain", bias_gain, 0, 1000),
+                                ("accel_reject_cdeg", accel_reject_cdeg, 100, 9000),
+                                ("mag_reject_cdeg", mag_reject_cdeg, 100, 18000),
+                                ("recovery_us", recovery_us, 0, 100000000),
+                                ("max_uncertainty_cdeg", max_uncertainty_cdeg, 0, 18000)):
+            if not isinstance(v, int) or not lo <= v <= hi:
+                raise ValueError("Attitude %s=%r: expected an int in %d..%d%s" % (
+                    name, v, lo, hi, " (1/1000 per second)" if name.endswith("gain") else ""))
+        if counts_per_dps_x10 not in (1310, 655, 328, 164):
+            raise ValueError("Attitude counts_per_dps_x10=%r: the MPU6050's 1310, 655, 328 or "
+                             "164 (10 x counts per deg/s)" % (counts_per_dps_x10,))
+        self.gyro = gyro
+        self.gravity = gravity
+        self.field = field
+        self.compass = compass
+        self.recovery_us = recovery_us
+        self.max_uncertainty_cdeg = max_uncertainty_cdeg
+        self.still_counts = counts_per_dps_x10 // 10  # 1 deg/s
+        self.base_cdeg = 100            # the field-corrected heading: ~1 deg
+        self.bias_cdeg_per_s = 20       # bias measured while still: within 0.2 deg/s
+        self.unknown_bias_cdeg_per_s = 100  # never still yet: the integral's ~1 deg/s
+        self.bias_estimates = 0
+        self.started = False
+        self.accel_rejected = True
+        self._cpg = counts_per_g
+        st = array("i", bytearray(4 * _SIZE))
+        self.st = st
+        # half angle per 16384 us (Q28 rad) per 1/16 count: pi 2**42 / (5760 cps 10**6),
+        # pi as 355/113 (8.5e-8), x 2**14 split into integer and fraction
+        k = (355 * (1 << 56) * 10 + 56 * 5760 * 1000000 * counts_per_dps_x10) // (
+            113 * 5760 * 1000000 * counts_per_dps_x10)
+        st[_KI] = k >> 14
+        st[_KF] = k & _M14
+        # gain x 180/pi x cps x 4 (Q12 per Q14 error); mag_gain x 360 x cps (Q12 per KANG)
+        st[_KA] = (gain * counts_per_dps_x10 * 720 * 113 + 1775000) // 3550000
+        st[_KM] = (mag_gain * 360 * counts_per_dps_x10 + 5000) // 10000
+        st[_KB] = (bias_gain * 256 * 16384 * 64 + 500000000) // 1000000000
+        s = sin(accel_reject_cdeg * 4096 // 5625) >> 1  # cdeg -> KANG: x 65536 / 36000
+        st[_ACC_LIM] = s * s
+        self.acc_lim = s * s
+        st[_MAG_LIM] = mag_reject_cdeg * 4096 // 2250
+        st[_Q] = _ONE28
+
+    # results
+    heading_kang = property(lambda self: self.st[_HEAD])
+    pitch_kang = property(lambda self: self.st[_PITCH])
+    roll_kang = property(lambda self: self.st[_ROLL])
+    since_mag_us = property(lambda self: self.st[_SINCE])
+    heading_error_kang = property(lambda self: self.st[_E])
+
+    @property
+    def bias(self):
+        st = self.st
+        return (st[_BIAS], st[_BIAS + 1], st[_BIAS + 2])
+
+    @property
+    def source(self):
+        return SOURCE_MAG if self.st[_SINCE] == 0 and self.started else SOURCE_GYRO
+
+    @property
+    def uncertainty_cdeg(self):
+        """The heading's uncertainty (0.01 deg): the base while the field corrects it, plus the
+        gyro bias uncertainty times the time since the last correction."""
+        t = self.st[_SINCE] // 1000  # ms
+        r = self.bias_cdeg_per_s if self.bias_estimates else self.unknown_bias_cdeg_per_s
+        return self.base_cdeg + t * r // 1000
+
+    @property
+    def vouched(self):
+        return self.started and self.uncertainty_cdeg <= self.max_uncertainty_cdeg
+
+    def reset(self):
+        """Start again from the next good sample (the bias estimate is kept)."""
+        self.started = False
+        self.st[_SINCE] = 0
+
+    def update(self, dt, flags):
+        if dt > _DT_MAX or dt < 0:
+            dt = _DT_MAX if dt > 0 else 0
+        if not self.started:
+            return self._start(flags)
+        st = self.st
+        rates(st, self.gyro)  # the rate, plus the corrections the last sample asked for
+        self._still(dt, flags)
+        advance(st, dt)
+        self._correct(dt, flags)
+        euler(st)
+        return st[_HEAD]
+
+    def _start(self, flags):
+        if flags & (FIELD | ACC_OK) != FIELD | ACC_OK:
+            return -1
+        c = self.compass
+        st = self.st
+        set_euler(st, c.heading_kang - c.declination_kang, c.pitch_kang, c.roll_kang)
+        self.started = True
+        euler(st)
+        return st[_HEAD]
+
+    def _correct(self, dt, flags):
+        # the corrections this sample's gravity and field ask for, as rates for the next one
+        st = self.st
+        q_hi(st)
+        down(st)
+        st[_U] = 0
+        st[_U + 1] = 0
+        st[_U + 2] = 0
+        self.accel_rejected = True
+        if flags & ACC_OK:
+            k = norm14(self.gravity, st, _G)
+            if k != ZERO_VECTOR:
+                self._accel(dt, tilt_error(st), k)
+        self._field(dt, flags)
+        st[_C] = st[_U]
+        st[_C + 1] = st[_U + 1]
+        st[_C + 2] = st[_U + 2]
+
+    def _accel(self, dt, n2, k):
+        st = self.st
+        n = isqrt(n2)  # |g| scaled, 2**13..2**14 x sqrt(3)
+        tilt_sine(st, n)
+        n = n >> k if k >= 0 else n << -k  # |g| in counts: within 10 % of 1 g?
+        if 10 * n >= 9 * self._cpg and 10 * n <= 11 * self._cpg and accel_apply(st):
+            st[_AREJ] = 0
+            self.accel_rejected = False
+            return
+        if st[_AREJ] <= self.recovery_us:
+            st[_AREJ] += dt
+        else:  # the filter is the suspect: believe gravity again
+            st[_ACC_LIM] = 0x3FFFFFFF
+            accel_apply(st)
+            st[_ACC_LIM] = self.acc_lim
+            self.accel_rejected = False
+
+    def _field(self, dt, flags):
+        st = self.st
+        if not flags & FIELD or norm14(self.field, st, _G) == ZERO_VECTOR:
+            self._hold(dt)
+            return
+        e = field_error(st)
+        st[_E] = e
+        if not flags & MAG_OK:
+            self._hold(dt)
+            return
+        lim = st[_MAG_LIM]
+        if -lim <= e <= lim:
+            st[_MREJ] = 0
+        else:
+            st[_MREJ] += dt
+            if st[_MREJ] <= self.recovery_us:
+                self._hold(dt)
+                return
+            turn(st, e)  # the gyro lost the heading (e.g. past its range): the field's
+            st[_MREJ] = 0
+            e = 0
+        yaw_rate(st, e)
+        st[_SINCE] = 0
+
+    def _hold(self, dt):
+        st = self.st
+        if st[_SINCE] < _SINCE_CAP:
+            st[_SINCE] += dt
+
+    def _still(self, dt, flags):
+        """Still-board windows: the gyro's mean rate over 1 s without motion is its bias."""
+        st = self.st
+        g = self.gyro
+        ok = st[_WN] > 0 and _near(g, st, _WG, self.still_counts)
+        if ok and flags & ACC_OK:  # gravity within 2 % (of 2**14)
+            ok = norm14(self.gravity, st, _SCR) != ZERO_VECTOR and _near_st(st, _SCR, _WA, 328)
+        if ok and flags & FIELD:  # the field within 1 %: no slow turn about the vertical
+            ok = norm14(self.field, st, _SCR) != ZERO_VECTOR and _near_st(st, _SCR, _WB, 164)
+        if not ok:
+            self._window(flags)
+            return
+        st[_WN] += 1
+        st[_WT] += dt
+        st[_WS] += g[0]
+        st[_WS + 1] += g[1]
+        st[_WS + 2] += g[2]
+        if st[_WT] >= _STILL_US or st[_WN] >= _WINDOW_MAX:
+            _bias_from_window(st, self.bias_estimates == 0)
+            self.bias_estimates += 1
+            self._window(flags)
+
+    def _window(self, flags):
+        st = self.st
+        g = self.gyro
+        st[_WN] = 1
+        st[_WT] = 0
+        _copy3(g, st, _WS)
+        _copy3(g, st, _WG)
+        if flags & ACC_OK:
+            norm14(self.gravity, st, _WA)
+        if flags & FIELD:
+            norm14(self.field, st, _WB)

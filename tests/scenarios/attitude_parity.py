@@ -1,0 +1,31 @@
+# The attitude filter (firmware/attitude.py) over integer inputs (attitude_inputs): the
+# heading, tilt, bias and source every 50 samples; every tier prints the same JSON lines.
+import json
+from array import array
+
+from firmware.attitude import Attitude
+from firmware.compass import Compass
+from tests.scenarios import attitude_inputs as I
+
+gyro = array("h", (0, 0, 0))
+grav = array("h", (0, 0, 0))
+field = array("h", (0, 0, 0))
+c = Compass()
+I.step(0, gyro, grav, field)
+c.update(field, grav)
+a = Attitude(gyro, grav, field, c, I.CPS_X10, I.CPG)
+rows = []
+for i in range(1500):
+    I.step(i, gyro, grav, field)
+    c.update(field, grav)
+    h = a.update(20000, I.flags(i))
+    if i % 50 == 0:
+        b = a.bias
+        rows.append([i, h, a.pitch_kang, a.roll_kang, b[0], b[1], b[2], a.since_mag_us,
+                     a.heading_error_kang, a.bias_estimates, a.uncertainty_cdeg])
+print(json.dumps({"name": "attitude", "rows": rows}))
+# a slow loop: 0.1 s between samples (several integration chunks each)
+for i in range(100):
+    I.step(i * 5, gyro, grav, field)
+    h = a.update(100000, 7)
+print(json.dumps({"name": "slow", "v": [h, a.pitch_kang, a.roll_kang, a.heading_error_kang]}))
