@@ -142,7 +142,7 @@ HAS_DATASETS = os.path.exists(os.path.join(mp.ROOT, "..", "shared", "datasets",
 # every plain firmware module loads as it is on every tier (no emitter decorators in them)
 SCENARIOS = ["sim_parity", "sim_heaplock", "fixedpoint_table", "compass_parity", "store_parity",
              "drivers_parity", "samples_parity", "app_parity", "calibrator_parity",
-             "app_modules", "field_parity", "motioncal_parity"]
+             "app_modules", "field_parity", "motioncal_parity", "attitude_parity"]
 
 
 def _cases():
