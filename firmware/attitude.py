@@ -44,7 +44,9 @@ The filter (Mahony's complementary filter on a quaternion; the kinematics q' = q
   field    m = C b, the field in the filter's level frame; its direction atan2(my, mx) is the
            heading error, corrected by a rotation about the down axis, times mag_gain.
   bias     the integral of the corrections (bias_gain), and while the board is still (1 s
-           windows in which the gyro moves < 1 deg/s, gravity < 2 % and the field < 1 %) the
+           windows in which the gyro less its bias stays within 0.5 deg/s, gravity within
+           1/64 g and the field within 1/64 of its size; a turn slower than that counts as
+           still) the
            window's mean rate: the first window sets it, later ones move it a quarter of the
            way.
 Every intermediate stays below 2**30 (a product a x b of a Q28 and a Q14 is taken as
@@ -92,9 +94,8 @@ _MREJ = const(31)  # us of the filter's own field rejection in a row
 _WN = const(32)    # still window: samples
 _WT = const(33)    # still window: us
 _WS = const(34)    # 34..36 still window: gyro sums (counts)
-_WG = const(37)    # 37..39 still window: gyro at its start
-_WA = const(40)    # 40..42 still window: gravity at its start (scaled)
-_WB = const(43)    # 43..45 still window: field at its start (scaled)
+_WA = const(40)    # 40..42 still window: gravity at its start
+_WB = const(43)    # 43..45 still window: field at its start
 _ACC_LIM = const(46)  # sin of accel_reject, Q14, squared
 _MAG_LIM = const(47)  # mag_reject, KANG
 _CPG = const(48)   # counts per g
@@ -104,7 +105,8 @@ _PITCH = const(51)
 _ROLL = const(52)
 _SCR = const(53)   # 53..55 scratch
 _C = const(56)     # 56..58 the corrections (1/16 count) for the next sample's rates
-_SIZE = const(59)
+_WLB = const(59)   # still window: the field's tolerance (counts)
+_SIZE = const(60)
 
 
 def mul14(a, b):
@@ -338,6 +340,18 @@ def turn(st, e):
     st[_Q + 2] = mul14(st[_Q + 2], c) + mul14(x, s)
 
 
+def slow(st, g, lim):
+    """Every axis of the gyro, less the bias, within lim (1/16 count)."""
+    d = (g[0] << 4) - (st[_BIAS] >> 8)
+    if d > lim or d < -lim:
+        return False
+    d = (g[1] << 4) - (st[_BIAS + 1] >> 8)
+    if d > lim or d < -lim:
+        return False
+    d = (g[2] << 4) - (st[_BIAS + 2] >> 8)
+    return -lim <= d <= lim
+
+
 def _near(a, b, o, lim):
     # |a[i] - b[o + i]| <= lim on every axis
     d = a[0] - b[o]
@@ -408,7 +422,8 @@ class Attitude:
         self.compass = compass
         self.recovery_us = recovery_us
         self.max_uncertainty_cdeg = max_uncertainty_cdeg
-        self.still_counts = counts_per_dps_x10 // 10  # 1 deg/s
+        self.still_counts = counts_per_dps_x10 * 8 // 10  # 0.5 deg/s in 1/16 count
+        self.still_g = counts_per_g >> 6
         self.base_cdeg = 100            # the field-corrected heading: ~1 deg
         self.bias_cdeg_per_s = 20       # bias measured while still: within 0.2 deg/s
         self.unknown_bias_cdeg_per_s = 100  # never still yet: the integral's ~1 deg/s
@@ -558,11 +573,11 @@ class Attitude:
         """Still-board windows: the gyro's mean rate over 1 s without motion is its bias."""
         st = self.st
         g = self.gyro
-        ok = st[_WN] > 0 and _near(g, st, _WG, self.still_counts)
-        if ok and flags & ACC_OK:  # gravity within 2 % (of 2**14)
-            ok = norm14(self.gravity, st, _SCR) != ZERO_VECTOR and _near_st(st, _SCR, _WA, 328)
-        if ok and flags & FIELD:  # the field within 1 %: no slow turn about the vertical
-            ok = norm14(self.field, st, _SCR) != ZERO_VECTOR and _near_st(st, _SCR, _WB, 164)
+        ok = st[_WN] > 0 and slow(st, g, self.still_counts)
+        if ok and flags & ACC_OK:  # gravity within 1/64 g
+            ok = _near(self.gravity, st, _WA, self.still_g)
+        if ok and flags & FIELD:  # the field within 1/64 of its components' sum
+            ok = _near(self.field, st, _WB, st[_WLB])
         if not ok:
             self._window(flags)
             return
@@ -582,8 +597,9 @@ class Attitude:
         st[_WN] = 1
         st[_WT] = 0
         _copy3(g, st, _WS)
-        _copy3(g, st, _WG)
         if flags & ACC_OK:
-            norm14(self.gravity, st, _WA)
+            _copy3(self.gravity, st, _WA)
         if flags & FIELD:
-            norm14(self.field, st, _WB)
+            f = self.field
+            _copy3(f, st, _WB)
+            st[_WLB] = (abs(f[0]) + abs(f[1]) + abs(f[2])) >> 6

@@ -64,10 +64,12 @@ def _mag(kind, world, mount, seed, noise):
 
 
 def make_board(chip="qmc5883l", world=None, seed=1, noise=True, freq=400000, mount=None,
-               accel_mount=None, accel=None, clock=None):
+               accel_mount=None, accel=None, clock=None, gyro=None):
     """Build a simulated board (see the module docstring). `world` defaults to a still
     World(seed=seed); `mount`/`accel_mount` override the chips' mountings; `noise=False`
-    leaves only quantisation; `accel` None = the board's own (gy87: yes, others: no)."""
+    leaves only quantisation; `accel` None = the board's own (gy87: yes, others: no);
+    `gyro` the MPU6050's gyroscope errors, a dict of MPU6050Sim's gyro_bias_dps,
+    gyro_temp_dps_per_c, gyro_drift_dps_per_s (e.g. {"gyro_bias_dps": (3, 0, -1)})."""
     if chip not in CHIPS:
         raise ValueError("make_board: unknown chip %r; expected one of %s"
                          % (chip, ", ".join(CHIPS)))
@@ -86,7 +88,8 @@ def make_board(chip="qmc5883l", world=None, seed=1, noise=True, freq=400000, mou
     has_accel = chip in ("gy87", "gy87-qmc") if accel is None else bool(accel)
     if has_accel:
         from host_sim.mpu6050 import MPU6050Sim
-        b.accel = MPU6050Sim(world, mount=b.accel_mount, seed=acc_seed, noise=noise)
+        b.accel = MPU6050Sim(world, mount=b.accel_mount, seed=acc_seed, noise=noise,
+                             **(gyro or {}))
         b.accel_address = 0x68
         bus.attach(0x68, b.accel)
     if chip in ("gy87", "gy87-qmc"):

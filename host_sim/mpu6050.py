@@ -28,8 +28,12 @@ Behaviour modelled (lazily, on the next transaction):
   (260, 184, 94, 44, 21, 10, 5 Hz for DLPF_CFG 0-6; 7 taken as 260): 6.4 mg RMS (105
   counts at +-2 g) at the power-on setting.
 - Temperature: TEMP_OUT = (T - 36.53) * 340 (register map: T = TEMP_OUT / 340 + 36.53).
-- Gyroscope: the board's rotation rate is not modelled; the gyro registers read noise
-  around 0 (0.05 deg/s RMS, datasheet total RMS noise) at 131/65.5/32.8/16.4 counts per deg/s.
+- Gyroscope: the board's rotation rate (World.angular_rate_body) through the mounting, plus
+  a zero-rate offset (gyro_bias_dps; datasheet initial ZRO tolerance +-20 deg/s), its
+  temperature coefficient (gyro_temp_dps_per_c times T - 25 C; datasheet ZRO variation
+  +-20 deg/s over -40..85 C) and a slow linear drift with time (gyro_drift_dps_per_s, a model
+  choice), plus noise of 0.05 deg/s RMS (datasheet total RMS noise), at 131/65.5/32.8/16.4
+  counts per deg/s (GYRO_CONFIG FS_SEL), saturated to int16 like the accelerometer.
 - Field faults (fault hooks): doze() - SLEEP set behind the driver's back (a glitch write
   or a partial reset): the outputs freeze at their last values, a frozen tilt; free_fall =
   True - the board falls, the accelerometer reads ~0 g (noise only); brown_out() -
@@ -50,6 +54,7 @@ except ImportError:
 
 from host_sim.bus import RegisterDevice
 from host_sim.prng import Prng
+from host_sim.world import mount_apply
 
 ADDRESS = 0x68
 ADDRESS_AD0 = 0x69
@@ -98,13 +103,18 @@ class MPU6050Sim(RegisterDevice):
 
     ADDRESS = 0x68
 
-    def __init__(self, world=None, mount=(1, -2, -3), seed=1, noise=True, bias_g=(0.0, 0.0, 0.0)):
+    def __init__(self, world=None, mount=(1, -2, -3), seed=1, noise=True, bias_g=(0.0, 0.0, 0.0),
+                 gyro_bias_dps=(0.0, 0.0, 0.0), gyro_temp_dps_per_c=(0.0, 0.0, 0.0),
+                 gyro_drift_dps_per_s=(0.0, 0.0, 0.0)):
         RegisterDevice.__init__(self)
         self.world = world
         self.mount = tuple(mount)
         self.seed = seed
         self.noise = noise
         self.bias_g = (float(bias_g[0]), float(bias_g[1]), float(bias_g[2]))
+        self.gyro_bias_dps = tuple(float(v) for v in gyro_bias_dps)
+        self.gyro_temp_dps_per_c = tuple(float(v) for v in gyro_temp_dps_per_c)
+        self.gyro_drift_dps_per_s = tuple(float(v) for v in gyro_drift_dps_per_s)
         self.samples = 0
         self.free_fall = False
         self.power_on()
@@ -166,6 +176,7 @@ class MPU6050Sim(RegisterDevice):
 
     def _sample(self, t_us):
         cpg = self.counts_per_g()
+        rate = (0.0, 0.0, 0.0)
         if self.free_fall:
             f = (0.0, 0.0, 0.0)
             tc = 25.0
@@ -175,15 +186,19 @@ class MPU6050Sim(RegisterDevice):
         else:
             f = self.world.specific_force(t_us, self.mount)
             tc = self.world.temperature_c
+        if self.world is not None:
+            rate = mount_apply(self.mount, self.world.angular_rate_body(t_us))
         g = Prng(self.seed, stream=t_us) if self.noise else None
         sigma = _ACCEL_PSD_G * math.sqrt(_DLPF_BW_HZ[self.regs[_REG_CONFIG] & 0x07]) * cpg
         gcount = _GYRO_COUNTS_PER_DPS[(self.regs[_REG_GYRO_CONFIG] >> 3) & 0x03]
+        t_s = t_us / 1e6
         for i in range(3):
             v = (f[i] + self.bias_g[i]) * cpg
-            w = 0.0
+            w = (rate[i] + self.gyro_bias_dps[i] + self.gyro_temp_dps_per_c[i] * (tc - 25.0)
+                 + self.gyro_drift_dps_per_s[i] * t_s) * gcount
             if g is not None:
                 v += g.gauss(sigma)
-                w = g.gauss(_GYRO_RMS_DPS * gcount)
+                w += g.gauss(_GYRO_RMS_DPS * gcount)
             self.accel[i] = _sat16(int(math.floor(v + 0.5)))
             self.gyro[i] = _sat16(int(math.floor(w + 0.5)))
         self.temp = _sat16(int(math.floor((tc - _TEMP_OFFSET_C) * _TEMP_COUNTS_PER_C + 0.5)))

@@ -78,21 +78,23 @@ def rotation(yaw_deg, pitch_deg, roll_deg):
     return mat_mul(rx, mat_mul(ry, rz))
 
 
-class Magnet:
-    """Interference: an extra field `field_ut` (3-vector) switched on over [start, end] with
-    linear ramps of `ramp_s` at both ends. `frame` is 'sensor' (added as the chip reads it,
-    like a magnet carried with the board), 'body' (through the chip's mounting) or 'world'
-    (fixed in NED, so it rotates with the board's orientation, like a magnet on the table)."""
+class Pulse:
+    """A vector switched on over [start, end] with linear ramps of `ramp_s` at both ends, in a
+    frame: what Magnet and Acceleration share."""
 
-    def __init__(self, field_ut, start_s, end_s, ramp_s=0.5, frame="sensor"):
-        if frame not in ("sensor", "body", "world"):
-            raise ValueError("Magnet: frame must be 'sensor', 'body' or 'world', got %r" % frame)
-        self.field_ut = (float(field_ut[0]), float(field_ut[1]), float(field_ut[2]))
+    FRAMES = ("sensor", "body", "world")
+
+    def __init__(self, vec, start_s, end_s, ramp_s, frame):
+        kind = type(self).__name__
+        if frame not in self.FRAMES:
+            raise ValueError("%s: frame must be one of %s, got %r"
+                             % (kind, ", ".join(repr(f) for f in self.FRAMES), frame))
+        self.vec = (float(vec[0]), float(vec[1]), float(vec[2]))
         self.start_us = int(math.floor(start_s * 1000000 + 0.5))
         self.end_us = int(math.floor(end_s * 1000000 + 0.5))
         self.ramp_us = int(math.floor(ramp_s * 1000000 + 0.5))
         if self.end_us < self.start_us:
-            raise ValueError("Magnet: end_s before start_s")
+            raise ValueError("%s: end_s before start_s" % kind)
         self.frame = frame
 
     def envelope(self, t_us):
@@ -106,6 +108,27 @@ class Magnet:
         b = (self.end_us - t_us) / r
         e = a if a < b else b
         return 1.0 if e > 1.0 else e
+
+
+class Magnet(Pulse):
+    """Interference: an extra field `field_ut` (3-vector) switched on over [start, end] with
+    linear ramps of `ramp_s` at both ends. `frame` is 'sensor' (added as the chip reads it,
+    like a magnet carried with the board), 'body' (through the chip's mounting) or 'world'
+    (fixed in NED, so it rotates with the board's orientation, like a magnet on the table)."""
+
+    def __init__(self, field_ut, start_s, end_s, ramp_s=0.5, frame="sensor"):
+        Pulse.__init__(self, field_ut, start_s, end_s, ramp_s, frame)
+        self.field_ut = self.vec
+
+
+class Acceleration(Pulse):
+    """The board's own acceleration `accel_g` (g, a 3-vector) over [start, end] with linear
+    ramps: 'world' (NED: a car braking while heading north is (-0.5, 0, 0)) or 'body'."""
+
+    FRAMES = ("body", "world")
+
+    def __init__(self, accel_g, start_s, end_s, ramp_s=0.2, frame="world"):
+        Pulse.__init__(self, accel_g, start_s, end_s, ramp_s, frame)
 
 
 class World:
@@ -127,6 +150,7 @@ class World:
         self.seed = seed
         self.temperature_c = float(temperature_c)
         self.magnets = []
+        self.accelerations = []
         self.drift = None       # (rate uT/s, start us, end us or None): drift_iron()
         self.switch = None      # (delta uT, period us, start us, end us or None): switch_iron()
         self.set_iron(hard_iron_ut, soft_iron)
@@ -180,6 +204,13 @@ class World:
         self.magnets.append(m)
         return m
 
+    def add_acceleration(self, accel_g, start_s, end_s, ramp_s=0.2, frame="world"):
+        """The board accelerates (braking, a bump): the accelerometer senses it on top of
+        gravity (specific_force)."""
+        a = Acceleration(accel_g, start_s, end_s, ramp_s, frame)
+        self.accelerations.append(a)
+        return a
+
     # --- geometry ---------------------------------------------------------------------
     def earth_field_ned(self):
         """Br in uT, magnetic NED (AN4248: B (cos delta, 0, sin delta))."""
@@ -197,6 +228,37 @@ class World:
             self._rot = rotation(yaw, pitch, roll)
             self._rot_t = t_us
         return self._rot
+
+    def angular_rate_body(self, t_us, half_us=500):
+        """The board's rotation rate in its own frame, deg/s (p, q, r about body x, y, z,
+        right-handed; a level board turning clockwise seen from above has r > 0): from the
+        rotation matrices 2 x half_us apart, [w]x = -(dR/dt) R^T (R world -> body), so a
+        heading that wraps through 360 deg is no jump."""
+        a = rotation(*self.motion.at(t_us - half_us))
+        b = rotation(*self.motion.at(t_us + half_us))
+        r = rotation(*self.motion.at(t_us))
+        dt = 2 * half_us / 1e6
+        d = [[(b[i][j] - a[i][j]) / dt for j in range(3)] for i in range(3)]
+        # W = -D R^T; w = (W32, W13, W21), averaged with the antisymmetric partner
+        w = [[-sum(d[i][k] * r[j][k] for k in range(3)) for j in range(3)] for i in range(3)]
+        k = 180.0 / math.pi
+        return [k * (w[2][1] - w[1][2]) / 2, k * (w[0][2] - w[2][0]) / 2,
+                k * (w[1][0] - w[0][1]) / 2]
+
+    def linear_accel_body(self, t_us):
+        """The board's own acceleration in its frame, g (the sum of add_acceleration's)."""
+        out = [0.0, 0.0, 0.0]
+        for a in self.accelerations:
+            e = a.envelope(t_us)
+            if e == 0.0:
+                continue
+            v = a.vec
+            if a.frame == "world":
+                v = mat_vec(self.rotation(t_us), v)
+            out[0] += e * v[0]
+            out[1] += e * v[1]
+            out[2] += e * v[2]
+        return out
 
     def field_body(self, t_us):
         """Earth's field in the body frame, uT, no iron, no magnets (AN4248 Bp)."""
@@ -245,9 +307,13 @@ class World:
         return out
 
     def specific_force(self, t_us, mount):
-        """What an accelerometer mounted `mount` senses, in g: M * (-Gp) (+1 g on an axis
-        pointing up). The board's own accelerations are not modelled (slow hand motion)."""
+        """What an accelerometer mounted `mount` senses, in g: M * (a - Gp), the board's own
+        acceleration a (add_acceleration; none by default: slow hand motion) minus gravity
+        (+1 g on an axis pointing up)."""
         g = self.gravity_body(t_us)
+        if self.accelerations:
+            a = self.linear_accel_body(t_us)
+            return mount_apply(mount, [a[0] - g[0], a[1] - g[1], a[2] - g[2]])
         return mount_apply(mount, [-g[0], -g[1], -g[2]])
 
 
