@@ -370,18 +370,6 @@ def _copy3(a, b, o):
     b[o + 2] = a[2]
 
 
-def _near_st(st, o, p, lim):
-    # |st[o + i] - st[p + i]| <= lim on every axis
-    d = st[o] - st[p]
-    if d > lim or d < -lim:
-        return False
-    d = st[o + 1] - st[p + 1]
-    if d > lim or d < -lim:
-        return False
-    d = st[o + 2] - st[p + 2]
-    return -lim <= d <= lim
-
-
 def _bias_from_window(st, first):
     # the window's mean rate (1/4096 count): the bias, or a quarter of the way to it
     n = st[_WN]
@@ -572,15 +560,10 @@ class Attitude:
     def _still(self, dt, flags):
         """Still-board windows: the gyro's mean rate over 1 s without motion is its bias."""
         st = self.st
-        g = self.gyro
-        ok = st[_WN] > 0 and slow(st, g, self.still_counts)
-        if ok and flags & ACC_OK:  # gravity within 1/64 g
-            ok = _near(self.gravity, st, _WA, self.still_g)
-        if ok and flags & FIELD:  # the field within 1/64 of its components' sum
-            ok = _near(self.field, st, _WB, st[_WLB])
-        if not ok:
+        if not self._steady(flags):
             self._window(flags)
             return
+        g = self.gyro
         st[_WN] += 1
         st[_WT] += dt
         st[_WS] += g[0]
@@ -590,6 +573,16 @@ class Attitude:
             _bias_from_window(st, self.bias_estimates == 0)
             self.bias_estimates += 1
             self._window(flags)
+
+    def _steady(self, flags):
+        # the gyro less its bias within 0.5 deg/s, gravity within 1/64 g and the field
+        # within 1/64 of its components' sum of the window's start
+        st = self.st
+        if st[_WN] == 0 or not slow(st, self.gyro, self.still_counts):
+            return False
+        if flags & ACC_OK and not _near(self.gravity, st, _WA, self.still_g):
+            return False
+        return not flags & FIELD or _near(self.field, st, _WB, st[_WLB])
 
     def _window(self, flags):
         st = self.st

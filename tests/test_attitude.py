@@ -124,7 +124,7 @@ def test_a_still_board_measures_its_gyro_bias_within_0_2_deg_per_s():
     for _ in range(60 * 50):  # 60 s still
         t.set((45, 0, 0), bias_dps=bias)
         a.update(DT, ALL)
-    assert a.bias_estimates >= 50
+    assert a.bias_estimates >= 30  # once the integral has the bias within 0.5 deg/s
     for i in range(3):
         assert abs(a.bias[i] / 4096.0 / CPS - bias[i]) < 0.2
     assert abs(err_deg(kang_deg(a.heading_kang), 45)) < 0.5
