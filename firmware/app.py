@@ -213,6 +213,7 @@ class CompassApp:
     quick = None     # the firmware.quickcal.QuickCal of the last quick_calibrate()
     attitude = None  # the firmware.attitude.Attitude of use_gyro()
     _gyr = None      # use_gyro(): the gyroscope's counts (sensor axes), then body axes
+    _aided_at = -2   # use_gyro(): the step that last ran the filter
 
     def __init__(self, i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z",
                  model=10, declination_cdeg=0, store=None, delay_us=None, ticks_us=None,
@@ -364,16 +365,21 @@ class CompassApp:
         g[0] = -g[0]
         g[1] = -g[1]
         g[2] = -g[2]
-        if self._gyro_bad():
-            a.reset()  # the rate is past the range or the chip lost its setting
+        n = self.steps
+        skipped = n != self._aided_at + 1 or self._stalled or not self.tilt
+        self._aided_at = n
+        if skipped or self._gyro_bad():
+            # a step without the gyro (a failed read, a stall: time the filter did not
+            # integrate), an implausible accelerometer (the gyro's chip: its burst is suspect
+            # too), a rate past the range or a chip that lost its setting: the filter starts
+            # again from the compass at the next clean sample
+            a.reset()
             return
         st = self.status
         f = 2  # attitude.FIELD
         if st == STATUS_OK or st == STATUS_JUMP:
             f = 3  # | attitude.MAG_OK: a jump the gyro confirms is a turn
-        if self.tilt:
-            f |= 4  # attitude.ACC_OK
-        h = a.update(self._dt, f)
+        h = a.update(self._dt, f | 4)  # attitude.ACC_OK: self.tilt
         if h < 0:
             return
         self.heading_kang = (h + self.compass.declination_kang) & 0xFFFF

@@ -24,8 +24,10 @@ Attitude(gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g, gain=5
   max_uncertainty_cdeg  the gyro-held heading is vouched for while its uncertainty is
                  within this (5 deg).
 
-update(dt_us, flags) -> heading (KANG, magnetic); flags: MAG_OK (the app's field checks pass
-this sample), FIELD (a calibrated field was read), ACC_OK (a plausible accelerometer).
+update(dt_us, flags) -> heading (KANG, magnetic), -1 until started; flags: MAG_OK (the app's
+field checks pass this sample), FIELD (a calibrated field was read), ACC_OK (a plausible
+accelerometer). The filter starts (and, after reset(), starts again) at the compass's
+attitude on the first sample with all three.
 After it: heading_kang, pitch_kang, roll_kang (KANG, AN4248 theta and phi), source
 (SOURCE_MAG: the last sample's field corrected the heading; SOURCE_GYRO: held by the gyro
 alone), since_mag_us (since the last magnetic correction), uncertainty_cdeg (grows while
@@ -484,7 +486,7 @@ class Attitude:
         return st[_HEAD]
 
     def _start(self, flags):
-        if flags & (FIELD | ACC_OK) != FIELD | ACC_OK:
+        if flags != MAG_OK | FIELD | ACC_OK:  # a clean field and gravity: the compass's word
             return -1
         c = self.compass
         st = self.st

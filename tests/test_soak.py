@@ -35,3 +35,14 @@ def test_soak_bad_arguments_are_one_line_and_exit_2():
     p = subprocess.run([sys.executable, "-m", "host_sim", "soak", "--sessions", "0"],
                        capture_output=True, text=True)
     assert p.returncode == 2 and p.stderr.count("\n") == 1 and "--sessions 0" in p.stderr
+
+
+def test_with_the_gyro_aided_heading_no_exception_no_loss_and_nothing_wrong_presented_good():
+    # every app runs use_gyro() where an MPU6050 answers: "gyro held" presents the heading as
+    # good as "ok" does, so a held heading off by > 5 deg counts as wrong-but-ok too
+    st = soak.campaign(sessions=60, seconds=40, seed=6, gyro=True)
+    assert st["gyro"] and st["steps"] > 60000 and set(st["faults"]) == set(soak.CLASSES)
+    assert st["exceptions"] == 0 and st["lost"] == 0
+    assert st["wrong_but_ok"] == 0 and st["wrong_by_class"] == {}
+    c = st["clean"]
+    assert c["steps"] > 5000 and c["not_ok"] <= c["steps"] // 1000 and c["wrong_but_ok"] == 0

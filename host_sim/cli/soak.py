@@ -1,6 +1,6 @@
 """`python -m host_sim soak`: a seeded fault campaign against the simulated board (make soak).
 
-    python -m host_sim soak [--sessions N] [--seconds S] [--seed K] [--clean C] [--json]
+    python -m host_sim soak [--sessions N] [--seconds S] [--seed K] [--clean C] [--gyro] [--json]
 
 Each session boots CompassApp from a store holding a good calibration (a GY-271 + MPU6050 or
 a GY-87, strong hard and soft iron, the board turning slowly and tilting), and injects
@@ -13,6 +13,10 @@ calibration in force, and a heading error above ACCURACY_DEG - and, per fault cl
 median and worst time from injection to the first non-ok status (docs/faults.md). Then C
 fault-free sessions (default one in ten) on the next streams: the same boards and motions
 with no fault and no reboot, whose non-ok samples are false alarms.
+
+--gyro runs every app with the gyro-aided heading (CompassApp.use_gyro, docs/gyro.md) where
+an MPU6050 answers at boot: a "gyro held" sample then claims a good heading as "ok" does, and
+counts as wrong-but-ok (and as not ok in the fault-free sessions) the same way.
 
 Fault classes: stale (output registers frozen), zeros (the chip returns 0 0 0), mag_reset
 (brown-out), range (a glitch write to the range/gain register), accel_sleep (MPU6050 asleep:
@@ -65,9 +69,15 @@ def world(m):
                  hard_iron_ut=HARD_IRON_UT, soft_iron=SOFT_IRON, motion=m)
 
 
-def app_on(b, store, **kw):
-    return CompassApp(b.bus, mag_axes=MAG_AXES, accel_axes=ACCEL_AXES, declination_cdeg=400,
-                      store=store, delay_us=b.sleep_us, ticks_us=b.clock.ticks_us, **kw)
+GOOD = ("ok", "gyro held")  # statuses that present the heading as good
+
+
+def app_on(b, store, gyro=False, **kw):
+    app = CompassApp(b.bus, mag_axes=MAG_AXES, accel_axes=ACCEL_AXES, declination_cdeg=400,
+                     store=store, delay_us=b.sleep_us, ticks_us=b.clock.ticks_us, **kw)
+    if gyro and app.accel is not None:
+        app.use_gyro()
+    return app
 
 
 def good_calibration(setup, accel):
@@ -137,7 +147,7 @@ def inject(b, cls, g):
     return lambda: None
 
 
-def session(k, seed, seconds, goods, stats, trace=None, faults=True):
+def session(k, seed, seconds, goods, stats, trace=None, faults=True, gyro=False):
     """One session (stream k of the seed); faults=False: the same board and motion with no
     fault and no reboot, counting its non-ok samples in stats["clean"] (false alarms).
     trace(k, board, app, last_class) is called after every step when given."""
@@ -149,7 +159,7 @@ def session(k, seed, seconds, goods, stats, trace=None, faults=True):
     b = make_board(setup, world=world(m), seed=1000 + k, accel=accel)
     fs = MemFs()
     CalStore("/", sensor=kind, range_code=rng, fs=fs).save(cal.to_bytes())
-    app = app_on(b, CalStore("/", fs=fs))
+    app = app_on(b, CalStore("/", fs=fs), gyro)
     reboot_at = seconds * 1e6 / 2 if g.randrange(3) == 0 and faults else None
     end = seconds * 1e6
     next_fault = 2e6 + g.randrange(8) * 1e6 if faults else 2 * end
@@ -167,7 +177,7 @@ def session(k, seed, seconds, goods, stats, trace=None, faults=True):
                 b.clock.advance(2000000 + g.randrange(58) * 1000000)
             elif cls == "accel_absent" and b.accel is not None and setup == "gy271":
                 b.bus.kill(b.accel_address)
-                app = reboot(app, b, fs, stats)
+                app = reboot(app, b, fs, stats, gyro)
                 revive_at = b.clock.now_us + 1e6 * (1 + g.randrange(10))
                 clear = lambda: b.bus.revive(b.accel_address)  # noqa: E731
                 clear_at = revive_at
@@ -184,7 +194,7 @@ def session(k, seed, seconds, goods, stats, trace=None, faults=True):
             next_fault = b.clock.now_us + 1e6 * (3 + g.randrange(15))
         if reboot_at is not None and now >= reboot_at:
             reboot_at = None
-            app = reboot(app, b, fs, stats)
+            app = reboot(app, b, fs, stats, gyro)
         try:
             app.step()
         except Exception as e:  # noqa: BLE001 - counted: step() must never raise
@@ -196,7 +206,7 @@ def session(k, seed, seconds, goods, stats, trace=None, faults=True):
             clean_step(app, b, stats["clean"])
             continue
         stats["steps"] += 1
-        if app.status != "ok":
+        if app.status not in GOOD:
             if pending is not None:
                 d = (b.clock.now_us - pending[1]) / 1e3
                 stats["detect_ms"].setdefault(pending[0], []).append(d)
@@ -218,33 +228,35 @@ def session(k, seed, seconds, goods, stats, trace=None, faults=True):
 
 def clean_step(app, b, st):
     st["steps"] += 1
-    if app.status != "ok":
+    if app.status not in GOOD:
         st["not_ok"] += 1
         st["by_status"][app.status] = st["by_status"].get(app.status, 0) + 1
     elif err_deg(app, b) > ACCURACY_DEG:
         st["wrong_but_ok"] += 1
 
 
-def reboot(app, b, fs, stats):
+def reboot(app, b, fs, stats, gyro=False):
     stats["reboots"] += 1
-    return app_on(b, CalStore("/", fs=fs))
+    return app_on(b, CalStore("/", fs=fs), gyro)
 
 
-def campaign(sessions, seconds, seed, clean=None):
+def campaign(sessions, seconds, seed, clean=None, gyro=False):
     """The campaign: `sessions` sessions with faults, then `clean` fault-free ones (None:
-    one in ten, at least 2) on streams after them, whose non-ok samples are false alarms."""
+    one in ten, at least 2) on streams after them, whose non-ok samples are false alarms;
+    gyro: every app with use_gyro() where it has an MPU6050."""
     goods = [good_calibration(s, a) for s, a in SETUPS]
     if clean is None:
         clean = max(2, sessions // 10)
     stats = {"sessions": sessions, "seconds_per_session": seconds, "seed": seed, "steps": 0,
+             "gyro": gyro,
              "faults": {}, "reboots": 0, "exceptions": 0, "lost": 0, "wrong_but_ok": 0,
              "wrong_by_class": {}, "detect_ms": {}, "accuracy_deg": ACCURACY_DEG,
              "clean": {"sessions": clean, "steps": 0, "not_ok": 0, "by_status": {},
                        "wrong_but_ok": 0}}
     for k in range(sessions):
-        session(k, seed, seconds, goods, stats)
+        session(k, seed, seconds, goods, stats, gyro=gyro)
     for k in range(sessions, sessions + clean):
-        session(k, seed, seconds, goods, stats, faults=False)
+        session(k, seed, seconds, goods, stats, faults=False, gyro=gyro)
     det = {}
     for cls, v in sorted(stats["detect_ms"].items()):
         v = sorted(v)
@@ -255,7 +267,7 @@ def campaign(sessions, seconds, seed, clean=None):
 
 
 def parser():
-    p = Parser("soak", "[--sessions N] [--seconds S] [--seed K] [--clean C] [--json]",
+    p = Parser("soak", "[--sessions N] [--seconds S] [--seed K] [--clean C] [--gyro] [--json]",
                "A seeded fault campaign against the simulated board (docs/faults.md).")
     p.option("--sessions", "int", default=40, lo=1, hi=100000, metavar="N",
              help="sessions with faults (default 40; make soak: 600)")
@@ -265,6 +277,7 @@ def parser():
              help="campaign seed (default 1)")
     p.option("--clean", "int", lo=0, hi=100000, metavar="C",
              help="fault-free sessions (default one in ten, at least 2)")
+    p.option("--gyro", "flag", help="the apps run the gyro-aided heading (use_gyro)")
     p.option("--json", "flag", help="the figures as one JSON object")
     p.epilog = "exit status: 0 done; 2 bad usage."
     return p
@@ -273,7 +286,7 @@ def parser():
 def body(opts):
     n = opts["sessions"]
     clean = opts["clean"] if opts["clean"] is not None else max(2, n // 10)
-    st = campaign(n, opts["seconds"], opts["seed"], clean)
+    st = campaign(n, opts["seconds"], opts["seed"], clean, opts["gyro"])
     if opts["json"]:
         print(json.dumps(st, sort_keys=True))
         return 0
@@ -289,8 +302,9 @@ def main(argv):
 def report(st):
     """The campaign's table as lines (make soak prints them; make bench puts them in
     docs/benchmarks.md)."""
-    out = ["soak: %d sessions x %d s, seed %d" % (st["sessions"], st["seconds_per_session"],
-                                                  st["seed"]),
+    out = ["soak: %d sessions x %d s, seed %d%s" % (
+               st["sessions"], st["seconds_per_session"], st["seed"],
+               ", gyro-aided heading (ok or gyro held count as good)" if st.get("gyro") else ""),
            "steps %d  faults %d  reboots %d  exceptions %d  calibrations lost %d  "
            "wrong-but-ok %d (ok and > %.0f deg)" % (st["steps"], st["total_faults"],
                                                      st["reboots"], st["exceptions"],
