@@ -118,6 +118,7 @@ STATUS_JUMP = "heading jumped"        # it moved > 4 deg since the last sample: 
 #                                       in, or a turn too fast for the sample rate to follow
 STATUS_GYRO_HELD = "gyro held"        # use_gyro(): the field is not used (interference), the
 #                                       gyroscope holds the heading and still vouches for it
+#                                       (firmware/attitude.py)
 
 
 SOLVE_EVERY = const(25)       # kept samples between solves: ~1/9 of a full sphere (225 held)
@@ -140,7 +141,6 @@ _ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between i
 REPORT_EVERY = const(25)      # run(): steps between reports (0.5 s at 50 Hz)
 
 
-_GYRO_CHECK_EVERY = const(64)  # use_gyro(): steps between MPU6050 configuration read-backs
 _READ_ERRORS = (OSError, SensorOverflow)  # a module constant: a literal tuple is built per call
 
 
@@ -212,8 +212,6 @@ class CompassApp:
     not_installed = None  # "calibrate": calibrate() found no calibration machinery
     quick = None     # the firmware.quickcal.QuickCal of the last quick_calibrate()
     attitude = None  # the firmware.attitude.Attitude of use_gyro()
-    _gyr = None      # use_gyro(): the gyroscope's counts (sensor axes), then body axes
-    _aided_at = -2   # use_gyro(): the step that last ran the filter
 
     def __init__(self, i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z",
                  model=10, declination_cdeg=0, store=None, delay_us=None, ticks_us=None,
@@ -336,75 +334,13 @@ class CompassApp:
     def use_gyro(self, **options):
         """Let the MPU6050's gyroscope hold the heading through magnets, motors and shaking
         (docs/gyro.md): loads firmware/attitude.py, reads the gyroscope with the accelerometer
-        (one burst) and makes the filter's heading the app's. `options` are Attitude's
-        (gain, mag_gain, bias_gain, accel_reject_cdeg, mag_reject_cdeg, recovery_us,
-        max_uncertainty_cdeg). Returns the Attitude; ValueError when there is no MPU6050."""
-        acc = self.accel
-        if acc is None or not hasattr(acc, "sample_all_into"):
-            raise ValueError("use_gyro: no gyroscope - it is the MPU6050's (GY-87, GY-521) "
-                             "and no MPU6050 answered on this bus")
-        from array import array
-        from firmware.attitude import Attitude
-        a = Attitude(array("h", (0, 0, 0)), self.gravity, self.body, self.compass,
-                     acc.counts_per_dps_x10, acc.counts_per_g, **options)
-        self._gyr = array("h", (0, 0, 0))
-        acc.gyro_into = self._gyr  # its sample_into() reads the gyroscope in the same burst
-        self.attitude = a
-        return a
-
-    def _aided(self):
-        # The filter's step, one call per sample: the gyroscope through the accelerometer's
-        # axis map negated (the map turns specific force into AN4248 gravity, Gp = -f; a
-        # rotation rate keeps its sign), then the filter's heading in place of the compass's.
-        # A field the checks flag is not used; while the filter vouches for its heading the
-        # status is "gyro held" in place of interference / heading jumped, and "ok" only
-        # when this sample's field corrected it.
-        a = self.attitude
-        g = a.gyro
-        self._apply(self._am, self._gyr, g)
-        g[0] = -g[0]
-        g[1] = -g[1]
-        g[2] = -g[2]
-        n = self.steps
-        skipped = n != self._aided_at + 1 or self._stalled or not self.tilt
-        self._aided_at = n
-        if skipped or self._gyro_bad():
-            # a step without the gyro (a failed read, a stall: time the filter did not
-            # integrate), an implausible accelerometer (the gyro's chip: its burst is suspect
-            # too), a rate past the range or a chip that lost its setting: the filter starts
-            # again from the compass at the next clean sample
-            a.reset()
-            return
-        st = self.status
-        f = 2  # attitude.FIELD
-        if st == STATUS_OK or st == STATUS_JUMP:
-            f = 3  # | attitude.MAG_OK: a jump the gyro confirms is a turn
-        h = a.update(self._dt, f | 4)  # attitude.ACC_OK: self.tilt
-        if h < 0:
-            return
-        self.heading_kang = (h + self.compass.declination_kang) & 0xFFFF
-        if a.st[29] == 0:  # attitude._SINCE: this sample's field corrected the heading
-            if st == STATUS_JUMP:
-                self.status = STATUS_OK
-        elif st == STATUS_OK or st == STATUS_INTERFERENCE or st == STATUS_JUMP:
-            self.status = STATUS_GYRO_HELD if a.vouched else STATUS_INTERFERENCE
-
-    def _gyro_bad(self):
-        g = self._gyr
-        if (g[0] == 32767 or g[0] == -32768 or g[1] == 32767 or g[1] == -32768
-                or g[2] == 32767 or g[2] == -32768):
-            return True
-        if self.steps % _GYRO_CHECK_EVERY:
-            return False
-        ok = False
-        r = self._guard
-        with r:
-            r.dev = self.accel
-            ok = self.accel.config_ok()
-            if not ok:
-                self.accel.configure()
-                self.reinits += 1
-        return not ok
+        (one burst) and makes the filter's heading the app's, with the status "gyro held"
+        while it holds the heading without the field. `options` are Attitude's (gain,
+        mag_gain, bias_gain, accel_reject_cdeg, mag_reject_cdeg, recovery_us,
+        max_uncertainty_cdeg). Returns the Attitude (.attitude); ValueError when there is no
+        MPU6050."""
+        from firmware.attitude import attach
+        return attach(self, options)
 
     @property
     def accuracy(self):
@@ -446,7 +382,7 @@ class CompassApp:
             if self._check():
                 self._select()
             if self.attitude is not None:
-                self._aided()
+                self.attitude.follow(self)  # use_gyro(): the filter's step
             if not self.tilt and (self.accel is not None or self._accel_auto) \
                     and self.status == STATUS_OK:
                 self._flag(STATUS_TILT)

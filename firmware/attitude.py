@@ -38,7 +38,8 @@ spells measured), accel_rejected (the last sample's accelerometer was not used).
 The filter (Mahony's complementary filter on a quaternion; the kinematics q' = q (0, w) / 2):
   state    q, body -> world (NED), Q28 in st[0..3]; the rotation matrix C (AN4248's R
            transposed) is built from q >> 14 (Q14) each sample.
-  gyro     u = 16 x counts - bias (1/16 count), plus the corrections below as rates; the half
+  gyro     u = 16 x counts - bias (1/16 count; the mean of the sample and the one before it:
+           the trapezoid rule), plus the corrections below as rates; the half
            angle of each axis h = u x dt x k, k from the range's counts per deg/s, with dt in
            chunks of < 16384 us (a slow loop integrates in several chunks); q += q (0, h).
   gravity  e = g x d (d = C's third row, the down direction the filter believes): the
@@ -65,6 +66,13 @@ FIELD = const(2)
 ACC_OK = const(4)
 SOURCE_MAG = "magnetometer"
 SOURCE_GYRO = "gyro"
+# the app's statuses (firmware/app.py STATUS_*)
+_OK = "ok"
+_INTERFERENCE = "interference"
+_JUMP = "heading jumped"
+_GYRO_HELD = "gyro held"
+_CHECK_EVERY = const(64)  # steps between the MPU6050's configuration read-backs
+_GIMBAL = const(14564)    # 80 deg (KANG): firmware/compass.py's gimbal limit
 
 _ONE28 = const(0x10000000)
 _M14 = const(0x3FFF)
@@ -108,6 +116,7 @@ _ROLL = const(52)
 _SCR = const(53)   # 53..55 scratch
 _C = const(56)     # 56..58 the corrections (1/16 count) for the next sample's rates
 _WLB = const(59)   # still window: the field's tolerance (counts)
+_GP = const(37)    # 37..39 the last gyro sample (counts)
 _SIZE = const(60)
 
 
@@ -117,10 +126,14 @@ def mul14(a, b):
 
 
 def rates(st, gyro):
-    """u = 16 x gyro - bias + the corrections (1/16 count)."""
-    st[_U] = (gyro[0] << 4) - (st[_BIAS] >> 8) + st[_C]
-    st[_U + 1] = (gyro[1] << 4) - (st[_BIAS + 1] >> 8) + st[_C + 1]
-    st[_U + 2] = (gyro[2] << 4) - (st[_BIAS + 2] >> 8) + st[_C + 2]
+    """u = 16 x the mean of this and the last gyro sample (the trapezoid rule: the rate is
+    sampled at the ends of the interval) - bias + the corrections (1/16 count)."""
+    st[_U] = ((gyro[0] + st[_GP]) << 3) - (st[_BIAS] >> 8) + st[_C]
+    st[_U + 1] = ((gyro[1] + st[_GP + 1]) << 3) - (st[_BIAS + 1] >> 8) + st[_C + 1]
+    st[_U + 2] = ((gyro[2] + st[_GP + 2]) << 3) - (st[_BIAS + 2] >> 8) + st[_C + 2]
+    st[_GP] = gyro[0]
+    st[_GP + 1] = gyro[1]
+    st[_GP + 2] = gyro[2]
 
 
 def q_hi(st):
@@ -388,8 +401,26 @@ def _blend(st, i, n, first):
     st[_BIAS + i] = m if -_BIAS_MAX <= m <= _BIAS_MAX else (_BIAS_MAX if m > 0 else -_BIAS_MAX)
 
 
+def attach(app, options):
+    """CompassApp.use_gyro(): an Attitude on the app's arrays, its MPU6050 reading the
+    gyroscope in the accelerometer's burst (driver .gyro_into), app.attitude set."""
+    acc = app.accel
+    if acc is None or not hasattr(acc, "sample_all_into"):
+        raise ValueError("use_gyro: no gyroscope - it is the MPU6050's (GY-87, GY-521) and "
+                         "no MPU6050 answered on this bus")
+    a = Attitude(array("h", (0, 0, 0)), app.gravity, app.body, app.compass,
+                 acc.counts_per_dps_x10, acc.counts_per_g, **options)
+    a.raw = array("h", (0, 0, 0))
+    acc.gyro_into = a.raw  # its sample_into() reads the gyroscope in the same burst
+    app.attitude = a
+    return a
+
+
 class Attitude:
     """See the module docstring."""
+
+    raw = None     # attach(): the gyroscope's counts in the sensor's axes
+    _at = -2       # follow(): the app step that last ran the filter
 
     def __init__(self, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g,
                  gain=500, mag_gain=500, bias_gain=125, accel_reject_cdeg=1000,
@@ -472,6 +503,75 @@ class Attitude:
         self.started = False
         self.st[_SINCE] = 0
 
+    # --- the app's step (attach, CompassApp.use_gyro) ------------------------------------
+    def follow(self, app):
+        """One call per app step after its field checks: the filter's heading becomes the
+        app's. A field the checks flag is not used; while the filter vouches for its heading
+        the status is "gyro held" in place of interference / heading jumped, and "ok" only
+        when this sample's field corrected it."""
+        if self._gap(app):
+            return
+        s = app.status
+        h = self.update(app._dt, 7 if s == _OK or s == _JUMP else 6)  # a jump the gyro
+        if h < 0:  # confirms is a turn: the field is offered (MAG_OK | FIELD | ACC_OK)
+            return
+        p = self.st[_PITCH]
+        if p > _GIMBAL or p < -_GIMBAL:  # near vertical the heading is the compass's: a
+            return  # small tilt error moves psi by tan(pitch) (AN4248 sec. 6)
+        app.heading_kang = (h + self.compass.declination_kang) & 0xFFFF
+        if self.st[_SINCE] == 0:  # this sample's field corrected the heading
+            if s == _JUMP:
+                app.status = _OK
+        elif s == _OK or s == _INTERFERENCE or s == _JUMP:
+            app.status = _GYRO_HELD if self.vouched else _INTERFERENCE
+
+    def _gap(self, app):
+        # The gyroscope into the body frame: the accelerometer's axis map negated (the map
+        # turns specific force into AN4248 gravity, Gp = -f; a rotation rate keeps its sign).
+        # True after a step without the gyro (a failed read, a stall: time the filter did
+        # not integrate), with an implausible accelerometer (the gyro's own chip: its burst
+        # is suspect too), a rate past the range or a chip that lost its setting: the filter
+        # then starts again from the compass at the next clean sample.
+        g = self.gyro
+        app._apply(app._am, self.raw, g)
+        g[0] = -g[0]
+        g[1] = -g[1]
+        g[2] = -g[2]
+        n = app.steps
+        skip = n != self._at + 1 or app._stalled or not app.tilt
+        self._at = n
+        if skip or self._bad(app):
+            self.reset()
+            return True
+        return False
+
+    def _bad(self, app):
+        g = self.raw
+        if (g[0] == 32767 or g[0] == -32768 or g[1] == 32767 or g[1] == -32768
+                or g[2] == 32767 or g[2] == -32768):
+            return True
+        if app.steps % _CHECK_EVERY:
+            return False
+        return not self._config(app)
+
+    def _config(self, app):
+        # GYRO_CONFIG (and the accelerometer's) read back, rewritten when it changed; a
+        # failed read counts as changed
+        r = app._guard
+        self.config_ok = False
+        with r:
+            r.dev = app.accel
+            self.config_ok = app.accel.config_ok()
+        if not self.config_ok:
+            self._configure(app)
+        return self.config_ok
+
+    def _configure(self, app):
+        r = app._guard
+        with r:
+            app.accel.configure()
+            app.reinits += 1
+
     def update(self, dt, flags):
         if dt > _DT_MAX or dt < 0:
             dt = _DT_MAX if dt > 0 else 0
@@ -491,6 +591,13 @@ class Attitude:
         c = self.compass
         st = self.st
         set_euler(st, c.heading_kang - c.declination_kang, c.pitch_kang, c.roll_kang)
+        g = self.gyro
+        st[_GP] = g[0]
+        st[_GP + 1] = g[1]
+        st[_GP + 2] = g[2]
+        st[_C] = 0
+        st[_C + 1] = 0
+        st[_C + 2] = 0
         self.started = True
         euler(st)
         return st[_HEAD]

@@ -179,12 +179,13 @@ def machine():
             "micropython": mp}
 
 
-def write_session(path, smoke):
+def write_session(path, smoke, mpu_bytes=6):
     """The recorded session memory.py replays (written here, so host_sim stays out of the
-    measured MicroPython process)."""
+    measured MicroPython process); mpu_bytes=14: the MPU6050's gyroscope too (the gyro
+    profile)."""
     from host_sim.cli.benchmarks import common
     n, dt = (1500, 20000) if smoke else (6000, 5000)
-    mag, acc = common.session(n, dt_us=dt)
+    mag, acc = common.session(n, dt_us=dt, mpu_bytes=mpu_bytes)
     with open(path, "wb") as f:
         f.write(bytes(mag) + bytes(acc))
 
@@ -380,24 +381,32 @@ def memory32(session, build, smoke, log=print):
         if extra is None:
             continue
         log("  profiles   x86-32 (%s)" % kind)
+        gyro = session + ".gyro"
+        if not os.path.exists(gyro):
+            write_session(gyro, smoke, mpu_bytes=14)
         out["profiles_" + kind] = profiles(session, path, build if path or extra else ROOT,
-                                           extra)
+                                           extra, gyro_session=gyro)
         log("  min heap   x86-32 (%s)" % kind)
         out["min_heap_" + kind] = min_heap(session, path, build if path or extra else ROOT,
                                            smoke, extra)
     return out
 
 
-def profiles(session, extra_path, cwd, extra=(), heap=None):
+def profiles(session, extra_path, cwd, extra=(), heap=None, gyro_session=None):
     """The live heap of a board booted as boards/main.py boots it (benchmarks/profiles.py):
     'calibrate' (an empty store: a first calibration, then headings) and then 'heading' (a
-    reboot on the record it saved). {'calibrate': {...}, 'heading': {...}}."""
+    reboot on the record it saved), and with gyro_session (its MPU6050 records with the
+    gyroscope, write_session(mpu_bytes=14)) 'gyro': the same reboot with use_gyro().
+    {'calibrate': {...}, 'heading': {...}, 'gyro': {...}}."""
     import tempfile
     out = {}
     with tempfile.TemporaryDirectory() as store:
-        for profile in ("calibrate", "heading"):
+        for profile in ("calibrate", "heading", "gyro"):
+            if profile == "gyro" and gyro_session is None:
+                continue
+            s = gyro_session if profile == "gyro" else session
             out[profile] = run_script("profiles", MICROPYTHON_32,
-                                      [session, store, profile] + list(extra),
+                                      [s, store, profile] + list(extra),
                                       extra_path=extra_path, cwd=cwd, heap=heap)
     return out
 

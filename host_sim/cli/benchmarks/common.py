@@ -208,10 +208,11 @@ SOFT_IRON = ((1.1, 0.05, -0.03), (0.05, 0.92, 0.04), (-0.03, 0.04, 1.0))
 
 
 def session(n, motion=None, seed=3, hard_iron_ut=HARD_IRON_UT, soft_iron=SOFT_IRON,
-            noise=True, dt_us=5000, accel=True):
+            noise=True, dt_us=5000, accel=True, mpu_bytes=6):
     """n samples of a simulated GY-271 + GY-521 (QMC5883L 200 Hz +-2 G, MPU6050 +-2 g) as
     the raw register bytes a driver reads: (mag bytes 6n LSB first, accel bytes 6n MSB
-    first or None)."""
+    first or None); mpu_bytes=14: the MPU6050's whole burst (accelerometer, temperature,
+    gyroscope at +-500 deg/s), 14n bytes, as the driver reads it after use_gyro()."""
     from host_sim import motion as mo
     from host_sim.boards import make_board
     from host_sim.world import World
@@ -225,16 +226,18 @@ def session(n, motion=None, seed=3, hard_iron_ut=HARD_IRON_UT, soft_iron=SOFT_IR
     if accel:
         b.bus.writeto_mem(MPU_ADDR, 0x6B, b"\x01")   # wake, PLL X gyro
         b.bus.writeto_mem(MPU_ADDR, 0x1C, b"\x00")   # +-2 g
+        b.bus.writeto_mem(MPU_ADDR, 0x1B, b"\x08")   # +-500 deg/s (the driver's default)
     mag = bytearray(6 * n)
-    acc = bytearray(6 * n) if accel else None
+    acc = bytearray(mpu_bytes * n) if accel else None
     d = bytearray(6)
+    e = bytearray(mpu_bytes)
     for i in range(n):
         b.clock.advance(dt_us)
         b.bus.readfrom_mem_into(QMC_ADDR, QMC_DATA, d)
         mag[6 * i:6 * i + 6] = d
         if accel:
-            b.bus.readfrom_mem_into(MPU_ADDR, MPU_ACCEL, d)
-            acc[6 * i:6 * i + 6] = d
+            b.bus.readfrom_mem_into(MPU_ADDR, MPU_ACCEL, e)
+            acc[mpu_bytes * i:mpu_bytes * (i + 1)] = e
     return mag, acc
 
 

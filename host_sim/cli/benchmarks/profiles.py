@@ -16,6 +16,8 @@ and the session bytes). PROFILE:
              still loaded; leaves the record in STOREDIR.
   heading    a board whose store holds that calibration: boot, then 1000 headings. Reports
              the live heap after them ("after") and the modules loaded.
+  gyro       the same with the gyro-aided heading (app.use_gyro() after boot); its SESSION
+             holds the MPU6050's 14-byte bursts (accelerometer, temperature, gyroscope).
 Both then run 1000 more headings and report the bytes allocated per sample over those
 (micropython.mem_total): the steady state, once the dip a new fit measures has been saved.
 The names interned so far (micropython.qstr_info(): never freed) are printed on a line of their
@@ -66,11 +68,12 @@ def main():
         common.emit({"interpreter": common.interpreter(), "skipped": "needs gc.mem_alloc"})
         return
     import os
-    n = os.stat(args[0])[6] // 12
+    store_dir, profile = args[1], args[2]
+    rec = 14 if profile == "gyro" else 6  # the MPU6050's bytes per sample
+    n = os.stat(args[0])[6] // (6 + rec)
     with open(args[0], "rb") as f:  # the two halves, each read once (no copy of the whole)
         mag = f.read(6 * n)
-        acc = f.read(6 * n)
-    store_dir, profile = args[1], args[2]
+        acc = f.read(rec * n)
     if "--romfs" in sys.argv:
         import vfs
         with open(args[3], "rb") as f:
@@ -83,6 +86,8 @@ def main():
     res = {"interpreter": common.interpreter(), "profile": profile}
     app = boot(bus, store_dir, clock)
     res["boot"] = live() - base
+    if profile == "gyro":
+        app.use_gyro()
     if profile == "calibrate":
         peak = 0
         track = "--min" not in sys.argv
@@ -117,6 +122,8 @@ def main():
     res["complete"] = app.calibration.model == 10 and ok == 2 * HEADINGS
     res["bytes_per_sample"] = per_sample
     res["status"] = app.status
+    if profile == "gyro":
+        res["gyro_source"] = app.attitude.source
     if "--min" in sys.argv:
         common.emit({"complete": res["complete"]})
         return
