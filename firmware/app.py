@@ -339,8 +339,12 @@ class CompassApp:
         mag_gain, bias_gain, accel_reject_cdeg, mag_reject_cdeg, recovery_us,
         max_uncertainty_cdeg). Returns the Attitude (.attitude); ValueError when there is no
         MPU6050."""
-        from firmware.attitude import attach
-        return attach(self, options)
+        from firmware.gyrosetup import attach
+        from firmware.attitude import Attitude
+        a = attach(self, Attitude, options)
+        attach = None
+        drop("gyrosetup")
+        return a
 
     @property
     def accuracy(self):

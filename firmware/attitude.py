@@ -58,7 +58,7 @@ functions keep their frames within MicroPython's 11 words (see firmware/compass.
 """
 from array import array
 
-from firmware.compat import const
+from firmware.compat import const, drop
 from firmware.trig import ZERO_VECTOR, atan2, isqrt, norm14, sin
 
 MAG_OK = const(1)
@@ -401,21 +401,6 @@ def _blend(st, i, n, first):
     st[_BIAS + i] = m if -_BIAS_MAX <= m <= _BIAS_MAX else (_BIAS_MAX if m > 0 else -_BIAS_MAX)
 
 
-def attach(app, options):
-    """CompassApp.use_gyro(): an Attitude on the app's arrays, its MPU6050 reading the
-    gyroscope in the accelerometer's burst (driver .gyro_into), app.attitude set."""
-    acc = app.accel
-    if acc is None or not hasattr(acc, "sample_all_into"):
-        raise ValueError("use_gyro: no gyroscope - it is the MPU6050's (GY-87, GY-521) and "
-                         "no MPU6050 answered on this bus")
-    a = Attitude(array("h", (0, 0, 0)), app.gravity, app.body, app.compass,
-                 acc.counts_per_dps_x10, acc.counts_per_g, **options)
-    a.raw = array("h", (0, 0, 0))
-    acc.gyro_into = a.raw  # its sample_into() reads the gyroscope in the same burst
-    app.attitude = a
-    return a
-
-
 class Attitude:
     """See the module docstring."""
 
@@ -423,26 +408,17 @@ class Attitude:
     _at = -2       # follow(): the app step that last ran the filter
 
     def __init__(self, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g,
-                 gain=500, mag_gain=500, bias_gain=125, accel_reject_cdeg=1000,
-                 mag_reject_cdeg=1000, recovery_us=5000000, max_uncertainty_cdeg=500):
-        for name, v, lo, hi in (("gain", gain, 0, 1000), ("mag_gain", mag_gain, 0, 1000),
-                                ("bias_gain", bias_gain, 0, 1000),
-                                ("accel_reject_cdeg", accel_reject_cdeg, 100, 9000),
-                                ("mag_reject_cdeg", mag_reject_cdeg, 100, 18000),
-                                ("recovery_us", recovery_us, 0, 100000000),
-                                ("max_uncertainty_cdeg", max_uncertainty_cdeg, 0, 18000)):
-            if not isinstance(v, int) or not lo <= v <= hi:
-                raise ValueError("Attitude %s=%r: expected an int in %d..%d%s" % (
-                    name, v, lo, hi, " (1/1000 per second)" if name.endswith("gain") else ""))
-        if counts_per_dps_x10 not in (1310, 655, 328, 164):
-            raise ValueError("Attitude counts_per_dps_x10=%r: the MPU6050's 1310, 655, 328 or "
-                             "164 (10 x counts per deg/s)" % (counts_per_dps_x10,))
+                 **options):
+        from firmware.gyrosetup import scales  # construction only: dropped after it
+        k = scales(counts_per_dps_x10, options)
+        scales = None
+        drop("gyrosetup")
         self.gyro = gyro
         self.gravity = gravity
         self.field = field
         self.compass = compass
-        self.recovery_us = recovery_us
-        self.max_uncertainty_cdeg = max_uncertainty_cdeg
+        self.recovery_us = k[7]
+        self.max_uncertainty_cdeg = k[8]
         self.still_counts = counts_per_dps_x10 * 8 // 10  # 0.5 deg/s in 1/16 count
         self.still_g = counts_per_g >> 6
         self.base_cdeg = 100            # the field-corrected heading: ~1 deg
@@ -452,22 +428,14 @@ class Attitude:
         self.started = False
         self.accel_rejected = True
         self._cpg = counts_per_g
-        st = array("i", bytearray(4 * _SIZE))
-        self.st = st
-        # half angle per 16384 us (Q28 rad) per 1/16 count: pi 2**42 / (5760 cps 10**6),
-        # pi as 355/113 (8.5e-8), x 2**14 split into integer and fraction
-        k = (355 * (1 << 56) * 10 + 56 * 5760 * 1000000 * counts_per_dps_x10) // (
-            113 * 5760 * 1000000 * counts_per_dps_x10)
-        st[_KI] = k >> 14
-        st[_KF] = k & _M14
-        # gain x 180/pi x cps x 4 (Q12 per Q14 error); mag_gain x 360 x cps (Q12 per KANG)
-        st[_KA] = (gain * counts_per_dps_x10 * 720 * 113 + 1775000) // 3550000
-        st[_KM] = (mag_gain * 360 * counts_per_dps_x10 + 5000) // 10000
-        st[_KB] = (bias_gain * 256 * 16384 * 64 + 500000000) // 1000000000
-        s = sin(accel_reject_cdeg * 4096 // 5625) >> 1  # cdeg -> KANG: x 65536 / 36000
-        st[_ACC_LIM] = s * s
-        self.acc_lim = s * s
-        st[_MAG_LIM] = mag_reject_cdeg * 4096 // 2250
+        self.st = st = array("i", bytearray(4 * _SIZE))
+        st[_KI] = k[0]
+        st[_KF] = k[1]
+        st[_KA] = k[2]
+        st[_KM] = k[3]
+        st[_KB] = k[4]
+        st[_ACC_LIM] = self.acc_lim = k[5]
+        st[_MAG_LIM] = k[6]
         st[_Q] = _ONE28
 
     # results

@@ -29,6 +29,7 @@ def build(tmp_path_factory):
     d = str(tmp_path_factory.mktemp("budgets"))
     session = os.path.join(d, "session.bin")
     bench.write_session(session, smoke=False)
+    bench.write_session(session + ".gyro", smoke=False, mpu_bytes=14)
     out = {"dir": d, "session": session, "session_bytes": os.path.getsize(session)}
     if X86.available:
         out["mpy"] = bench.build_mpy(os.path.join(d, "mpy"), bench.MPY_CROSS_32, "x86")
@@ -57,7 +58,7 @@ def _x86(build):
 @pytest.fixture(scope="module")
 def profiles_mpy(build):
     b = _x86(build)
-    return bench.profiles(b["session"], b["mpy"], b["dir"])
+    return bench.profiles(b["session"], b["mpy"], b["dir"], gyro_session=b["session"] + ".gyro")
 
 
 @pytest.fixture(scope="module")
@@ -77,6 +78,16 @@ def test_a_calibrated_board_stays_within_its_heap_budget_from_mpy(profiles_mpy):
     h = _ok(profiles_mpy)["heading"]
     assert h["after"] <= BUDGETS["heading_live_mpy"], h["after"]
     assert h["bytes_per_sample"] == BUDGETS["bytes_per_sample"]
+
+
+def test_the_gyro_aided_heading_costs_within_its_budget_and_nothing_per_sample(profiles_mpy):
+    p = _ok(profiles_mpy)
+    g, h = p["gyro"], p["heading"]
+    assert "error" not in g and g["complete"], g
+    assert g["after"] - h["after"] <= BUDGETS["gyro_extra_mpy"], (g["after"], h["after"])
+    assert g["bytes_per_sample"] == BUDGETS["bytes_per_sample"]
+    # the filter stays, its construction left
+    assert set(g["modules"]) - set(h["modules"]) == {"attitude"}
 
 
 def test_a_calibrated_board_stays_within_its_heap_budget_from_romfs(profiles_romfs):
