@@ -340,8 +340,9 @@ class CompassApp:
         max_uncertainty_cdeg). Returns the Attitude (.attitude); ValueError when there is no
         MPU6050."""
         from firmware.gyrosetup import attach
-        from firmware.attitude import Attitude
-        a = attach(self, Attitude, options)
+        from firmware import attitude
+        attitude.use_kernels(None if self.fast else False)  # the app's kernel set
+        a = attach(self, attitude.Attitude, options)
         attach = None
         drop("gyrosetup")
         return a

@@ -41,7 +41,7 @@ The filter (Mahony's complementary filter on a quaternion; the kinematics q' = q
   gyro     u = 16 x counts - bias (1/16 count; the mean of the sample and the one before it:
            the trapezoid rule), plus the corrections below as rates; the half
            angle of each axis h = u x dt x k, k from the range's counts per deg/s, with dt in
-           chunks of < 16384 us (a slow loop integrates in several chunks); q += q (0, h).
+           chunks of < 32768 us (a slow loop integrates in several chunks); q += q (0, h).
   gravity  e = g x d (d = C's third row, the down direction the filter believes): the
            rotation that turns the belief toward the measurement, times gain.
   field    m = C b, the field in the filter's level frame; its direction atan2(my, mx) is the
@@ -53,12 +53,12 @@ The filter (Mahony's complementary filter on a quaternion; the kinematics q' = q
            window's mean rate: the first window sets it, later ones move it a quarter of the
            way.
 Every intermediate stays below 2**30 (a product a x b of a Q28 and a Q14 is taken as
-(a >> 14) b + ((a & 0x3FFF) b >> 14), exact); the per-sample path allocates nothing: its
+(a >> 14) b + ((a & 0x3FFF) b >> 14), exact; a time in us likewise with 15 bits); the per-sample path allocates nothing: its
 functions keep their frames within MicroPython's 11 words (see firmware/compass.py).
 """
 from array import array
 
-from firmware.compat import const, drop
+from firmware.compat import const, drop, kernels
 from firmware.trig import ZERO_VECTOR, atan2, isqrt, norm14, sin
 
 MAG_OK = const(1)
@@ -71,12 +71,12 @@ _OK = "ok"
 _INTERFERENCE = "interference"
 _JUMP = "heading jumped"
 _GYRO_HELD = "gyro held"
-_CHECK_EVERY = const(64)  # steps between the MPU6050's configuration read-backs
-_GIMBAL = const(14564)    # 80 deg (KANG): firmware/compass.py's gimbal limit
+_CHECK_MASK = const(63)  # every 64 steps the MPU6050's configuration is read back
+_GIMBAL = const(16135)    # sin(80 deg) in Q14: firmware/compass.py's gimbal limit
 
 _ONE28 = const(0x10000000)
 _M14 = const(0x3FFF)
-_CHUNK_US = const(16383)
+_CHUNK_US = const(32767)
 _KANG_90 = const(16384)
 _STILL_US = const(1000000)
 _SINCE_CAP = const(0x20000000)
@@ -88,7 +88,7 @@ _WINDOW_MAX = const(4096)  # samples in a still window (the sums stay small)
 _Q = const(0)      # 0..3 q (w, x, y, z), Q28
 _BIAS = const(4)   # 4..6 gyro bias, body frame, 1/4096 count
 _U = const(7)      # 7..9 rate: 1/16 count, bias removed, corrections added
-_R = const(10)     # 10..12 half angle per 16384 us, Q28 rad
+_R = const(10)     # 10..12 half angle per 32768 us, Q28 rad
 _QH = const(13)    # 13..16 q >> 14
 _D = const(17)     # 17..19 C's third row: down in the body frame, Q14
 _G = const(20)     # 20..22 gravity / field scaled by norm14
@@ -96,7 +96,7 @@ _KI = const(23)    # rate scale: integer part...
 _KF = const(24)    # ...and fraction / 16384
 _KA = const(25)    # gain: (1/16 count rate) per Q14 error, Q12
 _KM = const(26)    # mag_gain: (1/16 count rate) per KANG of heading error, Q12
-_KB = const(27)    # bias_gain: bias (1/4096 count) per correction x 16384 us, Q6
+_KB = const(27)    # bias_gain: bias (1/4096 count) per correction x 32768 us, Q6
 _E = const(28)     # last heading error (KANG)
 _SINCE = const(29)  # us since the last magnetic correction
 _AREJ = const(30)  # us of accelerometer rejection in a row
@@ -104,25 +104,24 @@ _MREJ = const(31)  # us of the filter's own field rejection in a row
 _WN = const(32)    # still window: samples
 _WT = const(33)    # still window: us
 _WS = const(34)    # 34..36 still window: gyro sums (counts)
+_GP = const(37)    # 37..39 the last gyro sample (counts)
 _WA = const(40)    # 40..42 still window: gravity at its start
 _WB = const(43)    # 43..45 still window: field at its start
 _ACC_LIM = const(46)  # sin of accel_reject, Q14, squared
 _MAG_LIM = const(47)  # mag_reject, KANG
-_CPG = const(48)   # counts per g
-_STILL_G = const(49)  # gyro counts of 1 deg/s
-_HEAD = const(50)
-_PITCH = const(51)
-_ROLL = const(52)
-_SCR = const(53)   # 53..55 scratch
-_C = const(56)     # 56..58 the corrections (1/16 count) for the next sample's rates
-_WLB = const(59)   # still window: the field's tolerance (counts)
-_GP = const(37)    # 37..39 the last gyro sample (counts)
-_SIZE = const(60)
+_HEAD = const(48)
+_PITCH = const(49)
+_ROLL = const(50)
+_SCR = const(51)   # 51..53 scratch
+_C = const(54)     # 54..56 the corrections (1/16 count) for the next sample's rates
+_WLB = const(57)   # still window: the field's tolerance (counts)
+_SIZE = const(58)  # (firmware/fast.py's mirrors use these numbers)
 
 
 def mul14(a, b):
     """floor(a * b / 2**14) for |a| < 2**30, |b| <= 2**14 without leaving the small ints."""
     return (a >> 14) * b + (((a & _M14) * b) >> 14)
+
 
 
 def rates(st, gyro):
@@ -217,9 +216,13 @@ def yaw_rate(st, e):
 
 def integral(st, dt):
     """The bias takes bias_gain of the corrections over dt (within +-2**13 counts)."""
-    bias_step(st, 0, (mul14(st[_C], dt) * st[_KB]) >> 6)
-    bias_step(st, 1, (mul14(st[_C + 1], dt) * st[_KB]) >> 6)
-    bias_step(st, 2, (mul14(st[_C + 2], dt) * st[_KB]) >> 6)
+    k = st[_KB]
+    c = st[_C]
+    bias_step(st, 0, (((c >> 15) * dt + (((c & 0x7FFF) * dt) >> 15)) * k) >> 6)
+    c = st[_C + 1]
+    bias_step(st, 1, (((c >> 15) * dt + (((c & 0x7FFF) * dt) >> 15)) * k) >> 6)
+    c = st[_C + 2]
+    bias_step(st, 2, (((c >> 15) * dt + (((c & 0x7FFF) * dt) >> 15)) * k) >> 6)
 
 
 def bias_step(st, i, d):
@@ -228,22 +231,26 @@ def bias_step(st, i, d):
 
 
 def half_angles(st):
-    """r = u x k: the half angle per 16384 us, Q28 rad."""
+    """r = u x k: the half angle per 32768 us, Q28 rad (mul14 written out, here and below:
+    a call costs more than the product)."""
     i = st[_KI]
     f = st[_KF]
     u = st[_U]
-    st[_R] = u * i + mul14(u, f)
+    st[_R] = u * i + (u >> 14) * f + (((u & _M14) * f) >> 14)
     u = st[_U + 1]
-    st[_R + 1] = u * i + mul14(u, f)
+    st[_R + 1] = u * i + (u >> 14) * f + (((u & _M14) * f) >> 14)
     u = st[_U + 2]
-    st[_R + 2] = u * i + mul14(u, f)
+    st[_R + 2] = u * i + (u >> 14) * f + (((u & _M14) * f) >> 14)
 
 
 def integrate(st, dt):
-    """q += q (0, h) with h = r x dt / 16384 (dt < 16384 us): Q28."""
-    st[_SCR] = mul14(st[_R], dt)
-    st[_SCR + 1] = mul14(st[_R + 1], dt)
-    st[_SCR + 2] = mul14(st[_R + 2], dt)
+    """q += q (0, h) with h = r x dt / 32768 (dt < 32768 us): Q28."""
+    r = st[_R]
+    st[_SCR] = (r >> 15) * dt + (((r & 0x7FFF) * dt) >> 15)
+    r = st[_R + 1]
+    st[_SCR + 1] = (r >> 15) * dt + (((r & 0x7FFF) * dt) >> 15)
+    r = st[_R + 2]
+    st[_SCR + 2] = (r >> 15) * dt + (((r & 0x7FFF) * dt) >> 15)
     q_hi(st)
     dq_wx(st)
     dq_yz(st)
@@ -254,9 +261,19 @@ def dq_wx(st):
     h0 = st[_SCR]
     h1 = st[_SCR + 1]
     h2 = st[_SCR + 2]
-    d = mul14(h0, st[_QH + 1]) + mul14(h1, st[_QH + 2]) + mul14(h2, st[_QH + 3])
+    q = st[_QH + 1]
+    d = (h0 >> 14) * q + (((h0 & _M14) * q) >> 14)
+    q = st[_QH + 2]
+    d += (h1 >> 14) * q + (((h1 & _M14) * q) >> 14)
+    q = st[_QH + 3]
+    d += (h2 >> 14) * q + (((h2 & _M14) * q) >> 14)
     st[_Q] -= d
-    d = mul14(h0, st[_QH]) + mul14(h2, st[_QH + 2]) - mul14(h1, st[_QH + 3])
+    q = st[_QH]
+    d = (h0 >> 14) * q + (((h0 & _M14) * q) >> 14)
+    q = st[_QH + 2]
+    d += (h2 >> 14) * q + (((h2 & _M14) * q) >> 14)
+    q = st[_QH + 3]
+    d -= (h1 >> 14) * q + (((h1 & _M14) * q) >> 14)
     st[_Q + 1] += d
 
 
@@ -265,9 +282,19 @@ def dq_yz(st):
     h0 = st[_SCR]
     h1 = st[_SCR + 1]
     h2 = st[_SCR + 2]
-    d = mul14(h1, st[_QH]) + mul14(h0, st[_QH + 3]) - mul14(h2, st[_QH + 1])
+    q = st[_QH]
+    d = (h1 >> 14) * q + (((h1 & _M14) * q) >> 14)
+    q = st[_QH + 3]
+    d += (h0 >> 14) * q + (((h0 & _M14) * q) >> 14)
+    q = st[_QH + 1]
+    d -= (h2 >> 14) * q + (((h2 & _M14) * q) >> 14)
     st[_Q + 2] += d
-    d = mul14(h2, st[_QH]) + mul14(h1, st[_QH + 1]) - mul14(h0, st[_QH + 2])
+    q = st[_QH]
+    d = (h2 >> 14) * q + (((h2 & _M14) * q) >> 14)
+    q = st[_QH + 1]
+    d += (h1 >> 14) * q + (((h1 & _M14) * q) >> 14)
+    q = st[_QH + 2]
+    d -= (h0 >> 14) * q + (((h0 & _M14) * q) >> 14)
     st[_Q + 3] += d
 
 
@@ -286,14 +313,18 @@ def normalise(st):
         e = 8191
     elif e < -8191:
         e = -8191
-    st[_Q] += mul14(st[_Q], e)
-    st[_Q + 1] += mul14(st[_Q + 1], e)
-    st[_Q + 2] += mul14(st[_Q + 2], e)
-    st[_Q + 3] += mul14(st[_Q + 3], e)
+    q = st[_Q]
+    st[_Q] = q + (q >> 14) * e + (((q & _M14) * e) >> 14)
+    q = st[_Q + 1]
+    st[_Q + 1] = q + (q >> 14) * e + (((q & _M14) * e) >> 14)
+    q = st[_Q + 2]
+    st[_Q + 2] = q + (q >> 14) * e + (((q & _M14) * e) >> 14)
+    q = st[_Q + 3]
+    st[_Q + 3] = q + (q >> 14) * e + (((q & _M14) * e) >> 14)
 
 
 def advance(st, dt):
-    """The gyro step over dt in chunks below 16384 us (the integral term with each), then
+    """The gyro step over dt in chunks below 32768 us (the integral term with each), then
     |q| back to 1."""
     half_angles(st)
     while dt > 0:
@@ -306,10 +337,20 @@ def advance(st, dt):
 
 
 def euler(st):
-    """Heading, pitch and roll (KANG, AN4248 psi, theta, phi) of q."""
+    """Heading (and d, q >> 14) of q."""
     q_hi(st)
-    heading(st)
     down(st)
+    angles(st)
+
+
+def angles(st):
+    """The heading from q >> 14 as it is (the corrections just made it from this q); pitch
+    and roll are computed when asked for (tilt())."""
+    heading(st)
+
+
+def tilt(st):
+    """Pitch and roll (KANG) from d."""
     d = st[_D + 1]
     e = st[_D + 2]
     st[_ROLL] = atan2(d, e)
@@ -401,10 +442,39 @@ def _blend(st, i, n, first):
     st[_BIAS + i] = m if -_BIAS_MAX <= m <= _BIAS_MAX else (_BIAS_MAX if m > 0 else -_BIAS_MAX)
 
 
+# The steps the filter runs, module-wide: the plain functions above or their viper mirrors in
+# firmware/fast.py where the port has the native emitter (same bits; see use_kernels).
+_PLAIN = (rates, advance, q_hi, down, tilt_error, tilt_sine, accel_apply, field_error,
+          yaw_rate, angles, slow)
+KERNELS = None
+
+
+def use_kernels(kn=None):
+    """Run the filter with the kernel set `kn`: None picks firmware.fast where the native
+    emitter exists (else the plain functions), False the plain functions. Returns the set in
+    use (None for the plain functions)."""
+    global rates, advance, q_hi, down, tilt_error, tilt_sine, accel_apply, field_error
+    global yaw_rate, angles, slow, KERNELS
+    if kn is None:
+        kn = kernels()
+    f = _PLAIN
+    if kn and hasattr(kn, "att_rates"):
+        f = (kn.att_rates, kn.att_advance, kn.att_q_hi, kn.att_down, kn.att_tilt_error,
+             kn.att_tilt_sine, kn.att_accel_apply, kn.att_field_error, kn.att_yaw_rate,
+             kn.att_angles, kn.att_slow)
+    else:
+        kn = None
+    (rates, advance, q_hi, down, tilt_error, tilt_sine, accel_apply, field_error, yaw_rate,
+     angles, slow) = f
+    KERNELS = kn
+    return kn
+
+
 class Attitude:
     """See the module docstring."""
 
     raw = None     # attach(): the gyroscope's counts in the sensor's axes
+    axes = None    # attach(): their map to the body frame (firmware/axes.py AxisMap.m)
     _at = -2       # follow(): the app step that last ran the filter
 
     def __init__(self, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g,
@@ -440,8 +510,15 @@ class Attitude:
 
     # results
     heading_kang = property(lambda self: self.st[_HEAD])
-    pitch_kang = property(lambda self: self.st[_PITCH])
-    roll_kang = property(lambda self: self.st[_ROLL])
+    @property
+    def pitch_kang(self):
+        tilt(self.st)
+        return self.st[_PITCH]
+
+    @property
+    def roll_kang(self):
+        tilt(self.st)
+        return self.st[_ROLL]
     since_mag_us = property(lambda self: self.st[_SINCE])
     heading_error_kang = property(lambda self: self.st[_E])
 
@@ -483,7 +560,7 @@ class Attitude:
         h = self.update(app._dt, 7 if s == _OK or s == _JUMP else 6)  # a jump the gyro
         if h < 0:  # confirms is a turn: the field is offered (MAG_OK | FIELD | ACC_OK)
             return
-        p = self.st[_PITCH]
+        p = self.st[_D]  # -sin(pitch), Q14
         if p > _GIMBAL or p < -_GIMBAL:  # near vertical the heading is the compass's: a
             return  # small tilt error moves psi by tan(pitch) (AN4248 sec. 6)
         app.heading_kang = (h + self.compass.declination_kang) & 0xFFFF
@@ -494,17 +571,13 @@ class Attitude:
             app.status = _GYRO_HELD if self.vouched else _INTERFERENCE
 
     def _gap(self, app):
-        # The gyroscope into the body frame: the accelerometer's axis map negated (the map
-        # turns specific force into AN4248 gravity, Gp = -f; a rotation rate keeps its sign).
+        # The gyroscope into the body frame (.axes: the accelerometer's axis map negated, as
+        # the map turns specific force into AN4248 gravity, Gp = -f, and a rate keeps its sign).
         # True after a step without the gyro (a failed read, a stall: time the filter did
         # not integrate), with an implausible accelerometer (the gyro's own chip: its burst
         # is suspect too), a rate past the range or a chip that lost its setting: the filter
         # then starts again from the compass at the next clean sample.
-        g = self.gyro
-        app._apply(app._am, self.raw, g)
-        g[0] = -g[0]
-        g[1] = -g[1]
-        g[2] = -g[2]
+        app._apply(self.axes, self.raw, self.gyro)
         n = app.steps
         skip = n != self._at + 1 or app._stalled or not app.tilt
         self._at = n
@@ -518,7 +591,7 @@ class Attitude:
         if (g[0] == 32767 or g[0] == -32768 or g[1] == 32767 or g[1] == -32768
                 or g[2] == 32767 or g[2] == -32768):
             return True
-        if app.steps % _CHECK_EVERY:
+        if app.steps & _CHECK_MASK:
             return False
         return not self._config(app)
 
@@ -550,7 +623,7 @@ class Attitude:
         self._still(dt, flags)
         advance(st, dt)
         self._correct(dt, flags)
-        euler(st)
+        angles(st)
         return st[_HEAD]
 
     def _start(self, flags):
@@ -637,7 +710,10 @@ class Attitude:
     def _still(self, dt, flags):
         """Still-board windows: the gyro's mean rate over 1 s without motion is its bias."""
         st = self.st
-        if not self._steady(flags):
+        if not slow(st, self.gyro, self.still_counts):
+            st[_WN] = 0  # turning: no window (the next slow sample starts one)
+            return
+        if st[_WN] == 0 or not self._steady(flags):
             self._window(flags)
             return
         g = self.gyro
@@ -652,11 +728,9 @@ class Attitude:
             self._window(flags)
 
     def _steady(self, flags):
-        # the gyro less its bias within 0.5 deg/s, gravity within 1/64 g and the field
-        # within 1/64 of its components' sum of the window's start
+        # gravity within 1/64 g and the field within 1/64 of its components' sum of the
+        # window's start (the gyro less its bias is within 0.5 deg/s: _still)
         st = self.st
-        if st[_WN] == 0 or not slow(st, self.gyro, self.still_counts):
-            return False
         if flags & ACC_OK and not _near(self.gravity, st, _WA, self.still_g):
             return False
         return not flags & FIELD or _near(self.field, st, _WB, st[_WLB])
@@ -673,3 +747,6 @@ class Attitude:
             f = self.field
             _copy3(f, st, _WB)
             st[_WLB] = (abs(f[0]) + abs(f[1]) + abs(f[2])) >> 6
+
+
+use_kernels()

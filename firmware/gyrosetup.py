@@ -38,15 +38,15 @@ def scales(counts_per_dps_x10, options):
                          "(10 x counts per deg/s)" % (counts_per_dps_x10,))
     o = _options(dict(options))
     c = counts_per_dps_x10
-    # the half angle per 16384 us (Q28 rad) per 1/16 count: pi 2**42 / (5760 cps 10**6),
+    # the half angle per 32768 us (Q28 rad) per 1/16 count: pi 2**43 / (5760 cps 10**6),
     # pi as 355/113 (8.5e-8), x 2**14, split into integer and fraction
-    k = (355 * (1 << 56) * 10 + 56 * 5760 * 1000000 * c) // (113 * 5760 * 1000000 * c)
+    k = (355 * (1 << 57) * 10 + 56 * 5760 * 1000000 * c) // (113 * 5760 * 1000000 * c)
     # gain x 180/pi x cps x 4 (Q12 per Q14 of error); mag_gain x 360 x cps (Q12 per KANG);
-    # bias_gain x 256 x 16384 x 64 / 10**9 (Q6: bias in 1/4096 count per correction x dt)
+    # bias_gain x 256 x 32768 x 64 / 10**9 (Q6: bias in 1/4096 count per correction x dt)
     s = sin(o["accel_reject_cdeg"] * 4096 // 5625) >> 1  # cdeg -> KANG: x 65536 / 36000
     return (k >> 14, k & 0x3FFF, (o["gain"] * c * 720 * 113 + 1775000) // 3550000,
             (o["mag_gain"] * 360 * c + 5000) // 10000,
-            (o["bias_gain"] * 256 * 16384 * 64 + 500000000) // 1000000000,
+            (o["bias_gain"] * 256 * 32768 * 64 + 500000000) // 1000000000,
             s * s, o["mag_reject_cdeg"] * 4096 // 2250, o["recovery_us"],
             o["max_uncertainty_cdeg"])
 
@@ -60,6 +60,8 @@ def attach(app, cls, options):
     a = cls(array("h", (0, 0, 0)), app.gravity, app.body, app.compass,
                  acc.counts_per_dps_x10, acc.counts_per_g, **options)
     a.raw = array("h", (0, 0, 0))
+    m = app._am  # the accelerometer's map negated: it turns specific force into AN4248's
+    a.axes = array("b", (m[0], m[1], m[2], 1 - m[3], 1 - m[4], 1 - m[5]))  # gravity (Gp = -f)
     acc.gyro_into = a.raw  # its sample_into() reads the gyroscope in the same burst
     app.attitude = a
     return a

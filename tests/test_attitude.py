@@ -255,3 +255,12 @@ def test_same_bits_on_micropython():
 def test_an_update_allocates_nothing_on_micropython():
     out = mp.json_lines(mp.run(["tests/scenarios/attitude_alloc.py"], micro=True))[0]
     assert out["bytes"] == 0 and out["locked"] == out["updates"] == 1500
+
+
+@pytest.mark.parametrize("name", [n for n in ("unix", "x86-32") if n in mp.TIERS])
+def test_the_viper_mirrors_give_the_plain_bits_on_native_tiers(name):
+    # viper words are 32 bits on x86-32, as on the boards: an overflow shows as a mismatch
+    if not mp.TIERS[name].available:
+        pytest.skip("%s tier: %s" % (name, mp.TIERS[name].reason))
+    out = mp.json_lines(mp.run(["tests/scenarios/attitude_fast.py"], name, timeout=900))[-1]
+    assert out["mismatch"] == {} and out["compared"] > 15000

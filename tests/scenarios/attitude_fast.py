@@ -1,0 +1,52 @@
+# Native tiers only: every viper mirror of the attitude filter (firmware/fast.py att_*) against
+# its plain original (firmware/attitude.py) on the same state, over the integer inputs of
+# attitude_inputs (the filter's own states along the way). Prints one JSON object: the first
+# mismatch per function (none: {}) and how many comparisons ran.
+import json
+from array import array
+
+from firmware import attitude as A
+from firmware import fast as F
+from firmware.compass import Compass
+from tests.scenarios import attitude_inputs as I
+
+gyro = array("h", (0, 0, 0))
+grav = array("h", (0, 0, 0))
+field = array("h", (0, 0, 0))
+c = Compass()
+I.step(0, gyro, grav, field)
+c.update(field, grav)
+A.use_kernels(False)
+a = A.Attitude(gyro, grav, field, c, I.CPS_X10, I.CPG)
+a.update(20000, 7)
+G = "gyro"
+PAIRS = (("rates", A.rates, F.att_rates, (G,)), ("q_hi", A.q_hi, F.att_q_hi, ()),
+         ("down", A.down, F.att_down, ()), ("tilt_error", A.tilt_error, F.att_tilt_error, ()),
+         ("tilt_sine", A.tilt_sine, F.att_tilt_sine, (12345,)),
+         ("accel_apply", A.accel_apply, F.att_accel_apply, ()),
+         ("field_error", A.field_error, F.att_field_error, ()),
+         ("yaw_rate", A.yaw_rate, F.att_yaw_rate, (-700,)),
+         ("advance", A.advance, F.att_advance, (70000,)),
+         ("advance_20ms", A.advance, F.att_advance, (20000,)),
+         ("angles", A.angles, F.att_angles, ()), ("slow", A.slow, F.att_slow, (G, 500)))
+
+
+def norm(r):
+    return 1 if r is True else (0 if r is False or r is None else r)
+
+
+bad = {}
+n = 0
+for i in range(1, 1500):
+    I.step(i, gyro, grav, field)
+    a.update(20000 if i % 5 else 90000, I.flags(i))
+    for name, p, v, args in PAIRS:
+        args = tuple(gyro if x == G else x for x in args)
+        s1 = array("i", a.st)
+        s2 = array("i", a.st)
+        r1 = norm(p(s1, *args))
+        r2 = norm(v(s2, *args))
+        n += 1
+        if (list(s1) != list(s2) or r1 != r2) and name not in bad:
+            bad[name] = [i, r1, r2, [[k, s1[k], s2[k]] for k in range(len(s1)) if s1[k] != s2[k]][:4]]
+print(json.dumps({"mismatch": bad, "compared": n}))
