@@ -16,7 +16,7 @@ _FILES = {
     'motioncal': ('motioncal.py', 'motioncal_mode.py'),
     'field': ('field.py', 'location.py', 'quickcal.py'),
     'import': ('calimport.py',),
-    'gyro': ('attitude.py', 'gyrosetup.py'),
+    'gyro': ('attitude.py', 'attitude_plain.py', 'attitude_fast.py', 'gyrosetup.py'),
     'circuitpython': ('busio_i2c.py',),
 }
 

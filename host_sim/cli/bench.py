@@ -236,7 +236,7 @@ def collect(smoke, log=print):
             res[name]["micropython" if micro else "cpython"] = run_merged(name, micro, args,
                                                                          procs)
     res["boardtime"] = boardtime(log) if not smoke else {"skipped": "not in --smoke"}
-    for name in ("accuracy", "intcount", "quality", "fieldacc", "quickcal", "soak"):
+    for name in ("accuracy", "intcount", "quality", "fieldacc", "quickcal", "soak", "gyroacc"):
         log("  %-10s cpython" % name)
         res[name] = {"cpython": run_script(name, False, args)}
     res["fieldheap"] = {}
@@ -262,6 +262,13 @@ def collect(smoke, log=print):
         if interp is True or os.path.exists(interp):
             log("  apppath    %s" % label)
             res["apppath"][label] = run_script("apppath", interp, [session] + args)
+    gyro = session + ".gyro"  # the MPU6050's 14-byte bursts: the gyro-aided heading's boards
+    write_session(gyro, smoke, mpu_bytes=14)
+    res["gyrobench"] = {}
+    for label, interp in (("micropython", True), ("x86-32", MICROPYTHON_32)):
+        if interp is True or os.path.exists(interp):
+            log("  gyrobench  %s" % label)
+            res["gyrobench"][label] = run_script("gyrobench", interp, [gyro] + args)
     if os.path.exists(MICROPYTHON_32):
         res["memory32"] = memory32(session, build, smoke, log)
     else:
@@ -989,6 +996,86 @@ def rows(res, derived):
     R.extend(rows_quality(res))
     R.extend(rows_location(res))
     R.extend(rows_soak(res))
+    R.extend(rows_gyro(res))
+    return R
+
+
+def rows_gyro(res):
+    """The gyro-aided heading (docs/gyro.md): its scenarios against the goals
+    (benchmarks/gyroacc.py), its per-sample cost beside the compass step
+    (benchmarks/gyrobench.py), its heap on the 32-bit tier (benchmarks/profiles.py 'gyro') and
+    the fault campaign with it (benchmarks/soak.py)."""
+    R = []
+    g = _get(res, "gyroacc", "cpython") or {}
+    if "error" in g:
+        R.append(("9 gyro scenarios", g["error"][:60], "", "", "ERROR"))
+    elif g:
+        m = g["magnet_gyro"]
+        o = g["magnet_mag_only"]
+        held = m["status_during"].get("gyro held", 0)
+        n = sum(m["status_during"].values())
+        R.append(("9 gyro: 9 uT magnet passing 5 s, heading error during it [deg]",
+                  "%.2f (gyro held %d of %d samples)" % (m["worst_during_deg"], held, n), "",
+                  "goal <= 3; mag-only %.1f, interference %d of %d" % (
+                      o["worst_during_deg"], o["status_during"].get("interference", 0),
+                      sum(o["status_during"].values())),
+                  verdict(m["worst_during_deg"] <= 3.0
+                          and "interference" not in m["status_during"])))
+        b = g["braking"]
+        R.append(("9 gyro: 0.5 g braking for 2 s, worst tilt / heading error [deg]",
+                  "%.2f / %.2f" % (b["tilt_worst_deg"], b["heading_worst_deg"]), "",
+                  "goal <= 2", verdict(max(b["tilt_worst_deg"], b["heading_worst_deg"]) <= 2)))
+        f = g["fast_turn"]
+        R.append(("9 gyro: error 1 s after a 360 deg/s turn stops [deg]",
+                  "%.2f" % f["error_1s_after_deg"], "", "goal <= 2",
+                  verdict(f["error_1s_after_deg"] <= 2)))
+        s = g["still_60s"]
+        R.append(("9 gyro: bias 3 deg/s, still 60 s: bias estimate error [deg/s]",
+                  "%.3f (%d still windows)" % (s["bias_error_dps"], s["bias_estimates"]), "",
+                  "goal <= 0.2", verdict(s["bias_error_dps"] <= 0.2)))
+        s = g.get("still_600s")
+        if s:
+            R.append(("9 gyro: bias 3 deg/s, still 10 min: bias error [deg/s]; heading error "
+                      "worst after 1 min / at the end [deg]", "%.3f; %.2f / %.2f" % (
+                          s["bias_error_dps"], s["worst_after_60s_deg"], s["error_at_end_deg"]),
+                      "", "", ""))
+        d = g.get("dance_gyro")
+        if d:
+            R.append(("9 gyro: figure-8 gesture 60 s (~300 deg/s), worst error shown ok/held "
+                      "[deg]", "%.2f (mag-only %.2f)" % (
+                          d["worst_good_deg"], g["dance_mag_only"]["worst_good_deg"]), "",
+                      "<= 5 (docs/faults.md)", verdict(d["worst_good_deg"] <= 5)))
+    for label in ("x86-32", "micropython"):
+        c = _get(res, "gyrobench", label) or {}
+        if "error" in c:
+            R.append(("9 gyro per-sample cost (%s)" % label, "", c["error"][:60], "", "ERROR"))
+            continue
+        if not c:
+            continue
+        cpu = c["cpu_us"]
+        R.append(("9 gyro: the filter's cost per sample, %s, viper / plain [us] (compass step "
+                  "%.1f / %.1f us)" % (label, cpu["core_fast"], cpu["core_plain"]), "",
+                  "%.1f / %.1f" % (c["filter_fast_us"], c["filter_plain_us"]),
+                  "%.2fx / %.2fx of the step; goal <= 1.0x" % (c["ratio_fast"],
+                                                                c["ratio_plain"]),
+                  verdict(c["ratio_fast"] <= 1.0 and c["ratio_plain"] <= 1.0)))
+    from host_sim.cli.benchmarks.budgets import BUDGETS
+    p = _get(res, "memory32", "profiles_mpy") or {}
+    gy = p.get("gyro") or {}
+    h = p.get("heading") or {}
+    if "after" in gy and "after" in h:
+        d = gy["after"] - h["after"]
+        R.append(("9 gyro: extra live heap over the heading line (.mpy, x86-32); bytes/sample",
+                  "", "%s; %s" % (_kbf(d), gy.get("bytes_per_sample")),
+                  "goal <= 8 KB / 0 (budget %s)" % _kbf(BUDGETS["gyro_extra_mpy"]),
+                  verdict(d <= BUDGETS["gyro_extra_mpy"] and gy.get("bytes_per_sample") == 0)))
+    q = _get(res, "soak", "cpython", "gyro_campaign") or {}
+    if q and "error" not in q:
+        R.append(("9 gyro: fault campaign %d x %d s with the filter; exceptions / lost / "
+                  "wrong-but-ok (ok or gyro held)" % (q["sessions"], q["seconds_per_session"]),
+                  "%d / %d / %d" % (q["exceptions"], q["lost"], q["wrong_but_ok"]), "",
+                  "goal 0 / 0 / 0", verdict(q["exceptions"] == 0 and q["lost"] == 0
+                                            and q["wrong_but_ok"] == 0)))
     return R
 
 
@@ -1266,7 +1353,8 @@ def boards_section(res):
              "calibrate": "calibrating on the board (collect, solve, accept, history)",
              "motioncal": "PJRC MotionCal mode", "field": "field model, set_location, "
              "quick calibration", "import": "a desktop calibration file imported at boot",
-             "circuitpython": "CircuitPython's busio.I2C"}
+             "circuitpython": "CircuitPython's busio.I2C",
+             "gyro": "gyro-aided heading, use_gyro() (the MPU6050's gyroscope)"}
     lines = [README_BEGIN,
              "*Measured by `make bench` on a 32-bit MicroPython (x86-32 build; "
              "docs/benchmarks.md), %s.*" % machine()["date_utc"][:10], "",

@@ -47,7 +47,7 @@ PARTS = {
     # a calibration file fitted on the desktop, imported at boot
     "import": ("calimport.py",),
     # the gyro-aided heading: the MPU6050's gyroscope in an attitude filter (use_gyro())
-    "gyro": ("attitude.py", "gyrosetup.py"),
+    "gyro": ("attitude.py", "attitude_plain.py", "attitude_fast.py", "gyrosetup.py"),
     # CircuitPython's busio.I2C behind the machine.I2C calls the drivers make
     "circuitpython": ("busio_i2c.py",),
 }

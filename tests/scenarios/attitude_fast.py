@@ -1,12 +1,13 @@
-# Native tiers only: every viper mirror of the attitude filter (firmware/fast.py att_*) against
-# its plain original (firmware/attitude.py) on the same state, over the integer inputs of
+# Native tiers only: every viper mirror of the attitude filter (firmware/attitude_fast.py)
+# against its plain original (firmware/attitude_plain.py) on the same state, over the integer inputs of
 # attitude_inputs (the filter's own states along the way). Prints one JSON object: the first
 # mismatch per function (none: {}) and how many comparisons ran.
 import json
 from array import array
 
-from firmware import attitude as A
-from firmware import fast as F
+from firmware import attitude
+from firmware import attitude_fast as F
+from firmware import attitude_plain as A
 from firmware.compass import Compass
 from tests.scenarios import attitude_inputs as I
 
@@ -16,19 +17,19 @@ field = array("h", (0, 0, 0))
 c = Compass()
 I.step(0, gyro, grav, field)
 c.update(field, grav)
-A.use_kernels(False)
-a = A.Attitude(gyro, grav, field, c, I.CPS_X10, I.CPG)
+attitude.use_kernels(False)
+a = attitude.Attitude(gyro, grav, field, c, I.CPS_X10, I.CPG)
 a.update(20000, 7)
 G = "gyro"
-PAIRS = (("rates", A.rates, F.att_rates, (G,)), ("q_hi", A.q_hi, F.att_q_hi, ()),
-         ("down", A.down, F.att_down, ()), ("tilt_error", A.tilt_error, F.att_tilt_error, ()),
-         ("tilt_sine", A.tilt_sine, F.att_tilt_sine, (12345,)),
-         ("accel_apply", A.accel_apply, F.att_accel_apply, ()),
-         ("field_error", A.field_error, F.att_field_error, ()),
-         ("yaw_rate", A.yaw_rate, F.att_yaw_rate, (-700,)),
-         ("advance", A.advance, F.att_advance, (70000,)),
-         ("advance_20ms", A.advance, F.att_advance, (20000,)),
-         ("angles", A.angles, F.att_angles, ()), ("slow", A.slow, F.att_slow, (G, 500)))
+PAIRS = (("rates", A.rates, F.rates, (G,)), ("q_hi", A.q_hi, F.q_hi, ()),
+         ("down", A.down, F.down, ()), ("tilt_error", A.tilt_error, F.tilt_error, ()),
+         ("tilt_sine", A.tilt_sine, F.tilt_sine, (12345,)),
+         ("accel_apply", A.accel_apply, F.accel_apply, ()),
+         ("field_error", A.field_error, F.field_error, ()),
+         ("yaw_rate", A.yaw_rate, F.yaw_rate, (-700,)),
+         ("advance", A.advance, F.advance, (70000,)),
+         ("advance_20ms", A.advance, F.advance, (20000,)),
+         ("angles", A.angles, F.angles, ()), ("slow", A.slow, F.slow, (G, 500)))
 
 
 def norm(r):

@@ -18,7 +18,8 @@ HEADING = ("compat", "errors", "fixedpoint", "i2cdevice", "trig", "kang_tables",
 REPORT = ("status", "accuracy")
 MACHINERY = ("boot", "detect", "appsetup", "persist", "slots", "session", "history", "samples",
              "accum", "solve", "acceptance", "calibrator", "hmc5883l", "qmc5883p", "location",
-             "field", "quickcal", "motioncal", "motioncal_mode", "calimport")
+             "field", "quickcal", "motioncal", "motioncal_mode", "calimport", "gyrosetup",
+             "attitude")
 
 
 def live():

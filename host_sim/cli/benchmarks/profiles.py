@@ -88,6 +88,7 @@ def main():
     res["boot"] = live() - base
     if profile == "gyro":
         app.use_gyro()
+        res["gyro_attached"] = live() - base
     if profile == "calibrate":
         peak = 0
         track = "--min" not in sys.argv

@@ -1,13 +1,15 @@
 """A calibrated GY-87 (the QMC5883L clone: MPU6050 + magnetometer behind its bypass) in a
-world without iron, for the gyro-aided heading's scenarios (tests/test_gyro.py, make bench):
+world without iron, for the gyro-aided heading's scenarios (benchmarks/gyroacc.py for make
+bench, tests/test_gyro.py):
 its calibration is the exact one (identity InvW, no offset), stored, so the app starts
 calibrated and only the heading path runs."""
 from host_sim.boards import make_board
 from host_sim.world import World
 
+from host_sim.cli.memfs import MemFs
+
 from firmware.app import CompassApp
 from firmware.calibration import Calibration
-from tests.scenarios.app_world import MemFs
 from firmware.store import CalStore
 
 B_COUNTS = 6000  # 50 uT at the QMC5883L's 2 G range (12000 counts/G)
