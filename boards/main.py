@@ -7,6 +7,8 @@ figure-8 (every direction: over and around); the line shows coverage and samples
 
 board.MODE = "motioncal": stream to PJRC MotionCal instead and take its Send Cal
 (docs/motioncal.md). From the REPL (Ctrl-C stops the compass loop): motioncal().
+board.GYRO = True: the MPU6050's gyroscope holds the heading through magnets and fast turns
+(docs/gyro.md).
 """
 import time
 
@@ -45,6 +47,12 @@ start = None
 drop("boot")  # a running board holds only what it runs (docs/design.md, memory)
 print("eCompass: %s, accelerometer %s, stored calibration: %s" % (
     app.mag.KIND, "yes" if app.accel else "no", app.load_reason or "loaded"))
+if getattr(board, "GYRO", False) and not MOTIONCAL:
+    try:
+        app.use_gyro()  # docs/gyro.md: status "gyro held" while it holds the heading
+        print("eCompass: gyro-aided heading on")
+    except (ImportError, ValueError) as e:  # the gyro part not installed; no MPU6050
+        print("eCompass: no gyro-aided heading: %s" % e)
 
 
 def motioncal(rate_hz=50):

@@ -15,6 +15,9 @@ that applies gives the level and the reason.
   0      no_heading        the last step gave no heading (bus error, timeout, overflow,
                            zero field or gravity)
   0      uncalibrated      no calibration in force
+  2      gyro_held         use_gyro(): the field is not used (a magnet, a fast turn) and the
+                           gyroscope holds the heading within its vouched uncertainty
+                           (docs/gyro.md; status "gyro held")
   0      interference      the interference flag is up now (|b| or dip off the expected), or a
                            spell holds the status (firmware/health.py FieldWatch: a fast
                            change of |b| or dip, a heading jump, until the field is clean)
@@ -58,7 +61,7 @@ _CAUTION = "caution zone"
 
 
 def level(model=None, fit_error=0, coverage=0, heading=True, interference=False, tilt=True,
-          extreme=False, zone=None, mismatch=False):
+          extreme=False, zone=None, mismatch=False, held=False):
     """(level 0..3, reason) for the state described; see the module docstring's table.
     model: None, 'minmax', 4, 7, 10; fit_error hundredths of a percent; coverage %; heading:
     the last step gave one; tilt: an accelerometer is in use; extreme: pitch > 80 deg or dip
@@ -68,6 +71,8 @@ def level(model=None, fit_error=0, coverage=0, heading=True, interference=False,
         return UNRELIABLE, "no_heading"
     if model is None:
         return UNRELIABLE, "uncalibrated"
+    if held:
+        return MEDIUM, "gyro_held"
     if interference:
         return UNRELIABLE, "interference"
     if zone == _BLACKOUT:
@@ -103,8 +108,10 @@ def assess(app):
     c = app.compass
     loc = app.location
     st = app.status
+    held = st == "gyro held"
     return level(model=cal.model, fit_error=cal.fit_error, coverage=cal.coverage,
-                 heading=st == "ok" or st == "interference" or st == "heading jumped",
+                 heading=st == "ok" or st == "interference" or st == "heading jumped" or held,
+                 held=held,
                  interference=c.interference or st == "interference" or st == "heading jumped",
                  tilt=app.accel is not None,
                  extreme=c.gimbal or c.dip_high,

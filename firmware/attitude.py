@@ -46,10 +46,13 @@ The filter (Mahony's complementary filter on a quaternion; the kinematics q' = q
            rotation that turns the belief toward the measurement, times gain.
   field    m = C b, the field in the filter's level frame; its direction atan2(my, mx) is the
            heading error, corrected by a rotation about the down axis, times mag_gain.
-  bias     the integral of the corrections (bias_gain), and while the board is still (1 s
-           windows in which the gyro less its bias stays within 0.5 deg/s, gravity within
-           1/64 g and the field within 1/64 of its size; a turn slower than that counts as
-           still) the
+  bias     the integral of the corrections (bias_gain; while every axis turns slower than 10
+           deg/s: faster, the corrections carry the integration's own errors), and while the
+           board is still, windows of 1 s (the first: 3 s) in which the gyro stays within
+           1 deg/s of the window's first sample for the first estimate, then within 0.5
+           deg/s of the bias, gravity within 1/64 g and the field within 1/64 of its size;
+           a steady turn slower than ~0.7 deg/s can pass for bias until the integral sees
+           it) the
            window's mean rate: the first window sets it, later ones move it a quarter of the
            way.
 Every intermediate stays below 2**30 (a product a x b of a Q28 and a Q14 is taken as
@@ -72,13 +75,15 @@ _INTERFERENCE = "interference"
 _JUMP = "heading jumped"
 _GYRO_HELD = "gyro held"
 _CHECK_MASK = const(63)  # every 64 steps the MPU6050's configuration is read back
+_OFFER_US = const(1000000)  # follow(): clean samples in a spell before the field is offered
 _GIMBAL = const(16135)    # sin(80 deg) in Q14: firmware/compass.py's gimbal limit
 
 _ONE28 = const(0x10000000)
 _M14 = const(0x3FFF)
 _CHUNK_US = const(32767)
 _KANG_90 = const(16384)
-_STILL_US = const(1000000)
+_STILL_US = const(1000000)  # a still window...
+_FIRST_US = const(3000000)  # ...and the first: a slow turn has 3 s to move the field
 _SINCE_CAP = const(0x20000000)
 _DT_MAX = const(1000000)  # a longer gap counts as 1 s
 _BIAS_MAX = const(1 << 25)  # 2**13 counts in 1/4096 count: 62 deg/s at +-250 deg/s
@@ -115,7 +120,9 @@ _ROLL = const(50)
 _SCR = const(51)   # 51..53 scratch
 _C = const(54)     # 54..56 the corrections (1/16 count) for the next sample's rates
 _WLB = const(57)   # still window: the field's tolerance (counts)
-_SIZE = const(58)  # (firmware/fast.py's mirrors use these numbers)
+_UNC = const(58)   # the heading's uncertainty grown since the last correction, 1/1000 cdeg
+_WG = const(59)    # 59..61 still window: the gyro at its start (counts)
+_SIZE = const(62)  # (firmware/fast.py's mirrors use these numbers)
 
 
 def mul14(a, b):
@@ -252,11 +259,13 @@ class Attitude:
         self.recovery_us = k[7]
         self.max_uncertainty_cdeg = k[8]
         self.still_counts = counts_per_dps_x10 * 8 // 10  # 0.5 deg/s in 1/16 count
+        self.first_counts = counts_per_dps_x10 // 10  # 1 deg/s in counts
         self.still_g = counts_per_g >> 6
         self.base_cdeg = 100            # the field-corrected heading: ~1 deg
         self.bias_cdeg_per_s = 20       # bias measured while still: within 0.2 deg/s
         self.unknown_bias_cdeg_per_s = 100  # never still yet: the integral's ~1 deg/s
         self.bias_estimates = 0
+        self.unc_rate = self.unknown_bias_cdeg_per_s  # _hold's, cdeg/s
         self.started = False
         self.accel_rejected = True
         self._cpg = counts_per_g
@@ -265,7 +274,8 @@ class Attitude:
         st[_KF] = k[1]
         st[_KA] = k[2]
         st[_KM] = k[3]
-        st[_KB] = k[4]
+        st[_KB] = self.kb = k[4]
+        self.kb_counts = counts_per_dps_x10 * 16  # 10 deg/s in 1/16 count: the integral's limit
         st[_ACC_LIM] = self.acc_lim = k[5]
         st[_MAG_LIM] = k[6]
         st[_Q] = _ONE28
@@ -295,11 +305,11 @@ class Attitude:
 
     @property
     def uncertainty_cdeg(self):
-        """The heading's uncertainty (0.01 deg): the base while the field corrects it, plus the
-        gyro bias uncertainty times the time since the last correction."""
-        t = self.st[_SINCE] // 1000  # ms
-        r = self.bias_cdeg_per_s if self.bias_estimates else self.unknown_bias_cdeg_per_s
-        return self.base_cdeg + t * r // 1000
+        """The heading's uncertainty (0.01 deg): the base while the field corrects it, plus,
+        sample by sample since the last correction, the gyro bias uncertainty of the moment
+        times the time (unknown_bias_cdeg_per_s until a still window measured the bias,
+        bias_cdeg_per_s after)."""
+        return self.base_cdeg + self.st[_UNC] // 1000
 
     @property
     def vouched(self):
@@ -309,25 +319,32 @@ class Attitude:
         """Start again from the next good sample (the bias estimate is kept)."""
         self.started = False
         self.st[_SINCE] = 0
+        self.st[_UNC] = 0
 
     # --- the app's step (attach, CompassApp.use_gyro) ------------------------------------
     def follow(self, app):
         """One call per app step after its field checks: the filter's heading becomes the
-        app's. A field the checks flag is not used; while the filter vouches for its heading
-        the status is "gyro held" in place of interference / heading jumped, and "ok" only
-        when this sample's field corrected it."""
+        app's. The field is offered to the filter when the checks pass, on a heading jump (a
+        turn the gyro confirms) and once an interference spell has seen 1 s of samples that
+        raise no flag (firmware/health.py FieldWatch: the magnet has gone, or holds still);
+        the filter takes it only within mag_reject of its own heading. While it holds the
+        heading without the field and vouches for it the status is "gyro held" in place of
+        interference / heading jumped; "ok" when this sample's field corrected it."""
         if self._gap(app):
             return
         s = app.status
-        h = self.update(app._dt, 7 if s == _OK or s == _JUMP else 6)  # a jump the gyro
-        if h < 0:  # confirms is a turn: the field is offered (MAG_OK | FIELD | ACC_OK)
+        f = 6  # FIELD | ACC_OK
+        if s == _OK or s == _JUMP or s == _INTERFERENCE and app.watch.clean_us >= _OFFER_US:
+            f = 7  # | MAG_OK
+        h = self.update(app._dt, f)
+        if h < 0:
             return
         p = self.st[_D]  # -sin(pitch), Q14
         if p > _GIMBAL or p < -_GIMBAL:  # near vertical the heading is the compass's: a
             return  # small tilt error moves psi by tan(pitch) (AN4248 sec. 6)
         app.heading_kang = (h + self.compass.declination_kang) & 0xFFFF
         if self.st[_SINCE] == 0:  # this sample's field corrected the heading
-            if s == _JUMP:
+            if s != _OK:
                 app.status = _OK
         elif s == _OK or s == _INTERFERENCE or s == _JUMP:
             app.status = _GYRO_HELD if self.vouched else _INTERFERENCE
@@ -383,7 +400,8 @@ class Attitude:
         st = self.st
         rates(st, self.gyro)  # the rate, plus the corrections the last sample asked for
         self._still(dt, flags)
-        advance(st, dt)
+        st[_KB] = self.kb if slow(st, self.gyro, self.kb_counts) else 0  # turning fast:
+        advance(st, dt)  # the corrections carry the integration's errors, not the bias
         self._correct(dt, flags)
         angles(st)
         return st[_HEAD]
@@ -463,18 +481,23 @@ class Attitude:
             e = 0
         yaw_rate(st, e)
         st[_SINCE] = 0
+        st[_UNC] = 0
 
     def _hold(self, dt):
         st = self.st
         if st[_SINCE] < _SINCE_CAP:
             st[_SINCE] += dt
+            st[_UNC] += self.unc_rate * dt // 1000
 
     def _still(self, dt, flags):
         """Still-board windows: the gyro's mean rate over 1 s without motion is its bias."""
         st = self.st
-        if not slow(st, self.gyro, self.still_counts):
-            st[_WN] = 0  # turning: no window (the next slow sample starts one)
-            return
+        if self.bias_estimates:
+            if not slow(st, self.gyro, self.still_counts):
+                st[_WN] = 0  # turning: no window (the next slow sample starts one)
+                return
+        elif st[_WN] and not _near(self.gyro, st, _WG, self.first_counts):
+            st[_WN] = 0  # no bias known yet: the gyro must hold within 1 deg/s of the start
         if st[_WN] == 0 or not self._steady(flags):
             self._window(flags)
             return
@@ -484,9 +507,11 @@ class Attitude:
         st[_WS] += g[0]
         st[_WS + 1] += g[1]
         st[_WS + 2] += g[2]
-        if st[_WT] >= _STILL_US or st[_WN] >= _WINDOW_MAX:
+        if st[_WT] >= (_STILL_US if self.bias_estimates else _FIRST_US) or \
+                st[_WN] >= _WINDOW_MAX:
             _bias_from_window(st, self.bias_estimates == 0)
             self.bias_estimates += 1
+            self.unc_rate = self.bias_cdeg_per_s
             self._window(flags)
 
     def _steady(self, flags):
@@ -503,6 +528,7 @@ class Attitude:
         st[_WN] = 1
         st[_WT] = 0
         _copy3(g, st, _WS)
+        _copy3(g, st, _WG)
         if flags & ACC_OK:
             _copy3(self.gravity, st, _WA)
         if flags & FIELD:

@@ -8,8 +8,9 @@ progress(app)  the calibration's state as a dict (coverage, samples, model, fit 
                last refusal, counters, status, interference, store and history figures).
 line(app)      one readable line: heading (marked when not tilt-compensated), status and
                flags, the calibration's stage in words (collecting with its coverage, solving,
-               saved once, calibrated, and what to do when a fit is refused), accuracy
-               (firmware/accuracy.py), location. docs/calibration.md explains every field.
+               saved once, calibrated, and what to do when a fit is refused), the gyro-aided
+               heading's source (use_gyro: on field, or held for how long and how well),
+               accuracy (firmware/accuracy.py), location. docs/calibration.md explains every field.
 """
 from firmware.compat import const
 from firmware.trig import kang_to_str
@@ -85,6 +86,17 @@ def _story(app, p):
     return out
 
 
+def _gyro(a):
+    if not a.started:
+        return "gyro: starting"
+    if a.source == "magnetometer":
+        return "gyro: on field"
+    t = a.since_mag_us // 100000
+    u = a.uncertainty_cdeg
+    return "gyro: held %d.%d s +-%d.%d deg%s" % (t // 10, t % 10, u // 100, u % 100 // 10,
+                                                  "" if a.vouched else " (too long)")
+
+
 def line(app):
     """One readable line: heading (marked when not tilt-compensated), status and flags, the
     calibration's stage in words (collecting with its coverage, solving, saved once,
@@ -100,6 +112,9 @@ def line(app):
     if flags:
         parts.append("flags " + ",".join(flags))
     parts.extend(_story(app, p))
+    a = app.attitude
+    if a is not None:  # use_gyro() (docs/gyro.md)
+        parts.append(_gyro(a))
     if app.relearning:
         parts.append("relearning")
     if app.save_errors:

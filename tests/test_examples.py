@@ -54,3 +54,12 @@ def test_a_log_fitted_on_the_desktop_is_loaded_onto_the_board_once(tmp_path):
     assert any(f.endswith(".cal") for f in os.listdir(store))
     again = mp.run(["examples/load_calibration.py", cal, str(store)], micro=True)
     assert again.startswith("no calibration file")  # imported once
+
+
+def test_gyro_heading_holds_through_the_magnet_the_same_on_both_interpreters():
+    out = mp.parity(["examples/gyro_heading.py", "50"])
+    lines = out.strip().splitlines()
+    held = [ln for ln in lines if "| gyro held |" in ln]
+    assert len(held) >= 5 and all("gyro: held" in ln for ln in held)   # the 5 s pass
+    assert not any("| interference |" in ln for ln in lines[-12:])  # never left unvouched
+    assert "| ok |" in lines[-1] and "gyro: on field" in lines[-1]

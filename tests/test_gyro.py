@@ -54,3 +54,28 @@ def test_use_gyro_without_an_mpu6050_says_so():
     with pytest.raises(ValueError, match="MPU6050"):
         app.use_gyro()
     assert app.attitude is None
+
+
+def test_the_status_line_and_the_accuracy_say_the_heading_is_held():
+    from firmware.app import status_line
+    from host_sim.cli.benchmarks import gyroworld as G
+    from host_sim import motion
+    b = G.board(motion.still(yaw=40), gyro=gyroacc.BIAS)
+    b.world.add_magnet((8.0, 4.0, 0.0), 4, 30, ramp_s=0.3, frame="world")
+    app = G.app(b)
+    G.run(app, b, 3)
+    assert "gyro: on field" in status_line(app) and app.accuracy == 3
+    G.run(app, b, 6)
+    line = status_line(app)
+    assert app.status == HELD and "| gyro held |" in line and "gyro: held 1." in line, line
+    assert (app.accuracy, app.accuracy_reason()) == (2, "gyro_held")
+    # the bias was measured in the first second (0.2 deg/s of uncertainty a second from
+    # then): held past 5 deg of uncertainty (~20 s), it is no longer vouched for
+    G.run(app, b, 27)
+    assert app.status == "interference" and app.accuracy == 0
+    assert "(too long)" in status_line(app)
+    # the magnet gone (30 s), the field is offered again after 1 s of clean samples and the
+    # filter, whose heading still agrees with it, takes it: ok
+    G.run(app, b, 35)
+    assert app.status == "ok" and "gyro: on field" in status_line(app)
+    assert abs(G.err_deg(app, b)) < 1.0

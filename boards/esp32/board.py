@@ -13,6 +13,8 @@ ACCEL_AXES = "-x,y,z"       # a GY-521 MPU6050 lying the same way; tests/test_ap
 DECLINATION_CDEG = 0        # local magnetic declination, centidegrees east-positive (NOAA/WMM)
 MODE = "compass"            # "compass": headings, self-calibrating; "motioncal": stream to
 #                             PJRC MotionCal and take its Send Cal (docs/motioncal.md)
+GYRO = False                # True: the MPU6050's gyroscope holds the heading through magnets
+#                             and fast turns (docs/gyro.md; package-gyro.json installed)
 STORE_DIR = "/"             # where the calibration record lives (LittleFS on the internal flash)
 
 

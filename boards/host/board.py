@@ -22,6 +22,8 @@ ACCEL_AXES = "-x,y,z"       # GY-521 lying like the breakout (x forward, y left,
 DECLINATION_CDEG = 0
 MODE = "compass"            # "compass": headings, self-calibrating; "motioncal": stream to
 #                             PJRC MotionCal and take its Send Cal (docs/motioncal.md)
+GYRO = False                # True: the MPU6050's gyroscope holds the heading through magnets
+#                             and fast turns (docs/gyro.md; package-gyro.json installed)
 STORE_DIR = "build"         # the calibration record (build/ecompass_a.cal, _b.cal)
 # Strong iron: |V| = 1.4 Earth fields, soft iron with eigenvalues ~0.85..1.2 and shear.
 HARD_IRON_UT = (40.0, -30.0, 25.0)
