@@ -195,6 +195,10 @@ def session(k, seed, seconds, goods, stats, trace=None, faults=True, gyro=False)
         if reboot_at is not None and now >= reboot_at:
             reboot_at = None
             app = reboot(app, b, fs, stats, gyro)
+            if pending is not None:  # the reboot re-initialised the chips before any step saw
+                c = stats["reboot_cleared"]  # the fault (an MPU6050 put to sleep, woken)
+                c[pending[0]] = c.get(pending[0], 0) + 1
+                pending = None
         try:
             app.step()
         except Exception as e:  # noqa: BLE001 - counted: step() must never raise
@@ -250,7 +254,8 @@ def campaign(sessions, seconds, seed, clean=None, gyro=False):
     stats = {"sessions": sessions, "seconds_per_session": seconds, "seed": seed, "steps": 0,
              "gyro": gyro,
              "faults": {}, "reboots": 0, "exceptions": 0, "lost": 0, "wrong_but_ok": 0,
-             "wrong_by_class": {}, "detect_ms": {}, "accuracy_deg": ACCURACY_DEG,
+             "wrong_by_class": {}, "detect_ms": {}, "reboot_cleared": {},
+             "accuracy_deg": ACCURACY_DEG,
              "clean": {"sessions": clean, "steps": 0, "not_ok": 0, "by_status": {},
                        "wrong_but_ok": 0}}
     for k in range(sessions):
@@ -318,6 +323,8 @@ def report(st):
                                                 d["max_ms"] if d else "-"))
     if st["wrong_by_class"]:
         out.append("wrong-but-ok by class: %s" % st["wrong_by_class"])
+    if st.get("reboot_cleared"):
+        out.append("cleared by a reboot before any step read them: %s" % st["reboot_cleared"])
     out.append(false_alarms(st["clean"], st["seconds_per_session"]))
     return out
 
