@@ -1373,17 +1373,77 @@ def boards_section(res):
 
 def splice_readme(section, path=None):
     """Replace README.md's block between README_BEGIN and README_END with `section`."""
-    if path is None:
-        path = os.path.join(ROOT, "README.md")
+    return splice_block(path or os.path.join(ROOT, "README.md"), README_BEGIN, README_END,
+                        section)
+
+
+def splice_block(path, begin, end, section):
+    """Replace the block of file `path` from marker `begin` to `end` with `section` (which
+    carries the markers); False when the file has no such block."""
     with open(path) as f:
         text = f.read()
-    i = text.find(README_BEGIN)
-    j = text.find(README_END)
+    i = text.find(begin)
+    j = text.find(end)
     if i < 0 or j < i:
         return False
     with open(path, "w") as f:
-        f.write(text[:i] + section + text[j + len(README_END):])
+        f.write(text[:i] + section + text[j + len(end):])
     return True
+
+
+GYRO_BEGIN = "<!-- gyro:begin -->"
+GYRO_END = "<!-- gyro:end -->"
+
+
+def gyro_section(res):
+    """docs/gyro.md's figures (between GYRO_BEGIN and GYRO_END), from this run."""
+    g = _get(res, "gyroacc", "cpython") or {}
+    lbl = "x86-32" if _get(res, "gyrobench", "x86-32") else "unix port"
+    c = _get(res, "gyrobench", "x86-32") or _get(res, "gyrobench", "micropython") or {}
+    p = _get(res, "memory32", "profiles_mpy") or {}
+    q = _get(res, "soak", "cpython", "gyro_campaign") or {}
+    if not g or "error" in g or "error" in c:
+        return None
+    m, o = g["magnet_gyro"], g["magnet_mag_only"]
+    rows = [("9 uT magnet passing for 5 s: heading error during the pass, status",
+             "<= 3 deg, not `interference`", "%.2f deg, `gyro held` %d of %d samples "
+             "(magnetometer only: %.1f deg, `interference` %d)" % (
+                 m["worst_during_deg"], m["status_during"].get("gyro held", 0),
+                 sum(m["status_during"].values()), o["worst_during_deg"],
+                 o["status_during"].get("interference", 0))),
+            ("0.5 g braking for 2 s: tilt / heading error", "<= 2 deg", "%.2f / %.2f deg" % (
+                g["braking"]["tilt_worst_deg"], g["braking"]["heading_worst_deg"])),
+            ("1 s after a 360 deg/s turn stops", "<= 2 deg",
+             "%.2f deg" % g["fast_turn"]["error_1s_after_deg"]),
+            ("still, gyro bias 3 deg/s: bias estimate after 60 s", "within 0.2 deg/s",
+             "%.3f deg/s" % g["still_60s"]["bias_error_dps"])]
+    s10 = g.get("still_600s")
+    if s10:
+        rows.append(("still 10 minutes: bias error; heading error after the first minute / "
+                     "at the end", "", "%.3f deg/s; %.2f / %.2f deg" % (
+                         s10["bias_error_dps"], s10["worst_after_60s_deg"],
+                         s10["error_at_end_deg"])))
+    d = g.get("dance_gyro")
+    if d:
+        rows.append(("figure-8 gesture (~300 deg/s) 60 s: worst error shown `ok` or held",
+                     "<= 5 deg", "%.1f deg (magnetometer only %.1f)" % (
+                         d["worst_good_deg"], g["dance_mag_only"]["worst_good_deg"])))
+    if "after" in (p.get("gyro") or {}) and "after" in (p.get("heading") or {}):
+        rows.append(("extra live heap (32-bit, .mpy); bytes per sample", "<= 8 KB; 0",
+                     "%s; %s" % (_kbf(p["gyro"]["after"] - p["heading"]["after"]),
+                                 p["gyro"].get("bytes_per_sample"))))
+    if c:
+        rows.append(("per-sample cost vs the calibrated compass step (%s, viper / plain)"
+                     % lbl, "<= 1.0x", "%.2fx / %.2fx (%.1f / %.1f us)" % (
+                         c["ratio_fast"], c["ratio_plain"], c["filter_fast_us"],
+                         c["filter_plain_us"])))
+    if q and "error" not in q:
+        rows.append(("fault campaign with the filter: exceptions / lost / wrong-but-ok "
+                     "(`ok` or `gyro held`)", "0 / 0 / 0", "%d / %d / %d (%d sessions x %d s)" % (
+                         q["exceptions"], q["lost"], q["wrong_but_ok"], q["sessions"],
+                         q["seconds_per_session"])))
+    return "\n".join([GYRO_BEGIN, "| scenario | goal | measured |", "|---|---|---|"] +
+                      ["| %s | %s | %s |" % r for r in rows] + [GYRO_END])
 
 
 def write_doc(section, path=None):
@@ -1485,6 +1545,10 @@ def body(opts):
         print("docs/benchmarks.md written")
         if not opts["smoke"] and splice_readme(boards_section(res)):
             print("README.md board table written")
+        gs = gyro_section(res)
+        if not opts["smoke"] and gs and splice_block(os.path.join(ROOT, "docs", "gyro.md"),
+                                                    GYRO_BEGIN, GYRO_END, gs):
+            print("docs/gyro.md figures written")
     errors = [n for n, v in res.items() if isinstance(v, dict) and any(
         isinstance(x, dict) and "error" in x for x in v.values())]
     if errors:
