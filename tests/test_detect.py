@@ -226,7 +226,7 @@ def test_drivers_bit_identical_on_micropython():
 def test_read_into_allocates_nothing_on_micropython():
     out = mp.json_lines(mp.run(["tests/scenarios/drivers_alloc.py"], micro=True))
     rows = [o for o in out if "chip" in o]
-    assert len(rows) == 10
+    assert len(rows) == 12
     for o in rows:
         assert o["heap_locked_reads"] == o["reads"] == 200, o
         assert o["net_bytes"] == 0, o

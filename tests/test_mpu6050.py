@@ -155,3 +155,57 @@ def test_dlpf_option_sets_config_and_its_bandwidth_cuts_the_noise():
     assert 2.8 < ratio < 4.3, ratio
     with pytest.raises(ValueError, match="dlpf=30"):
         MPU6050(quiet.bus, dlpf=30)
+
+
+# -- the gyroscope (use_gyro, docs/gyro.md)
+
+@pytest.mark.parametrize("rng,cpd10", [(250, 1310), (500, 655), (1000, 328), (2000, 164)])
+def test_gyro_range_sets_gyro_config_and_the_scale(rng, cpd10):
+    b = make_board("gy87", world=World(motion=motion.flat_spin(period_s=8)), noise=False)
+    m = MPU6050(b.bus, gyro_range=rng)
+    assert m.counts_per_dps_x10 == cpd10 and m.gyro_range == rng
+    assert b.bus.readfrom_mem(ADDR, 0x1B, 1)[0] == [250, 500, 1000, 2000].index(rng) << 3
+    b.sleep_us(2000)
+    x, y, z = m.read_gyro()               # +45 deg/s about body z (down); chip z points up
+    assert x == 0 and y == 0 and abs(z * 10 + 45 * cpd10) <= 10
+
+
+def test_bad_gyro_range_names_the_option_and_its_choices():
+    with pytest.raises(ValueError, match="gyro_range=300: expected one of 250, 500, 1000, 2000"):
+        MPU6050(make_board("gy87").bus, gyro_range=300)
+
+
+def test_one_burst_reads_accelerometer_temperature_and_gyroscope():
+    from array import array
+    w = World(motion=motion.flat_spin(period_s=8), temperature_c=30.0)
+    b = make_board("gy87", world=w, noise=False)
+    m = MPU6050(b.bus)
+    b.sleep_us(2000)
+    acc, gyr = array("h", [0, 0, 0]), array("h", [0, 0, 0])
+    m.read_all_into(acc, gyr)
+    assert list(acc) == [0, 0, 16384] and abs(gyr[2] + 45 * 65.5) <= 1
+    assert abs(m.temp_cdeg() - 3000) <= 1   # register map 4.18: raw / 340 + 36.53
+    # the app's path: sample_into() with .gyro_into set reads the same burst
+    m.gyro_into = array("h", [0, 0, 0])
+    buf = [0, 0, 0]
+    m.read_accel_into(buf)
+    assert buf == list(acc) and list(m.gyro_into) == list(gyr)
+
+
+def test_data_ready_is_set_by_each_sample_and_cleared_by_the_read():
+    b = accel_board()
+    m = MPU6050(b.bus)
+    b.sleep_us(2000)
+    assert m.data_ready() is True and m.data_ready() is False
+    b.sleep_us(2000)
+    assert m.data_ready() is True
+
+
+def test_a_glitched_gyro_range_fails_config_ok_until_configure():
+    b = accel_board()
+    m = MPU6050(b.bus)
+    assert m.config_ok()
+    b.accel.glitch(0x1B, 3 << 3)          # +-2000 deg/s behind the driver's back
+    assert not m.config_ok()
+    m.configure()
+    assert m.config_ok()

@@ -3,6 +3,7 @@ from hardware.md and the InvenSense product spec / register map, decoded here wi
 import math
 import struct
 
+import pytest
 from hypothesis import given, strategies as st
 
 from host_sim import motion
@@ -178,3 +179,45 @@ def test_int_rd_clear_clears_data_ready_on_any_read():
     b.sleep_us(10100)
     accel(b)
     assert rd(b, 0x3A)[0] & 1 == 0
+
+
+def gyro(b):
+    return struct.unpack(">hhh", rd(b, 0x43, 6))
+
+
+@pytest.mark.parametrize("fs,cps", [(0, 131.0), (1, 65.5), (2, 32.8), (3, 16.4)])
+def test_the_gyro_reads_the_board_rotation_through_the_mounting_at_each_range(fs, cps):
+    b = awake(World(motion=motion.flat_spin(period_s=8)))   # +45 deg/s about body z (down)
+    wr(b, 0x1B, fs << 3)
+    b.sleep_us(2000)
+    x, y, z = gyro(b)
+    # mounting (1, -2, -3): chip z is up, so it reads -45 deg/s
+    assert x == 0 and y == 0 and abs(z + 45 * cps) <= 1
+
+
+def test_gyro_bias_temperature_coefficient_and_drift_add_up():
+    w = World(temperature_c=35.0)
+    b = make_board("gy87", world=w, noise=False, gyro={
+        "gyro_bias_dps": (2.0, 0.0, -1.0), "gyro_temp_dps_per_c": (0.1, 0.0, 0.0),
+        "gyro_drift_dps_per_s": (0.0, 0.5, 0.0)})
+    wr(b, 0x6B, 0x00)
+    b.sleep_us(2000000)                       # t = 2 s
+    x, y, z = gyro(b)
+    assert abs(x - (2.0 + 0.1 * 10) * 131) <= 1
+    assert abs(y - 0.5 * b.clock.now_us / 1e6 * 131) <= 2
+    assert abs(z + 131) <= 1
+
+
+def test_a_rate_past_the_range_saturates():
+    b = awake(World(motion=motion.flat_spin(period_s=0.5)))  # 720 deg/s, range +-250
+    assert gyro(b)[2] == -32768
+
+
+def test_gyro_noise_is_the_datasheet_total_rms():
+    b = board(noise=True)
+    wr(b, 0x6B, 0x00)
+    xs = []
+    for _ in range(2000):
+        b.sleep_us(1000)
+        xs.append(gyro(b)[0])
+    assert abs(_std(xs) - 0.05 * 131) < 0.2 * 0.05 * 131

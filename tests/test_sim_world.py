@@ -360,3 +360,49 @@ def test_sim_register_bytes_identical_on_cpython_and_micropython():
     assert len(qmc) == 400 and len(hmc) == 300
     assert len(set(tuple(r[2:8]) for r in qmc)) > 300               # noise and motion move it
     assert tail[1] == 3 * 5                                          # the EIO burst was seen
+
+
+# --- rotation rate and the board's own acceleration ----------------------------------------
+def test_a_level_clockwise_spin_is_a_positive_rate_about_body_z():
+    w = World(motion=motion.flat_spin(period_s=8))
+    p, q, r = w.angular_rate_body(1234567)
+    assert abs(p) < 1e-6 and abs(q) < 1e-6 and abs(r - 45.0) < 45e-6
+    # through the 360 -> 0 wrap of the yaw angle too (matrices, not angles, are differenced)
+    assert abs(w.angular_rate_body(8000000)[2] - 45.0) < 45e-6
+
+
+@given(st.floats(-40, 40), st.floats(-60, 60), st.floats(-170, 170))
+def test_the_rate_follows_the_euler_kinematics(yaw_rate, pitch, roll_rate):
+    # yaw and roll turning at constant rates with pitch held: p = roll' - yaw' sin(pitch),
+    # q = yaw' sin(roll) cos(pitch), r = yaw' cos(roll) cos(pitch) (AN4248 angles)
+    class Turn:
+        duration_us = None
+
+        def at(self, t_us):
+            s = t_us / 1e6
+            return ((yaw_rate * s) % 360, pitch, roll_rate * s)
+    t = 1700000
+    w = World(motion=Turn())
+    roll = math.radians(roll_rate * t / 1e6)
+    sp, cp = math.sin(math.radians(pitch)), math.cos(math.radians(pitch))
+    want = (roll_rate - yaw_rate * sp, yaw_rate * math.sin(roll) * cp,
+            yaw_rate * math.cos(roll) * cp)
+    got = w.angular_rate_body(t)
+    assert all(abs(g - e) < 1e-3 for g, e in zip(got, want)), (got, want)
+
+
+def test_a_board_braking_feels_the_deceleration_on_top_of_gravity():
+    w = World(motion=motion.still(yaw=0))
+    w.add_acceleration((-0.5, 0.0, 0.0), 1.0, 3.0, ramp_s=0.2)
+    mount = (1, -2, -3)  # chip x forward, z up: a level board reads +1 g on z
+    assert w.specific_force(0, mount) == [0.0, 0.0, 1.0]
+    f = w.specific_force(2000000, mount)   # heading north, decelerating: -0.5 g on x
+    assert abs(f[0] + 0.5) < 1e-12 and abs(f[2] - 1.0) < 1e-12
+    assert abs(w.specific_force(1100000, mount)[0] + 0.25) < 1e-9   # half way up its ramp
+    w2 = World(motion=motion.still(yaw=90))   # heading east, the same world acceleration
+    assert abs(w2.specific_force(0, mount)[1]) < 1e-12
+    w2.add_acceleration((-0.5, 0.0, 0.0), 1.0, 3.0)
+    f = w2.specific_force(2000000, mount)     # seen from the side: chip y (left) reads -0.5 g
+    assert abs(f[0]) < 1e-9 and abs(f[1] + 0.5) < 1e-9
+    with pytest.raises(ValueError, match="frame"):
+        w.add_acceleration((1, 0, 0), 0, 1, frame="sensor")

@@ -173,6 +173,9 @@ for delay in ("counted", "board"):
     measure("hmc5883l", bus, h.read_into, array("i", [0, 0, 0]), polls)
     measure("qmc5883p", bus, p.read_into, [0, 0, 0], polls)
     measure("mpu6050", bus, m.read_accel_into, [0, 0, 0], 0)
+    g = MPU6050(bus)
+    g.gyro_into = array("h", [0, 0, 0])  # use_gyro(): the 14-byte burst with the gyroscope
+    measure("mpu6050/gyro", bus, g.read_accel_into, [0, 0, 0], 0)
 
 # The board path of the bounded wait (time.sleep_us + time.ticks_us, delay_us=None): a chip
 # whose status never says ready must time out after timeout_us of real time.
