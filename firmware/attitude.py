@@ -213,9 +213,9 @@ def _blend(st, i, n, first):
 # viper mirrors in firmware/attitude_fast.py where the port has the native emitter (the same
 # bits); only the set in use is loaded (see use_kernels).
 _KERNEL_NAMES = ("rates", "advance", "q_hi", "down", "tilt_error", "tilt_sine", "accel_apply",
-                 "field_error", "yaw_rate", "angles", "slow")
+                 "field_error", "yaw_rate", "angles", "spin")
 rates = advance = q_hi = down = tilt_error = tilt_sine = accel_apply = None
-field_error = yaw_rate = angles = slow = None
+field_error = yaw_rate = angles = spin = None
 KERNELS = None
 
 
@@ -399,9 +399,10 @@ class Attitude:
             return self._start(flags)
         st = self.st
         rates(st, self.gyro)  # the rate, plus the corrections the last sample asked for
-        self._still(dt, flags)
-        st[_KB] = self.kb if slow(st, self.gyro, self.kb_counts) else 0  # turning fast:
-        advance(st, dt)  # the corrections carry the integration's errors, not the bias
+        m = spin(st, self.gyro)
+        self._still(dt, flags, m)
+        st[_KB] = self.kb if m <= self.kb_counts else 0  # turning fast: the corrections
+        advance(st, dt)  # carry the integration's errors, not the bias
         self._correct(dt, flags)
         angles(st)
         return st[_HEAD]
@@ -426,8 +427,7 @@ class Attitude:
     def _correct(self, dt, flags):
         # the corrections this sample's gravity and field ask for, as rates for the next one
         st = self.st
-        q_hi(st)
-        down(st)
+        down(st)  # from normalise's q >> 14 (q before its last, tiny, step)
         st[_U] = 0
         st[_U + 1] = 0
         st[_U + 2] = 0
@@ -442,17 +442,22 @@ class Attitude:
         st[_C + 2] = st[_U + 2]
 
     def _accel(self, dt, n2, k):
+        # n2: |g|^2 scaled by 4**k (norm14); c: 1 g scaled the same way (a power of 2, as
+        # counts_per_g is): |g| within 10 % of it is (0.81 .. 1.21) c^2, no square root
         st = self.st
-        n = isqrt(n2)  # |g| scaled, 2**13..2**14 x sqrt(3)
-        tilt_sine(st, n)
-        n = n >> k if k >= 0 else n << -k  # |g| in counts: within 10 % of 1 g?
-        if 10 * n >= 9 * self._cpg and 10 * n <= 11 * self._cpg and accel_apply(st):
-            st[_AREJ] = 0
-            self.accel_rejected = False
-            return
+        c = self._cpg << k if k >= 0 else self._cpg >> -k
+        if 4096 < c < 32768:  # else |g| is nowhere near 1 g (|g| scaled is 2**13..2**14.8)
+            q = c * c // 100
+            if 81 * q <= n2 <= 121 * q:
+                tilt_sine(st, c)  # the sine to within |g| / c, 0.9..1.1: a gain, no more
+                if accel_apply(st):
+                    st[_AREJ] = 0
+                    self.accel_rejected = False
+                    return
         if st[_AREJ] <= self.recovery_us:
             st[_AREJ] += dt
         else:  # the filter is the suspect: believe gravity again
+            tilt_sine(st, isqrt(n2))
             st[_ACC_LIM] = 0x3FFFFFFF
             accel_apply(st)
             st[_ACC_LIM] = self.acc_lim
@@ -460,14 +465,12 @@ class Attitude:
 
     def _field(self, dt, flags):
         st = self.st
-        if not flags & FIELD or norm14(self.field, st, _G) == ZERO_VECTOR:
-            self._hold(dt)
+        if flags & (MAG_OK | FIELD) != MAG_OK | FIELD or norm14(
+                self.field, st, _G) == ZERO_VECTOR:  # not offered: the heading error of
+            self._hold(dt)  # the last field offered stays in .heading_error_kang
             return
         e = field_error(st)
         st[_E] = e
-        if not flags & MAG_OK:
-            self._hold(dt)
-            return
         lim = st[_MAG_LIM]
         if -lim <= e <= lim:
             st[_MREJ] = 0
@@ -489,11 +492,12 @@ class Attitude:
             st[_SINCE] += dt
             st[_UNC] += self.unc_rate * dt // 1000
 
-    def _still(self, dt, flags):
-        """Still-board windows: the gyro's mean rate over 1 s without motion is its bias."""
+    def _still(self, dt, flags, m):
+        """Still-board windows: the gyro's mean rate over 1 s without motion is its bias (m:
+        spin(), how fast it turns)."""
         st = self.st
         if self.bias_estimates:
-            if not slow(st, self.gyro, self.still_counts):
+            if m > self.still_counts:
                 st[_WN] = 0  # turning: no window (the next slow sample starts one)
                 return
         elif st[_WN] and not _near(self.gyro, st, _WG, self.first_counts):

@@ -1,7 +1,7 @@
 """The attitude filter's per-sample steps as viper mirrors of firmware/attitude_plain.py: the
 same names, signatures and bits. attitude.use_kernels() imports this module, inside
-try/except, where the port has the native emitter (firmware/fast.py loaded: its atan2 and
-isqrt are used here); on any other port it is never imported.
+try/except, where the port has the native emitter (firmware/fast.py loaded: its atan2 is
+used here); on any other port it is never imported.
 
 The state is an array('i') of values up to 2**30 in magnitude: a load is sign-extended from
 31 bits, ((v + 2**30) & (2**31 - 1)) - 2**30, with both constants made at run time (2**30 is
@@ -15,7 +15,7 @@ original on the native tiers.
 """
 import micropython
 
-from firmware.fast import atan2, isqrt
+from firmware.fast import atan2
 
 
 @micropython.viper
@@ -230,16 +230,19 @@ def angles(st):
 
 
 @micropython.viper
-def slow(st, gyro, lim: int) -> int:
-    """attitude_plain.slow (1 / 0 for True / False)."""
+def spin(st, gyro) -> int:
+    """attitude_plain.spin."""
     s = ptr32(st)
     g = ptr16(gyro)
     h = 1
     h <<= 30  # at run time: the literal 2**30 would be an object on a 32-bit port
     m = h + (h - 1)
+    r = 0
     for i in range(3):
         v = ((g[i] + 0x8000) & 0xFFFF) - 0x8000
         d = (v << 4) - ((((s[4 + i] + h) & m) - h) >> 8)
-        if d > lim or d < 0 - lim:
-            return 0
-    return 1
+        if d < 0:
+            d = 0 - d
+        if d > r:
+            r = d
+    return r

@@ -262,13 +262,17 @@ def heading(st):
     st[_HEAD] = atan2((x * y + w * z) >> 13, 16384 - ((y * y + z * z) >> 13)) & 0xFFFF
 
 
-def slow(st, g, lim):
-    """Every axis of the gyro, less the bias, within lim (1/16 count)."""
-    d = (g[0] << 4) - (st[_BIAS] >> 8)
-    if d > lim or d < -lim:
-        return False
+def spin(st, g):
+    """The largest |gyro - bias| over the axes (1/16 count): how fast the board turns."""
+    m = (g[0] << 4) - (st[_BIAS] >> 8)
+    if m < 0:
+        m = -m
     d = (g[1] << 4) - (st[_BIAS + 1] >> 8)
-    if d > lim or d < -lim:
-        return False
+    if d < 0:
+        d = -d
+    if d > m:
+        m = d
     d = (g[2] << 4) - (st[_BIAS + 2] >> 8)
-    return -lim <= d <= lim
+    if d < 0:
+        d = -d
+    return d if d > m else m

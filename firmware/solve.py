@@ -762,7 +762,17 @@ def power_steps(m, out):
     # out[0] = Rayleigh quotient (Q16) after POWER_ITER power steps; vectors rescaled by
     # shifts; one power step per next()
     out[0] = 0
-    v = [1 << 14, 1 << 13, 1 << 12]
+    # the start: the column of the largest diagonal entry (a fixed vector can be nearly
+    # orthogonal to the top eigenvector, and then 24 steps leave the quotient far low)
+    k = 0
+    if m[1][1] > m[k][k]:
+        k = 1
+    if m[2][2] > m[k][k]:
+        k = 2
+    v = [m[0][k], m[1][k], m[2][k]]
+    sh = bit_length(max(abs(v[0]), abs(v[1]), abs(v[2]))) - 15
+    if sh > 0:
+        v = [v[0] >> sh, v[1] >> sh, v[2] >> sh]
     for _ in range(POWER_ITER):
         yield
         u = mat_vec3(m, v)

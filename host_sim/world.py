@@ -247,14 +247,21 @@ class World:
 
     def linear_accel_body(self, t_us):
         """The board's own acceleration in its frame, g (the sum of add_acceleration's)."""
+        return self._pulses(self.accelerations, t_us, None)
+
+    def _pulses(self, pulses, t_us, mount):
+        # the sum of the pulses present at t_us: world-frame ones rotated into the body, then
+        # (mount given) body-frame ones through the chip's mounting; sensor-frame ones as is
         out = [0.0, 0.0, 0.0]
-        for a in self.accelerations:
-            e = a.envelope(t_us)
+        for p in pulses:
+            e = p.envelope(t_us)
             if e == 0.0:
                 continue
-            v = a.vec
-            if a.frame == "world":
+            v = p.vec
+            if p.frame == "world":
                 v = mat_vec(self.rotation(t_us), v)
+            if mount is not None and p.frame != "sensor":
+                v = mount_apply(mount, v)
             out[0] += e * v[0]
             out[1] += e * v[1]
             out[2] += e * v[2]
@@ -279,20 +286,7 @@ class World:
     # --- what a chip senses -----------------------------------------------------------
     def interference(self, t_us, mount):
         """Sum of the magnets' fields in the sensor frame of a chip mounted `mount`, uT."""
-        out = [0.0, 0.0, 0.0]
-        for m in self.magnets:
-            e = m.envelope(t_us)
-            if e == 0.0:
-                continue
-            v = m.field_ut
-            if m.frame == "world":
-                v = mount_apply(mount, mat_vec(self.rotation(t_us), v))
-            elif m.frame == "body":
-                v = mount_apply(mount, v)
-            out[0] += e * v[0]
-            out[1] += e * v[1]
-            out[2] += e * v[2]
-        return out
+        return self._pulses(self.magnets, t_us, mount)
 
     def sensor_field(self, t_us, mount):
         """W * (M * Bp) + V + magnets, uT, in the sensor frame (AN4246 eq. 5)."""

@@ -349,6 +349,12 @@ def test_random_packets_are_accepted_exactly_when_a_float_check_says_so(seed, cp
     assume(ev[0] <= 0 or abs(cond - 5) > 0.15)
     assume(abs(Bf - 10) > 1e-4 and abs(Bf - 90) > 1e-4)
     assume(all(abs(abs(o) - 32767.5) > 0.01 for o in off))
+    # the output field: InvW is scaled to Q15 so that its largest row sum is 32767
+    # (solve.q15_steps), so the corrected field is B x 32767 / 32768 / that row sum (counts);
+    # firmware/acceptance.py check_output_field wants it within B / 8 .. 2 B and >= 16 counts
+    s = 32767 / 32768 / max(sum(abs(x) for x in row) for row in m)
+    fo = Bf * k * s
+    assume(abs(fo - 16) > 0.6 and abs(s - 0.125) > 1e-3 and abs(s - 2) > 1e-3)
     if ev[0] <= 0:
         want = mc.REASON_NOT_POSITIVE_DEFINITE
     elif cond > 5:
@@ -357,6 +363,8 @@ def test_random_packets_are_accepted_exactly_when_a_float_check_says_so(seed, cp
         want = mc.REASON_FIELD_OUT_OF_RANGE
     elif any(abs(o) > 32767.5 for o in off):
         want = mc.REASON_OFFSET_OUT_OF_RANGE
+    elif fo < 16 or s < 0.125 or s > 2:
+        want = mc.REASON_FIELD_OUT_OF_RANGE
     else:
         want = None
     try:

@@ -8,18 +8,10 @@ from array import array
 
 import micropython
 
-from firmware.attitude import Attitude
-from firmware.compass import Compass
 from tests.scenarios import attitude_inputs as I
 
 N = 1500
-gyro = array("h", (0, 0, 0))
-grav = array("h", (0, 0, 0))
-field = array("h", (0, 0, 0))
-c = Compass()
-I.step(0, gyro, grav, field)
-c.update(field, grav)
-a = Attitude(gyro, grav, field, c, I.CPS_X10, I.CPG)
+a, gyro, grav, field, c = I.filter()
 a.update(20000, 7)
 # the inputs first (their generator allocates), 10 ints a sample
 tab = array("i", bytearray(4 * 10 * N))

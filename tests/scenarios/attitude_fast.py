@@ -8,17 +8,10 @@ from array import array
 from firmware import attitude
 from firmware import attitude_fast as F
 from firmware import attitude_plain as A
-from firmware.compass import Compass
 from tests.scenarios import attitude_inputs as I
 
-gyro = array("h", (0, 0, 0))
-grav = array("h", (0, 0, 0))
-field = array("h", (0, 0, 0))
-c = Compass()
-I.step(0, gyro, grav, field)
-c.update(field, grav)
 attitude.use_kernels(False)
-a = attitude.Attitude(gyro, grav, field, c, I.CPS_X10, I.CPG)
+a, gyro, grav, field, c = I.filter()
 a.update(20000, 7)
 G = "gyro"
 PAIRS = (("rates", A.rates, F.rates, (G,)), ("q_hi", A.q_hi, F.q_hi, ()),
@@ -29,7 +22,7 @@ PAIRS = (("rates", A.rates, F.rates, (G,)), ("q_hi", A.q_hi, F.q_hi, ()),
          ("yaw_rate", A.yaw_rate, F.yaw_rate, (-700,)),
          ("advance", A.advance, F.advance, (70000,)),
          ("advance_20ms", A.advance, F.advance, (20000,)),
-         ("angles", A.angles, F.angles, ()), ("slow", A.slow, F.slow, (G, 500)))
+         ("angles", A.angles, F.angles, ()), ("spin", A.spin, F.spin, (G,)))
 
 
 def norm(r):

@@ -2,7 +2,10 @@
 # a level-ish board turning about the vertical with a slow tilt wobble, its gyroscope (body
 # axes, counts at 65.5 per deg/s) with a bias, gravity and a field made with firmware.trig -
 # the same bits on every interpreter. step(i, gyro, grav, field) fills the arrays for sample i
-# (20 ms apart) without allocating; flags(i) says what the app would pass.
+# (20 ms apart) without allocating; flags(i) says what the app would pass; filter() makes the
+# arrays, a Compass on sample 0 and an Attitude on them.
+from array import array
+
 from firmware.trig import cos, sin
 
 CPS_X10 = 655
@@ -41,3 +44,17 @@ def flags(i):
     if 1000 <= i < 1100:
         f &= ~4
     return f
+
+
+def filter():
+    """(attitude, gyro, grav, field, compass) for sample 0: the arrays are the filter's inputs
+    (firmware.attitude is imported here: a scenario may pick its kernels first)."""
+    from firmware.attitude import Attitude
+    from firmware.compass import Compass
+    gyro = array("h", (0, 0, 0))
+    grav = array("h", (0, 0, 0))
+    field = array("h", (0, 0, 0))
+    c = Compass()
+    step(0, gyro, grav, field)
+    c.update(field, grav)
+    return Attitude(gyro, grav, field, c, CPS_X10, CPG), gyro, grav, field, c

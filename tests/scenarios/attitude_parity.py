@@ -1,19 +1,10 @@
 # The attitude filter (firmware/attitude.py) over integer inputs (attitude_inputs): the
 # heading, tilt, bias and source every 50 samples; every tier prints the same JSON lines.
 import json
-from array import array
 
-from firmware.attitude import Attitude
-from firmware.compass import Compass
 from tests.scenarios import attitude_inputs as I
 
-gyro = array("h", (0, 0, 0))
-grav = array("h", (0, 0, 0))
-field = array("h", (0, 0, 0))
-c = Compass()
-I.step(0, gyro, grav, field)
-c.update(field, grav)
-a = Attitude(gyro, grav, field, c, I.CPS_X10, I.CPG)
+a, gyro, grav, field, c = I.filter()
 rows = []
 for i in range(1500):
     I.step(i, gyro, grav, field)

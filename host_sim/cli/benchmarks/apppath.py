@@ -84,15 +84,11 @@ def main():
         app, clock, _, b = apps[name]
         kern = compass.KERNELS if app.fast else False
 
-        def run(n):
-            compass.use_kernels(kern)  # the set this app chose (module-wide)
+        def select():  # the set this app chose (module-wide)
+            compass.use_kernels(kern)
             samples.use_kernels(kern)
             i2cdevice.use_kernels(kern)
-            b.rewind()
-            for _ in range(n):
-                clock.now += PERIOD_US
-                app.step()
-        return run
+        return common.app_runner(app, clock, b, PERIOD_US, select)
 
     st = bytearray(1)
     d6 = bytearray(6)

@@ -191,6 +191,19 @@ def mpu_image():
     return img
 
 
+def app_runner(app, clock, bus, period_us, select):
+    """fn(n): n steps of a CompassApp over its replay `bus` (rewound first), the clock moved a
+    period each; select() first (it picks the kernel sets this app uses: they are
+    module-wide)."""
+    def run(n):
+        select()
+        bus.rewind()
+        for _ in range(n):
+            clock.now += period_us
+            app.step()
+    return run
+
+
 def replay_board(mag_bytes, acc_bytes):
     """A ReplayBus with a QMC5883L (0x0D) and an MPU6050 (0x68) serving the sessions."""
     bus = ReplayBus()

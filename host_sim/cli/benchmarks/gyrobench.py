@@ -64,15 +64,11 @@ def main():
         a, clock, bus = apps[name]
         kern = compass.KERNELS if a.fast else False
 
-        def run(n):
-            compass.use_kernels(kern)  # the set this app chose (module-wide)
+        def select():  # the sets this app chose (module-wide)
+            compass.use_kernels(kern)
             i2cdevice.use_kernels(kern)
-            attitude.use_kernels(kern)
-            bus.rewind()
-            for _ in range(n):
-                clock.now += PERIOD_US
-                a.step()
-        return run
+            attitude.use_kernels(None if a.fast else False)
+        return common.app_runner(a, clock, bus, PERIOD_US, select)
 
     st = bytearray(1)
     d6 = bytearray(6)
