@@ -457,11 +457,16 @@ class Attitude:
         if st[_AREJ] <= self.recovery_us:
             st[_AREJ] += dt
         else:  # the filter is the suspect: believe gravity again
-            tilt_sine(st, isqrt(n2))
-            st[_ACC_LIM] = 0x3FFFFFFF
-            accel_apply(st)
-            st[_ACC_LIM] = self.acc_lim
-            self.accel_rejected = False
+            self._believe_gravity(st)
+
+    def _believe_gravity(self, st):
+        # the cross product afresh (the branch above may have scaled it), by the true |g|
+        n = isqrt(tilt_error(st))
+        tilt_sine(st, n)
+        st[_ACC_LIM] = 0x3FFFFFFF
+        accel_apply(st)
+        st[_ACC_LIM] = self.acc_lim
+        self.accel_rejected = False
 
     def _field(self, dt, flags):
         st = self.st
