@@ -27,11 +27,13 @@ RUNS = 3 if SMOKE else 25
 PERIOD_US = 5000
 
 
-def load(path):
+def load(path, mpu_bytes=6):
+    """(mag bytes, MPU6050 bytes) of a recorded session (bench.py write_session): 6 bytes of
+    the magnetometer, then `mpu_bytes` of the MPU6050 (14: its burst with the gyroscope)."""
     with open(path, "rb") as f:
         data = f.read()
-    n = len(data) // 12
-    return data[:6 * n], data[6 * n:12 * n]
+    n = len(data) // (6 + mpu_bytes)
+    return data[:6 * n], data[6 * n:(6 + mpu_bytes) * n]
 
 
 def make_app(bus, fast, learn=True):

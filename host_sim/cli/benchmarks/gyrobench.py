@@ -15,6 +15,7 @@ step on MicroPython.
 import sys
 
 from host_sim.cli.benchmarks import common
+from host_sim.cli.benchmarks.apppath import load, make_app
 
 SMOKE = common.smoke()
 N = 100 if SMOKE else 400
@@ -22,26 +23,9 @@ RUNS = 3 if SMOKE else 21
 PERIOD_US = 5000
 
 
-def load(path):
-    with open(path, "rb") as f:
-        data = f.read()
-    n = len(data) // 20
-    return data[:6 * n], data[6 * n:20 * n]
-
-
-def make_app(bus, fast, learn):
-    from firmware.app import CompassApp
-    from firmware.mpu6050 import MPU6050
-    from firmware.qmc5883l import QMC5883L
-    clock = common.Clock()
-    app = CompassApp(bus, mag=QMC5883L(bus, odr=200), accel=MPU6050(bus), ticks_us=clock.ticks,
-                     store=None, fast=fast, learn=learn)
-    return app, clock
-
-
 def main():
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
-    mag, acc = load(args[0])
+    mag, acc = load(args[0], 14)
     steps = len(mag) // 6
     b = common.replay_board(mag, acc)
     app, clock = make_app(b, None, True)
