@@ -22,7 +22,7 @@ BUDGETS = {
     "min_heap_calibrate_mpy": 160 * KB,
     "min_heap_calibrate_romfs": 106 * KB,
     # the gyro-aided heading (use_gyro(), .mpy): live heap after boot + 1000 headings, minus
-    # the heading line above (the goal; measured 7.4 KB when set)
+    # the heading line above (docs/gyro.md's goal; 6.5-7.4 KB measured when set)
     "gyro_extra_mpy": 8 * KB,
     # bytes allocated per sample once the board shows headings
     "bytes_per_sample": 0,

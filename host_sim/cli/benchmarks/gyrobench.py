@@ -9,7 +9,7 @@ calibration session: core (the compass step a calibrated board runs every sample
 (the same with use_gyro()), each with the fast kernels where the port has the native emitter
 and with the plain functions. Printed: microseconds per step (median over interleaved runs,
 the replay bus's own cost subtracted) and the filter's share: gyro - core, and that over core
-(the issue's "per-sample cost vs the compass step"), plus Attitude.update alone and bytes per
+(docs/gyro.md's "per-sample cost vs the compass step"), plus Attitude.update alone and bytes per
 step on MicroPython.
 """
 import sys
