@@ -245,6 +245,7 @@ class Attitude:
     raw = None     # attach(): the gyroscope's counts in the sensor's axes
     axes = None    # attach(): their map to the body frame (firmware/axes.py AxisMap.m)
     _at = -2       # follow(): the app step that last ran the filter
+    _cal = None    # follow(): the calibration in force when the filter started
 
     def __init__(self, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g,
                  **options):
@@ -352,14 +353,18 @@ class Attitude:
     def _gap(self, app):
         # The gyroscope into the body frame (.axes: the accelerometer's axis map negated, as
         # the map turns specific force into AN4248 gravity, Gp = -f, and a rate keeps its sign).
-        # True after a step without the gyro (a failed read, a stall: time the filter did
-        # not integrate), with an implausible accelerometer (the gyro's own chip: its burst
-        # is suspect too), a rate past the range or a chip that lost its setting: the filter
-        # then starts again from the compass at the next clean sample.
+        # True after a step without the gyro (a failed read, a stall: time the filter did not
+        # integrate), when another calibration was put in force (the field it followed was
+        # another), with an implausible accelerometer (the gyro's own chip: its burst is
+        # suspect too), a rate past the range or a chip that lost its setting: the filter then
+        # starts again from the compass at the next clean sample.
         app._apply(self.axes, self.raw, self.gyro)
         n = app.steps
         skip = n != self._at + 1 or app._stalled or not app.tilt
         self._at = n
+        if app.calibration is not self._cal:
+            self._cal = app.calibration
+            skip = True
         if skip or self._bad(app):
             self.reset()
             return True

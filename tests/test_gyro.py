@@ -79,3 +79,19 @@ def test_the_status_line_and_the_accuracy_say_the_heading_is_held():
     G.run(app, b, 35)
     assert app.status == "ok" and "gyro: on field" in status_line(app)
     assert abs(G.err_deg(app, b)) < 1.0
+
+
+def test_another_calibration_in_force_starts_the_filter_again_from_the_compass():
+    from firmware.calibration import Calibration
+    from host_sim.cli.benchmarks import gyroworld as G
+    from host_sim import motion
+    b = G.board(motion.still(yaw=40), gyro=gyroacc.BIAS)
+    app = G.app(b)
+    G.run(app, b, 2)
+    at = app.attitude
+    assert at.started and at.source == "magnetometer"
+    app.use_calibration(Calibration.from_bytes(app.calibration.to_bytes()), save=False)
+    app.step()
+    assert not at.started  # the field it followed was the old calibration's
+    app.step()
+    assert at.started and abs(G.err_deg(app, b)) < 1.0
