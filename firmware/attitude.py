@@ -43,7 +43,8 @@ The filter (Mahony's complementary filter on a quaternion; the kinematics q' = q
            angle of each axis h = u x dt x k, k from the range's counts per deg/s, with dt in
            chunks of < 32768 us (a slow loop integrates in several chunks); q += q (0, h).
   gravity  e = g x d (d = C's third row, the down direction the filter believes): the
-           rotation that turns the belief toward the measurement, times gain.
+           rotation that turns the belief toward the measurement, times gain; every other
+           sample, held for the one between.
   field    m = C b, the field in the filter's level frame; its direction atan2(my, mx) is the
            heading error, corrected by a rotation about the down axis, times mag_gain.
   bias     the integral of the corrections (bias_gain; while every axis turns slower than 10
@@ -122,7 +123,8 @@ _C = const(54)     # 54..56 the corrections (1/16 count) for the next sample's r
 _WLB = const(57)   # still window: the field's tolerance (counts)
 _UNC = const(58)   # the heading's uncertainty grown since the last correction, 1/1000 cdeg
 _WG = const(59)    # 59..61 still window: the gyro at its start (counts)
-_SIZE = const(62)  # (firmware/fast.py's mirrors use these numbers)
+_CA = const(62)    # 62..64 the last gravity correction (1/16 count), held a sample
+_SIZE = const(65)  # (firmware/fast.py's mirrors use these numbers)
 
 
 def mul14(a, b):
@@ -213,9 +215,9 @@ def _blend(st, i, n, first):
 # viper mirrors in firmware/attitude_fast.py where the port has the native emitter (the same
 # bits); only the set in use is loaded (see use_kernels).
 _KERNEL_NAMES = ("rates", "advance", "q_hi", "down", "tilt_error", "tilt_sine", "accel_apply",
-                 "field_error", "yaw_rate", "angles", "spin")
+                 "field_error", "yaw_rate", "angles")
 rates = advance = q_hi = down = tilt_error = tilt_sine = accel_apply = None
-field_error = yaw_rate = angles = spin = None
+field_error = yaw_rate = angles = None
 KERNELS = None
 
 
@@ -269,6 +271,7 @@ class Attitude:
         self.unc_rate = self.unknown_bias_cdeg_per_s  # _hold's, cdeg/s
         self.started = False
         self.accel_rejected = True
+        self._odd = False  # _correct: gravity's turn
         self._cpg = counts_per_g
         self.st = st = array("i", bytearray(4 * _SIZE))
         st[_KI] = k[0]
@@ -403,8 +406,8 @@ class Attitude:
         if not self.started:
             return self._start(flags)
         st = self.st
-        rates(st, self.gyro)  # the rate, plus the corrections the last sample asked for
-        m = spin(st, self.gyro)
+        m = rates(st, self.gyro)  # the rate, plus the corrections the last sample asked
+        #                           for; m: how fast it turns
         self._still(dt, flags, m)
         st[_KB] = self.kb if m <= self.kb_counts else 0  # turning fast: the corrections
         advance(st, dt)  # carry the integration's errors, not the bias
@@ -430,21 +433,47 @@ class Attitude:
         return st[_HEAD]
 
     def _correct(self, dt, flags):
-        # the corrections this sample's gravity and field ask for, as rates for the next one
+        # the corrections this sample's gravity and field ask for, as rates for the next one;
+        # gravity's every other sample (its 2 s time constant does not miss one: the plain
+        # path's cost), held for the sample between while the accelerometer stays plausible
         st = self.st
         down(st)  # from normalise's q >> 14 (q before its last, tiny, step)
-        st[_U] = 0
-        st[_U + 1] = 0
-        st[_U + 2] = 0
-        self.accel_rejected = True
-        if flags & ACC_OK:
-            k = norm14(self.gravity, st, _G)
-            if k != ZERO_VECTOR:
-                self._accel(dt, tilt_error(st), k)
+        self._odd = not self._odd
+        if not flags & ACC_OK:
+            self.accel_rejected = True
+            self._gravity_held(0)
+        elif self._odd:
+            self._gravity(dt << 1)
+        else:
+            self._gravity_held(1)
         self._field(dt, flags)
         st[_C] = st[_U]
         st[_C + 1] = st[_U + 1]
         st[_C + 2] = st[_U + 2]
+
+    def _gravity(self, dt):
+        st = self.st
+        st[_U] = 0
+        st[_U + 1] = 0
+        st[_U + 2] = 0
+        self.accel_rejected = True
+        k = norm14(self.gravity, st, _G)
+        if k != ZERO_VECTOR:
+            self._accel(dt, tilt_error(st), k)
+        st[_CA] = st[_U]
+        st[_CA + 1] = st[_U + 1]
+        st[_CA + 2] = st[_U + 2]
+
+    def _gravity_held(self, keep):
+        # the last gravity correction (keep) or none, as the start of this sample's
+        st = self.st
+        if not keep:
+            st[_CA] = 0
+            st[_CA + 1] = 0
+            st[_CA + 2] = 0
+        st[_U] = st[_CA]
+        st[_U + 1] = st[_CA + 1]
+        st[_U + 2] = st[_CA + 2]
 
     def _accel(self, dt, n2, k):
         # n2: |g|^2 scaled by 4**k (norm14); c: 1 g scaled the same way (a power of 2, as
@@ -504,7 +533,7 @@ class Attitude:
 
     def _still(self, dt, flags, m):
         """Still-board windows: the gyro's mean rate over 1 s without motion is its bias (m:
-        spin(), how fast it turns)."""
+        rates(), how fast it turns)."""
         st = self.st
         if self.bias_estimates:
             if m > self.still_counts:

@@ -19,20 +19,27 @@ from firmware.fast import atan2
 
 
 @micropython.viper
-def rates(st, gyro):
+def rates(st, gyro) -> int:
     """attitude_plain.rates."""
     s = ptr32(st)
     g = ptr16(gyro)
     h = 1
     h <<= 30  # at run time: the literal 2**30 would be an object on a 32-bit port
     m = h + (h - 1)
+    r = 0
     for i in range(3):
         v = ((g[i] + 0x8000) & 0xFFFF) - 0x8000
         p = ((s[37 + i] + h) & m) - h
-        b = ((s[4 + i] + h) & m) - h
+        b = (((s[4 + i] + h) & m) - h) >> 8
         c = ((s[54 + i] + h) & m) - h
-        s[7 + i] = ((v + p) << 3) - (b >> 8) + c
+        s[7 + i] = ((v + p) << 3) - b + c
         s[37 + i] = v
+        d = (v << 4) - b
+        if d < 0:
+            d = 0 - d
+        if d > r:
+            r = d
+    return r
 
 
 @micropython.viper
@@ -227,22 +234,3 @@ def angles(st):
     y = ((s[15] + 0x20000) & 0x3FFFF) - 0x20000
     z = ((s[16] + 0x20000) & 0x3FFFF) - 0x20000
     s[48] = int(atan2((x * y + w * z) >> 13, 16384 - ((y * y + z * z) >> 13))) & 0xFFFF
-
-
-@micropython.viper
-def spin(st, gyro) -> int:
-    """attitude_plain.spin."""
-    s = ptr32(st)
-    g = ptr16(gyro)
-    h = 1
-    h <<= 30  # at run time: the literal 2**30 would be an object on a 32-bit port
-    m = h + (h - 1)
-    r = 0
-    for i in range(3):
-        v = ((g[i] + 0x8000) & 0xFFFF) - 0x8000
-        d = (v << 4) - ((((s[4 + i] + h) & m) - h) >> 8)
-        if d < 0:
-            d = 0 - d
-        if d > r:
-            r = d
-    return r

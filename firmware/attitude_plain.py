@@ -37,13 +37,32 @@ _CHUNK_US = const(32767)
 
 def rates(st, gyro):
     """u = 16 x the mean of this and the last gyro sample (the trapezoid rule: the rate is
-    sampled at the ends of the interval) - bias + the corrections (1/16 count)."""
-    st[_U] = ((gyro[0] + st[_GP]) << 3) - (st[_BIAS] >> 8) + st[_C]
-    st[_U + 1] = ((gyro[1] + st[_GP + 1]) << 3) - (st[_BIAS + 1] >> 8) + st[_C + 1]
-    st[_U + 2] = ((gyro[2] + st[_GP + 2]) << 3) - (st[_BIAS + 2] >> 8) + st[_C + 2]
-    st[_GP] = gyro[0]
-    st[_GP + 1] = gyro[1]
-    st[_GP + 2] = gyro[2]
+    sampled at the ends of the interval) - bias + the corrections (1/16 count). Returns the
+    largest |16 x gyro - bias| over the axes: how fast the board turns."""
+    g = gyro[0]
+    b = st[_BIAS] >> 8
+    st[_U] = ((g + st[_GP]) << 3) - b + st[_C]
+    st[_GP] = g
+    m = (g << 4) - b
+    if m < 0:
+        m = -m
+    g = gyro[1]
+    b = st[_BIAS + 1] >> 8
+    st[_U + 1] = ((g + st[_GP + 1]) << 3) - b + st[_C + 1]
+    st[_GP + 1] = g
+    b = (g << 4) - b
+    if b < 0:
+        b = -b
+    if b > m:
+        m = b
+    g = gyro[2]
+    b = st[_BIAS + 2] >> 8
+    st[_U + 2] = ((g + st[_GP + 2]) << 3) - b + st[_C + 2]
+    st[_GP + 2] = g
+    b = (g << 4) - b
+    if b < 0:
+        b = -b
+    return b if b > m else m
 
 
 def q_hi(st):
@@ -248,31 +267,10 @@ def advance(st, dt):
 
 
 def angles(st):
-    """The heading from q >> 14 as it is (the corrections just made it from this q); pitch
-    and roll are computed when asked for (tilt())."""
-    heading(st)
-
-
-def heading(st):
-    # psi = atan2(C21, C11)
+    """The heading, psi = atan2(C21, C11), from q >> 14 as it is (the corrections just made
+    it from this q); pitch and roll are computed when asked for (attitude.tilt())."""
     w = st[_QH]
     x = st[_QH + 1]
     y = st[_QH + 2]
     z = st[_QH + 3]
     st[_HEAD] = atan2((x * y + w * z) >> 13, 16384 - ((y * y + z * z) >> 13)) & 0xFFFF
-
-
-def spin(st, g):
-    """The largest |gyro - bias| over the axes (1/16 count): how fast the board turns."""
-    m = (g[0] << 4) - (st[_BIAS] >> 8)
-    if m < 0:
-        m = -m
-    d = (g[1] << 4) - (st[_BIAS + 1] >> 8)
-    if d < 0:
-        d = -d
-    if d > m:
-        m = d
-    d = (g[2] << 4) - (st[_BIAS + 2] >> 8)
-    if d < 0:
-        d = -d
-    return d if d > m else m
