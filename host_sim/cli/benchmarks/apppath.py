@@ -119,13 +119,7 @@ def main():
     fns = (("bus", bare), ("float", flt), ("ours_fast", stepper("ours_fast")),
            ("ours_plain", stepper("ours_plain")), ("core_fast", stepper("core_fast")),
            ("core_plain", stepper("core_plain")))
-    for _, fn in fns:
-        fn(N)
-    per = {name: [] for name, _ in fns}
-    for _ in range(RUNS):
-        for name, fn in fns:
-            per[name].append(common.timed_runs(fn, N, 1)[0])
-    t = {name: common.median(per[name]) for name, _ in fns}
+    t = common.interleaved_medians(fns, N, RUNS)
     cpu = {name: t[name] - t["bus"] for name in ("float", "ours_fast", "ours_plain",
                                                   "core_fast", "core_plain")}
     res = {"interpreter": common.interpreter(), "n_per_run": N, "runs": RUNS,

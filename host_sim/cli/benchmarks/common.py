@@ -191,6 +191,19 @@ def mpu_image():
     return img
 
 
+def interleaved_medians(fns, n, runs):
+    """{name: median microseconds per call of fn(n)} for (name, fn) pairs: each run once to
+    warm up, then `runs` rounds that time every one in turn (a slow patch of the machine
+    falls on all of them alike)."""
+    for _, fn in fns:
+        fn(n)
+    per = {name: [] for name, _ in fns}
+    for _ in range(runs):
+        for name, fn in fns:
+            per[name].append(timed_runs(fn, n, 1)[0])
+    return {name: median(per[name]) for name, _ in fns}
+
+
 def app_runner(app, clock, bus, period_us, select):
     """fn(n): n steps of a CompassApp over its replay `bus` (rewound first), the clock moved a
     period each; select() first (it picks the kernel sets this app uses: they are

@@ -76,13 +76,7 @@ def main():
     fns = (("bus", bare), ("core_fast", stepper("core_fast")),
            ("core_plain", stepper("core_plain")), ("gyro_fast", stepper("gyro_fast")),
            ("gyro_plain", stepper("gyro_plain")), ("update_plain", update))
-    for _, fn in fns:
-        fn(N)
-    per = {name: [] for name, _ in fns}
-    for _ in range(RUNS):
-        for name, fn in fns:
-            per[name].append(common.timed_runs(fn, N, 1)[0])
-    t = {name: common.median(per[name]) for name, _ in fns}
+    t = common.interleaved_medians(fns, N, RUNS)
     cpu = {k: t[k] - t["bus"] for k in ("core_fast", "core_plain", "gyro_fast", "gyro_plain")}
     res = {"interpreter": common.interpreter(), "n_per_run": N, "runs": RUNS,
            "us_per_step": t, "cpu_us": cpu, "fast_available": apps["core_fast"][0].fast,
