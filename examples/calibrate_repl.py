@@ -1,7 +1,7 @@
 """Calibrate at the REPL: collect samples while you turn the board, then solve.
 
-    python examples/calibrate_repl.py [SECONDS]   # on the host: a simulated figure-8
-    import examples.calibrate_repl                # on a board: turn it for 30 s
+    python examples/calibrate_repl.py [SECONDS]                 # on the host: a figure-8
+    from examples.calibrate_repl import calibrate; calibrate()  # on a board: turn it 30 s
 
 Every raw sample goes to a Calibrator (firmware/calibrator.py), which keeps the ones that are
 new information; solve() returns a Calibration or says why not (too few samples, planar: turn
@@ -9,7 +9,11 @@ the board over, ...). The result is the record the app stores (hard iron V, InvW
 """
 import sys
 
-from examples.bus import get_bus
+try:
+    from examples.bus import get_bus
+except ImportError:  # run as a script, python examples/X.py: the folder above examples/
+    sys.path.insert(0, sys.path[0] + "/..")
+    from examples.bus import get_bus
 from firmware.calibrator import Calibrator
 from firmware.detect import detect
 from firmware.errors import CalibrationRejected

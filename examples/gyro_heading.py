@@ -1,7 +1,7 @@
 """Gyro-aided heading: the MPU6050's gyroscope holds the heading while a magnet passes.
 
     python examples/gyro_heading.py [SECONDS]     # on the host: the simulated board
-    import examples.gyro_heading                  # on a board: forever
+    from examples.gyro_heading import run; run()  # on a board: forever
 
 On a board this is the heading loop with app.use_gyro() (docs/gyro.md): bring a magnet or a
 motor near the sensor and the status says "gyro held" (with how long and how well) instead of
@@ -12,7 +12,11 @@ measured), then turns slowly while a magnet fixed in the room comes within range
 """
 import sys
 
-from examples.bus import get_bus
+try:
+    from examples.bus import get_bus
+except ImportError:  # run as a script, python examples/X.py: the folder above examples/
+    sys.path.insert(0, sys.path[0] + "/..")
+    from examples.bus import get_bus
 from firmware.app import CompassApp, status_line
 
 
@@ -23,7 +27,7 @@ def run(seconds=None, seed=1):
         app.use_gyro()
         app.run(None, report=lambda a: print(status_line(a)), every_us=1000000)
         return app
-    sys.path.insert(0, "boards/host")
+    # get_bus() imported the simulated board (boards/host/board.py)
     import board
     from host_sim import motion
     w = board.sim.world

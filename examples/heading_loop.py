@@ -1,7 +1,7 @@
 """A heading loop: the app with its status line (calibrates itself while you turn the board).
 
     python examples/heading_loop.py [SECONDS]     # on the host: a simulated figure-8
-    import examples.heading_loop                  # on a board: forever
+    from examples.heading_loop import run; run()  # on a board: forever
 
 firmware/app.py does everything: it finds the chips, loads the stored calibration (none
 here: store=None), collects and solves in the background, and shows the tilt-compensated
@@ -9,7 +9,11 @@ heading. status_line() says what it is doing.
 """
 import sys
 
-from examples.bus import get_bus
+try:
+    from examples.bus import get_bus
+except ImportError:  # run as a script, python examples/X.py: the folder above examples/
+    sys.path.insert(0, sys.path[0] + "/..")
+    from examples.bus import get_bus
 from firmware.app import CompassApp, status_line
 
 
@@ -19,7 +23,7 @@ def run(seconds=None, seed=1, declination_cdeg=0):
         app = CompassApp(i2c, declination_cdeg=declination_cdeg)
         steps = None
     else:  # the simulator: its clock moves when the drivers wait
-        sys.path.insert(0, "boards/host")
+        # get_bus() imported the simulated board (boards/host/board.py)
         import board
         app = CompassApp(i2c, delay_us=delay_us, ticks_us=board.ticks_us,
                          declination_cdeg=declination_cdeg)

@@ -2,9 +2,11 @@
 
     python -m host_sim calibrate mag_log.csv --sensor qmc5883l --out calibration.json
     mpremote cp calibration.json :calibration.json        # then, on the board:
-    import examples.load_calibration
+    from examples.load_calibration import load; load()
 
     python examples/load_calibration.py FILE [STORE_DIR]  # on the host (simulated board)
+
+STORE_DIR (default /, the board's root) is made when it does not exist (one level).
 
 firmware/calimport.py checks the file against the chip found (sensor kind, range) and the
 record's meaning, stores it, and renames the file to FILE.imported (FILE.rejected when it is
@@ -12,13 +14,38 @@ refused: the store is untouched). boards/main.py does the same at every boot.
 """
 import sys
 
-from examples.bus import get_bus
+try:
+    from examples.bus import get_bus
+except ImportError:  # run as a script, python examples/X.py: the folder above examples/
+    sys.path.insert(0, sys.path[0] + "/..")
+    from examples.bus import get_bus
 from firmware.calimport import import_calibration
 from firmware.detect import detect
 from firmware.store import CalStore
 
 
+def _store_folder(d):
+    """None when folder `d` exists or was made now; else what to do, in a line."""
+    import os
+    try:
+        if os.stat(d)[0] & 0o170000 == 0o040000:
+            return None
+        return "%s is a file, not a folder: give the folder for the store" % d
+    except OSError:
+        pass
+    try:
+        os.mkdir(d)
+    except OSError as e:
+        return "cannot create the store folder %s (%s): create it first" % (d, e)
+    print("created the store folder %s" % d)
+    return None
+
+
 def load(path="calibration.json", store_dir="/", seed=1):
+    why = _store_folder(store_dir)
+    if why is not None:
+        print("not imported: %s" % why)
+        return False, why
     i2c, delay_us = get_bus(seed)
     mag = detect(i2c, delay_us=delay_us) if delay_us else detect(i2c)
     store = CalStore(store_dir, sensor=mag.KIND, range_code=mag.range_code)

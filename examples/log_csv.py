@@ -1,7 +1,7 @@
 """Log raw magnetometer samples to a CSV file on the board's flash, bounded in size.
 
     python examples/log_csv.py [PATH] [MAX_BYTES]     # on the host (simulated board)
-    import examples.log_csv                           # on a board: writes /mag_log.csv
+    from examples.log_csv import log; log()           # on a board: writes /mag_log.csv
 
 Turn the board through figure-8s while it logs; copy the file to the desktop
 (`mpremote cp :mag_log.csv .`) and fit it there:
@@ -10,7 +10,11 @@ Stops when the next row would pass MAX_BYTES (default 16 KB, about 900 rows).
 """
 import sys
 
-from examples.bus import get_bus
+try:
+    from examples.bus import get_bus
+except ImportError:  # run as a script, python examples/X.py: the folder above examples/
+    sys.path.insert(0, sys.path[0] + "/..")
+    from examples.bus import get_bus
 from firmware.detect import detect
 
 

@@ -1,13 +1,17 @@
 """Read raw samples: find the compass chip and print what it measures.
 
-    python examples/read_raw.py [N]      # on the host (simulated GY-271 + GY-521)
-    import examples.read_raw             # on a board
+    python examples/read_raw.py [N]               # on the host (simulated GY-271 + GY-521)
+    from examples.read_raw import read; read()    # on a board
 
 Raw int16 counts in the chip's own axes; counts_per_gauss says the scale (1 G = 100 uT).
 """
 import sys
 
-from examples.bus import get_bus
+try:
+    from examples.bus import get_bus
+except ImportError:  # run as a script, python examples/X.py: the folder above examples/
+    sys.path.insert(0, sys.path[0] + "/..")
+    from examples.bus import get_bus
 from firmware.detect import detect, detect_accel
 
 
