@@ -2,7 +2,10 @@
 
 Serves the repository's web/ (the page) and firmware/ (the Python files the page loads into
 the MicroPython WebAssembly port) on 127.0.0.1 with the standard library's http.server, and
-nothing else of the repository. `/` redirects to `/web/`. The page uses relative URLs only
+nothing else of the repository: the path is decoded before it is judged (resolve()), dot-files,
+folders without an index.html and symlinks leading out answer 404, and a request whose Host
+header does not name this server (DNS rebinding) answers 403 (host_ok()). `/` redirects to
+`/web/`. The page uses relative URLs only
 (`vendor/...`, `../firmware/...`), so any static host that serves the repository's root (or
 at least web/ and firmware/ side by side) works the same.
 
@@ -27,7 +30,9 @@ import json
 import os
 import re
 import shutil
+import stat
 import sys
+import urllib.parse
 
 from host_sim.cli.args import STATUS_OK, STATUS_USAGE, Parser, UsageError, warn
 
@@ -163,7 +168,9 @@ def vendored(root=ROOT):
 
 
 class Handler(http.server.SimpleHTTPRequestHandler):
-    """Static files of web/ and firmware/ only; quiet unless verbose."""
+    """Regular files under web/ and firmware/ only, to the local browser only; quiet unless
+    verbose. docs/web.md, "What it serves, and to whom", states the rules resolve() and
+    host_ok() apply."""
     verbose = False
 
     def __init__(self, request, client_address, server):
@@ -177,31 +184,125 @@ class Handler(http.server.SimpleHTTPRequestHandler):
         self.send_header("Cache-Control", "no-store")  # firmware edits show on reload
         super().end_headers()
 
-    def _allowed(self):
-        p = self.path.split("?", 1)[0].split("#", 1)[0]
-        top = p.lstrip("/").split("/", 1)[0]
-        return top in SERVED
+    def parse_request(self):
+        # http.server turns a leading "//" into "/" before we see the path: keep the target
+        # exactly as the client sent it, so that resolve() judges that.
+        ok = super().parse_request()
+        words = self.requestline.split()
+        self.raw_target = words[1] if ok and len(words) >= 2 else ""
+        return ok
 
-    def do_GET(self):
-        if self.path in ("/", ""):
+    def send_head(self):
+        """Used by do_GET and do_HEAD (SimpleHTTPRequestHandler): answers 403, 302, 404 or
+        the file's headers; returns the open file for a 200, else None. Never a listing."""
+        if not host_ok(self.headers.get_all("Host") or [], self.server.allowed_hosts):
+            self.send_error(403, "only the address this server listens on is answered")
+            return None
+        target, _, query = self.raw_target.split("#", 1)[0].partition("?")
+        query = "?" + query if query else ""    # kept by the redirects (?seed=2, docs/web.md)
+        if target == "/":
             self.send_response(302)
-            self.send_header("Location", "/web/")
+            self.send_header("Location", "/web/" + query)
+            self.send_header("Content-Length", "0")
             self.end_headers()
-            return
-        if not self._allowed():
-            self.send_error(404, "only /web/ and /firmware/ are served")
-            return
-        super().do_GET()
+            return None
+        found = resolve(self.server.root, target)
+        if found is None:
+            self.send_error(404, "only files under /web/ and /firmware/ are served")
+            return None
+        kind, path = found
+        if kind == "redirect":          # a folder with an index.html, asked without its "/"
+            self.send_response(301)
+            self.send_header("Location", path + query)
+            self.send_header("Content-Length", "0")
+            self.end_headers()
+            return None
+        try:
+            f = open(path, "rb")
+            st = os.fstat(f.fileno())
+        except OSError:
+            self.send_error(404, "only files under /web/ and /firmware/ are served")
+            return None
+        if not stat.S_ISREG(st.st_mode):
+            f.close()
+            self.send_error(404, "only files under /web/ and /firmware/ are served")
+            return None
+        self.send_response(200)
+        self.send_header("Content-Type", self.guess_type(path))
+        self.send_header("Content-Length", str(st.st_size))
+        self.send_header("Last-Modified", self.date_time_string(st.st_mtime))
+        self.end_headers()
+        return f
 
-    def do_HEAD(self):
-        if not self._allowed():
-            self.send_error(404)
-            return
-        super().do_HEAD()
+    def list_directory(self, path):     # never reached (send_head above); no listings
+        self.send_error(404)
+        return None
 
     def log_message(self, fmt, *args):
         if self.verbose:
             super().log_message(fmt, *args)
+
+
+def host_ok(hosts, allowed):
+    """True when the request carries exactly one Host header and it names this server
+    (`allowed`: lower-case host:port forms). A page elsewhere that reaches 127.0.0.1 by DNS
+    rebinding sends its own name here, so it is refused."""
+    return len(hosts) == 1 and hosts[0].strip().lower() in allowed
+
+
+def allowed_hosts(host, port):
+    """The Host values a browser sends for this server: 127.0.0.1, localhost and [::1] (and
+    the address it listens on) with the port; without it too on port 80."""
+    names = {"127.0.0.1", "localhost", "[::1]",
+             ("[%s]" % host if ":" in host else host).lower()}
+    out = {"%s:%d" % (n, port) for n in names}
+    if port == 80:
+        out |= names
+    return frozenset(out)
+
+
+def resolve(root, target):
+    """The file a request target names, or None (404). The target is percent-decoded once
+    (strict UTF-8) and then judged as a whole: it must be "/" and segments that are not empty
+    (no "//"), start with no "." (no "..", no dot-files or dot-folders such as .git) and hold
+    no backslash, NUL or other control character; the first segment must be web or firmware.
+    The real path (symlinks followed) must stay inside that folder's real path, its parts
+    starting with no "." either. Returns ("file", real path) or, for a folder, only through
+    its index.html: asked with a trailing "/", ("file", the index's path); without it,
+    ("redirect", the URL with the "/"); no index, None. A file returned may still fail to
+    open or not be a regular file (send_head answers 404 then)."""
+    if not target.startswith("/"):
+        return None
+    try:
+        path = urllib.parse.unquote_to_bytes(target).decode("utf-8")
+    except UnicodeDecodeError:
+        return None
+    parts = path[1:].split("/")
+    trailing = len(parts) > 1 and parts[-1] == ""
+    if trailing:
+        parts.pop()
+    if not parts or parts[0] not in SERVED:
+        return None
+    for p in parts:
+        if (not p or p.startswith(".") or "\\" in p
+                or any(ord(c) < 32 or ord(c) == 127 for c in p)):
+            return None
+    base = os.path.realpath(os.path.join(root, parts[0]))
+    real = os.path.realpath(os.path.join(root, *parts))
+    if real != base and os.path.commonpath([base, real]) != base:
+        return None
+    if any(p.startswith(".") for p in os.path.relpath(real, base).split(os.sep) if p != "."):
+        return None
+    if os.path.isdir(real):
+        index = os.path.join(real, "index.html")
+        if not os.path.isfile(index):
+            return None
+        if trailing:
+            return "file", index
+        return "redirect", urllib.parse.quote("/" + "/".join(parts) + "/")
+    if trailing or not os.path.isfile(real):
+        return None
+    return "file", real
 
 
 class Server(http.server.ThreadingHTTPServer):
@@ -213,6 +314,7 @@ def make_server(port=DEFAULT_PORT, root=ROOT, host="127.0.0.1"):
     web/ and firmware/. OSError when the port is taken."""
     srv = Server((host, port), type("WebHandler", (Handler,), {}))
     srv.root = root
+    srv.allowed_hosts = allowed_hosts(host, srv.server_address[1])
     return srv
 
 
