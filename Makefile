@@ -24,8 +24,8 @@ $(STAMP): requirements.txt
 	@rm -f $(VENV)/.installed-*
 	@touch $@
 
-run: $(STAMP)  ## the compass on the simulated board; writes build/calibration.png
-	$(PY) -m host_sim run
+run: $(STAMP)  ## the compass on the simulated board; writes build/calibration.png and docs/design.md's excerpt of it
+	$(PY) -m host_sim run --update-doc
 
 test: $(STAMP) wasm web tiers postgres  ## the whole test suite on CPython and MicroPython
 	$(PY) -m pytest -q

@@ -260,3 +260,33 @@ def test_bad_usage_exits_2_with_one_line_on_stderr(capsys):
             and word in lines[0], cap.err
     rc, out = run_demo("--help")
     assert rc == 0 and "--chip" in out
+
+
+# ---- docs/design.md quotes `make run`: written by it, checked here ---------------------------
+
+def test_design_md_quotes_what_make_run_prints():
+    from host_sim.cli import run
+    p = subprocess.run([sys.executable, "-m", "host_sim", "run", "--no-plot"], cwd=mp.ROOT,
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    doc = open(run.DOC, encoding="utf-8").read()
+    i, j = doc.index(run.BEGIN), doc.index(run.END) + len(run.END)
+    assert doc[i:j] == run.excerpt(p.stdout), "make run rewrites it: python -m host_sim run " \
+                                              "--update-doc"
+    assert "error max / rms" in doc[i:j] and "Accepted calibration: model 10" in doc[i:j]
+
+
+def test_update_doc_rewrites_the_excerpt_only_for_the_default_world(tmp_path, monkeypatch,
+                                                                    capsys):
+    from host_sim.cli import run
+    doc = tmp_path / "design.md"
+    doc.write_text("intro\n%s\n```\nold figures\n```\n%s\nafter\n" % (run.BEGIN, run.END))
+    monkeypatch.setattr(run, "DOC", str(doc))
+    assert run.main(["--no-plot", "--seed", "2", "--update-doc"]) == 0
+    err = capsys.readouterr().err
+    assert "old figures" in doc.read_text() and "not written" in err and "--seed" in err
+    assert run.main(["--no-plot", "--update-doc"]) == 0
+    out = capsys.readouterr().out
+    text = doc.read_text()
+    assert "old figures" not in text and text.startswith("intro\n") and text.endswith("after\n")
+    assert run.excerpt(out) in text and "excerpt of this run rewritten" in out
