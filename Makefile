@@ -10,7 +10,7 @@ BOARD  ?= rp2040
 PORT   ?= /dev/ttyACM0
 BUILD  := build/$(BOARD)
 
-.PHONY: help run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm wasm test-arm web soak tiers postgres
+.PHONY: help run test fuzz bench bench-smoke deploy mpy package-json clean venv quality-pg wmm wasm test-arm web soak tiers postgres datasets
 
 # make help: every target with one line (the `##` comment after its name)
 help:  ## list the targets
@@ -136,6 +136,11 @@ deploy: mpy  ## copy firmware, board.py, main.py to the board at PORT
 	$(MPREMOTE) fs cp $(BUILD)/board.py :board.py
 	$(MPREMOTE) fs cp $(BUILD)/main.py :main.py
 	$(MPREMOTE) reset
+
+# the real logs whose licences keep them out of the repository (datasets/README.md), pinned by
+# sha256, into build/datasets; DATASETS_FROM=DIR copies them from a folder instead
+datasets:  ## fetch the real logs the repository does not ship into build/datasets (pinned)
+	$(PYTHON) tools/fetch_datasets.py $(if $(DATASETS_FROM),--from $(DATASETS_FROM))
 
 # the board's World Magnetic Model table (committed; docs/field_model.md)
 wmm: $(STAMP)  ## regenerate firmware/wmm2025.bin

@@ -1,7 +1,6 @@
 """`python -m host_sim calibrate` on real-world files: formats, corrupt rows, unusable inputs,
 every option's validation, exit statuses, --force, board counts, --out and its validator,
-the shared datasets, and a few cases under MicroPython."""
-import glob
+the real logs (datasets/README.md), and a few cases under MicroPython."""
 import json
 import os
 import subprocess
@@ -11,9 +10,9 @@ import pytest
 
 from host_sim.cli import calfile
 from host_sim.cli import calibrate as cli
+from host_sim.cli.benchmarks.reference import ALL_LOGS, log_path, meta, missing_reason
 from tests import mp
 
-DATASETS = os.path.join(mp.ROOT, "..", "shared", "datasets")
 # AN4246 Rev 4, worked example 1 (section 6), 0.1 uT counts; tests/test_solve.py checks the
 # solver on it exactly: V = (155.7, -239.1, 45.8) uT, B = 47.2 uT, fit error 0.30 %
 AN4246 = [(1674, -2424, 917), (1403, -2219, 868), (1524, -2304, -6), (1803, -2706, 710),
@@ -420,36 +419,44 @@ def test_sensor_tables_agree_with_the_drivers():
         assert [float(r[0]) for r in calfile.SENSORS[name]["ranges"]] == list(mod._RANGES_G)
 
 
-# ---- the shared datasets ----------------------------------------------------------------------
+# ---- the real logs ----------------------------------------------------------------------------
 
-def dataset_files():
-    return sorted(glob.glob(os.path.join(DATASETS, "*.csv")))
+def need(name):
+    if log_path(name) is None:
+        pytest.skip(missing_reason([name]))
+    return log_path(name)
 
 
-@pytest.mark.skipif(not dataset_files(), reason="../shared/datasets is absent")
-@pytest.mark.parametrize("path", dataset_files(), ids=os.path.basename)
-def test_every_dataset_calibrates_or_is_refused_for_a_reason(path, capsys):
-    with open(path[:-4] + ".json") as f:
-        meta = json.load(f)
+@pytest.mark.parametrize("name", ALL_LOGS)
+def test_every_dataset_calibrates_or_is_refused_for_a_reason(name, capsys):
+    path = need(name)
     argv = [path, "--json"]
-    if meta["units"].startswith("microtesla"):
+    if meta(name)["units"].startswith("microtesla"):
         argv += ["--units", "uT"]                            # enables the 10..90 uT check
     rc, out, err = call(capsys, *argv)
     r = json.loads(out)
-    if "planar" in os.path.basename(path):
+    if "planar" in name:
         assert rc == 1 and r["rejected"] == "planar"
         return
+    if name == "icm20948_ak09916_jremington":
+        # every sample held: its two halves disagree on the hard iron (in float64 too:
+        # tests/test_datasets.py); --force fits it, marked forced
+        assert rc == 1 and r["rejected"] == "inconsistent_samples" and "--skip" in r["hint"]
+        rc, out, err = call(capsys, *argv + ["--force"])
+        r = json.loads(out)
+        assert r["forced"] and r["refusal"] == "inconsistent_samples"
+        assert err.count("\n") == 1 and "warning: forced" in err
+        err = ""  # that one warning, checked
     assert rc == 0 and r["model"] == 10 and r["skipped_rows"] == 0 and err == ""
     assert r["fit_error_x100"] < 1000 and r["coverage_percent"] >= 80
     if "field_ut" in r:
         assert 40 < r["field_ut"] < 60                      # a magnet-free room
 
 
-@pytest.mark.skipif(not dataset_files(), reason="../shared/datasets is absent")
 def test_qmc_dataset_as_board_counts_writes_a_calibration(tmp_path, capsys):
     # The log is raw QMC5883L counts; its field, 1076 counts, is 36 uT at the 8 G range's
     # 3000 counts/G (9 uT at 2 G: refused), so that is the range it was taken at.
-    path = os.path.join(DATASETS, "qmc5883l_tomisuarez_filtered.csv")
+    path = need("qmc5883l_tomisuarez_filtered")
     rc, out, _ = call(capsys, path, "--sensor", "qmc5883l", "--range", "2", "--skip", "3000",
                       "--json", "--separation", "150")
     assert rc == 1 and json.loads(out)["rejected"] == "field_out_of_range"

@@ -947,6 +947,15 @@ def rows(res, derived):
     R.append(("5 logs: sphericity ours/float64, worst", "n/a" if worst is None else
               "%.3f (%s, %s)" % (worst[0], worst[1][:22], worst[2]), "same bits",
               "test tolerance 1.10", verdict(None if worst is None else worst[0] <= 1.10)))
+    from host_sim.cli.benchmarks.accuracy import COMMAND_GOAL
+    cmd = [(e["ratio"], name) for name, e in (acc.get("commands") or {}).items()
+           if isinstance(e, dict) and e.get("ratio") is not None and "refused" not in e]
+    worst = max(cmd) if cmd else None
+    R.append(("5 logs: calibrate at default settings, spread / float64 fit's, worst accepted",
+              "n/a" if worst is None else "%.3f (%s, %d logs)" % (worst[0], worst[1][:22],
+                                                                  len(cmd)), "",
+              "goal <= %.2f" % COMMAND_GOAL, verdict(None if worst is None
+                                                     else worst[0] <= COMMAND_GOAL)))
     for sc, row in (acc.get("headings") or {}).items():
         e = row.get("10") or {}
         r = e.get("ratio_rms")
@@ -1391,6 +1400,17 @@ def splice_block(path, begin, end, section):
     return True
 
 
+def splice_logs(res):
+    """docs/calibration.md's table of the default fit on every log, from this run."""
+    from host_sim.cli.benchmarks import accuracy, reference
+    cmd = (_get(res, "accuracy", "cpython") or {}).get("commands")
+    if not cmd:
+        return False
+    shipped = [n for n in cmd if os.path.exists(os.path.join(reference.SHIPPED, n + ".csv"))]
+    return splice_block(os.path.join(ROOT, "docs", "calibration.md"), accuracy.LOGS_BEGIN,
+                        accuracy.LOGS_END, accuracy.command_section(cmd, shipped))
+
+
 GYRO_BEGIN = "<!-- gyro:begin -->"
 GYRO_END = "<!-- gyro:end -->"
 
@@ -1545,6 +1565,8 @@ def body(opts):
         print("docs/benchmarks.md written")
         if not opts["smoke"] and splice_readme(boards_section(res)):
             print("README.md board table written")
+        if not opts["smoke"] and splice_logs(res):
+            print("docs/calibration.md log table written")
         gs = gyro_section(res)
         if not opts["smoke"] and gs and splice_block(os.path.join(ROOT, "docs", "gyro.md"),
                                                     GYRO_BEGIN, GYRO_END, gs):

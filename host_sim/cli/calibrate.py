@@ -1,13 +1,14 @@
 """`python -m host_sim calibrate FILE.csv [options]`: calibrate a logged magnetometer file offline.
 
-Runs the firmware's own Calibrator (firmware/magcal.py) over the file, so the result is the
-one a board would compute from the same samples (with the desktop's larger buffer), and
-prints it, or writes the calibration file a board loads (--out, host_sim/cli/calfile.py).
+Runs the firmware's own Calibrator (firmware/calibrator.py) over the file, so the result is
+the one a board would compute from the same samples, and prints it, or writes the calibration
+file a board loads (--out, host_sim/cli/calfile.py).
 Also runs under `micropython -m host_sim calibrate ...` (no argparse: host_sim/cli/args.py).
 
 Steps: read the log (host_sim/cli/logfile.py: separators, BOM, header names, corrupt rows
 skipped with a warning) -> choose the conversion into counts (the board's counts when its
-sensor and range are stated, else a power of ten into int16) -> feed the Calibrator -> solve
+sensor and range are stated, else a power of ten into int16) -> feed the Calibrator (the
+desktop keeps every distinct sample; --board-like thins them as a board: desktop_plan) -> solve
 and accept, or refuse (exit 1), or with --force fit without the acceptance checks
 (forced_solve: Calibrator.solve(checks=False)) -> report in the file's units and in counts.
 """
@@ -19,7 +20,11 @@ from host_sim.cli.args import (STATUS_OK, STATUS_REFUSED, Parser, UsageError, de
                                warn)
 from host_sim.cli.args import parse_decimal  # noqa: F401  (its earlier home; tests use it)
 
-DESKTOP_CAPACITY = 1000
+# The desktop holds every distinct sample of a log, up to the most a Calibrator holds
+# (firmware/samples.py MAX_CAPACITY); a board holds 300 (firmware/calibrator.py
+# DEFAULT_CAPACITY) kept apart by its separation rule (--board-like)
+DESKTOP_CAPACITY = 16383
+BOARD_CAPACITY = 300
 COMMAND = "calibrate"
 # --units: file units per gauss (1 G = 100 uT = 1000 mG = 100000 nT)
 UNITS_PER_GAUSS = {"uT": 100, "mG": 1000, "G": 1, "nT": 100000}
@@ -42,6 +47,9 @@ HINTS = {
     "fit_error_high": "the samples are not on the fitted shape: --model 10 for a soft-iron "
                       "ellipsoid, --max-fit-error PCT to allow more, or --force",
     "not_better": "a better calibration is already in force; --force",
+    "inconsistent_samples": "the start and the end of the log disagree (a magnet moved, a "
+                            "motor, a drifting offset): log again away from it, or --skip N "
+                            "to leave the start out; or --force",
 }
 
 
@@ -84,11 +92,18 @@ def _parser():
              help="1-based columns of x, y, z (overrides the header)")
     p.option("--skip", "int", default=0, lo=0, hi=10 ** 9, metavar="N",
              help="ignore the first N data rows (e.g. 3000 still samples)")
-    p.option("--capacity", "int", default=DESKTOP_CAPACITY, lo=12, hi=20000, metavar="N",
-             help="samples the buffer holds (default %d; a board holds 300)" % DESKTOP_CAPACITY)
+    p.option("--board-like", "flag",
+             help="thin the samples as a board does (a %d-sample buffer, its\n"
+                  "separation rule), e.g. to reproduce a board's fit; default:\n"
+                  "every distinct sample of the log" % BOARD_CAPACITY)
+    p.option("--capacity", "int", lo=12, hi=20000, metavar="N",
+             help="samples the buffer holds (default %d, the most a Calibrator\n"
+                  "holds; a longer log is offered every k-th row so none is\n"
+                  "evicted; --board-like: %d, as a board)" % (DESKTOP_CAPACITY, BOARD_CAPACITY))
     p.option("--separation", "int", lo=1, hi=32767, metavar="N",
-             help="counts between kept samples (default: from the sensitivity,\n"
-                  "else from the data's range, as a board does)")
+             help="counts between kept samples (default 1: every distinct\n"
+                  "sample; --board-like: from the sensitivity, else from the\n"
+                  "data's range, as a board does)")
     p.option("--max-fit-error", "decimal", lo="0.01", hi=100, metavar="PCT",
              help="refuse fits with a larger fit error (default 15 %)")
     p.option("--date", _date, metavar="ISO",
@@ -208,6 +223,23 @@ def forced_solve(cal, model):
 
 # ---- run ---------------------------------------------------------------------------------
 
+def desktop_plan(rows, capacity=None, separation=None, board_like=False):
+    """(capacity, separation, step) for a log of `rows` data rows; every step-th row is offered.
+
+    Default, the desktop: separation 1 count, so every distinct sample is held, in a buffer of
+    `capacity` (default DESKTOP_CAPACITY) but no larger than the log; a log of more rows than
+    that is offered every step-th row, step = ceil(rows / capacity): nothing is evicted and
+    the rows keep the log's own weighting in time (the float64 fit of every row weights them
+    so too; tests/test_datasets.py holds the fits together).
+    board_like: a board's buffer (BOARD_CAPACITY unless `capacity`) and separation rule (None:
+    from the sensitivity, else from the data's range), every row offered."""
+    if board_like:
+        return capacity or BOARD_CAPACITY, separation, 1
+    cap = capacity or DESKTOP_CAPACITY
+    step = max(1, -(-rows // cap))
+    return max(12, min(cap, -(-rows // step))), 1 if separation is None else separation, step
+
+
 def _model(text):
     return text if text in ("minmax", "auto") else int(text)
 
@@ -235,15 +267,17 @@ def run(opts):
         raise UsageError("%s: no data rows%s" % (path, " after the header (line %d)"
                                                  % log.header_line if log.header_line else ""))
     num, den, cpg, p = conversion(opts, board, mag, path)
+    capacity, separation, step = desktop_plan(log.rows_read, opts["capacity"],
+                                              opts["separation"], opts["board_like"])
     mfe = opts["max_fit_error"]
     mfe = DEFAULT_MAX_FIT_ERROR if mfe is None else logfile.scale_value(mfe[0], mfe[1], 2)
     model = _model(opts["model"])
     try:
-        cal = Calibrator(model=model, capacity=opts["capacity"], separation=opts["separation"],
+        cal = Calibrator(model=model, capacity=capacity, separation=separation,
                          counts_per_gauss=cpg, max_fit_error=mfe,
                          overflow=-4096 if board.sensor == "hmc5883l" else None)
     except MemoryError:
-        raise UsageError("--capacity %d: out of memory; give a smaller one" % opts["capacity"])
+        raise UsageError("--capacity %d: out of memory; give a smaller one" % capacity)
     olo, ohi = board.output
     used = 0
     markers = 0  # samples holding the HMC5883L's overflow marker: dropped, not "corrupt"
@@ -265,11 +299,13 @@ def run(opts):
                 " (%s at %s G)" % (board.sensor, board.range_gauss) if board.sensor else ""))
             continue
         used += 1
-        cal.add(v[0], v[1], v[2])
+        if (used - 1) % step == 0:
+            cal.add(v[0], v[1], v[2])
     info = {"rows": log.rows_read + log.skipped, "used": used, "railed": cal.railed + markers,
             "skipped": log.skipped,
             "warnings": log.warnings, "num": num, "den": den, "p": p, "cpg": cpg,
-            "held": cal.count, "separation": cal.separation, "board": board, "log": log}
+            "held": cal.count, "separation": cal.separation, "step": step, "board": board,
+            "log": log}
     if used == 0:
         _print_warnings(log)
         raise UsageError("%s: no row within %d..%d counts after conversion (x %s / %s): check "
@@ -409,8 +445,10 @@ def _print_text(r, c, info, opts):
     if "field_ut" in r:
         print("               %.1f uT at %d counts/G" % (r["field_ut"], info["cpg"]))
     print("fit error      %.2f %%" % r["fit_error_percent"])
-    print("samples        %d held of %d rows used (%d rows, %d skipped; separation %d counts; "
+    print("samples        %d held of %d rows used (%d rows, %d skipped; %sseparation %d counts; "
           "1 file unit = %.6g counts)" % (c.samples, info["used"], r["rows"], r["skipped_rows"],
+                                           "every %d rows offered; " % info["step"]
+                                           if info["step"] > 1 else "",
                                            info["separation"], r["scale"]))
     print("coverage       %d %%" % c.coverage)
     if b.sensor:

@@ -3,9 +3,13 @@
 The firmware's results are the same bits on MicroPython (tests/scenarios/calibrator_parity.py,
 compass_parity.py), so CPython runs it here next to numpy.
 
-Logs (../shared/datasets): for each log and model, sphericity std(|out|) / mean(|out|) of our
-calibration against the float64 fit of the same model on the same rows - the reading,
-scaling and reference of host_sim/cli/benchmarks/reference.py (shared with the tests).
+Logs (datasets/, and build/datasets after `make datasets`): for each log and model, sphericity
+std(|out|) / mean(|out|) of our calibration against the float64 fit of the same model on the
+same rows - the reading, scaling and reference of host_sim/cli/benchmarks/reference.py
+(shared with the tests). And `python -m host_sim calibrate LOG` at its default settings
+against a float64 fit of every row (reference.default_command): the table of
+docs/calibration.md between LOGS_BEGIN and LOGS_END (command_section), which `make bench`
+writes and tests/test_datasets.py checks against a fresh run.
 
 Simulated headings: a simulated GY-271 + GY-521 with known hard and soft iron does one
 noisy 30 s figure-8 at 200 Hz; our Calibrator (board defaults: 300 samples, QMC5883L
@@ -34,7 +38,7 @@ def logs(smoke):
     from firmware.errors import CalibrationRejected
     names = [n for n in td.LOGS]
     if smoke:
-        names = [n for n in names if n == "lsm9ds1_jremington"] or names[:1]
+        names = [n for n in names if n == SMOKE_LOG] or names[:1]
     out = {}
     for name in names:
         row = {}
@@ -48,6 +52,44 @@ def logs(smoke):
             row[str(model)] = {"ours": s_ours, "float64": s_ref, "ratio": s_ours / s_ref}
         out[name] = row
     return out
+
+
+def commands(smoke):
+    from host_sim.cli.benchmarks import reference as td
+    names = [n for n in td.LOGS if not smoke or n == SMOKE_LOG]
+    return {name: td.default_command(name) for name in names}
+
+
+SMOKE_LOG = "unknown_ellipsoid_fit_python_bazhin"   # small, and shipped
+LOGS_BEGIN = "<!-- logs:begin -->"
+LOGS_END = "<!-- logs:end -->"
+COMMAND_GOAL = 1.05   # the default fit's spread at most 5 % above the float64 fit's
+
+
+def command_row(name, e, shipped):
+    """One line of command_section's table."""
+    where = "datasets/" if shipped else "`make datasets`"
+    if e.get("ours") is None:
+        return "| %s | %s | refused: %s, even with --force | | | | |" % (
+            name, where, e.get("refused"))
+    note = "" if "refused" not in e else " (refused: %s; the fit --force gives)" % e["refused"]
+    return "| %s%s | %s | %d | %d | %.3f %% | %.3f %% | %.3f |" % (
+        name, note, where, e["rows"], e["held"], 100 * e["ours"], 100 * e["float64"],
+        e["ratio"])
+
+
+def command_section(cmd, shipped):
+    """docs/calibration.md's table of the default fit on every log (`cmd`: commands())."""
+    out = [LOGS_BEGIN,
+           "| log | where | rows | samples held | spread, default fit | spread, float64 fit "
+           "| ratio |", "|---|---|---|---|---|---|---|"]
+    out += [command_row(n, cmd[n], n in shipped) for n in sorted(cmd)]
+    out += ["", "*Written by `make bench` (host_sim/cli/benchmarks/accuracy.py) from the logs "
+            "here when it ran; tests/test_datasets.py runs each log again and compares. Spread: "
+            "std(|corrected|) / mean(|corrected|) over every row of the file; float64 fit: "
+            "the same 10-element model fitted to every row in float64 "
+            "(host_sim/cli/benchmarks/reference.py).*", LOGS_END]
+    return "\n".join(out)
 
 
 def grid(smoke):
@@ -162,7 +204,8 @@ def main():
     res = {"interpreter": common.interpreter()}
     try:
         res["logs"] = logs(smoke)
-    except ImportError as e:  # no numpy, or no datasets directory
+        res["commands"] = commands(smoke)
+    except ImportError as e:  # no numpy
         res["logs"] = {"skipped": str(e)}
     res["headings"] = headings(smoke)
     common.emit(res)

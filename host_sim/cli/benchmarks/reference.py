@@ -1,18 +1,55 @@
 """Float64 references for the benchmarks and the tests: the same algebraic model fitted with
-numpy (least squares on the design matrix, not the normal equations), and the real logs of
-../shared/datasets fitted both ways. Host only (numpy)."""
+numpy (least squares on the design matrix, not the normal equations), and the real logs
+(datasets/README.md) fitted both ways. Host only (numpy).
+
+The logs: those the repository ships, in datasets/, and those whose licences keep them out
+of it, which `make datasets` fetches pinned into build/datasets (tools/fetch_datasets.py;
+their provenance is in datasets/fetched/). LOGS is what is here, MISSING what is not."""
+import json
 import os
 
 import numpy as np
 
 from firmware.calibrator import Calibrator
-from host_sim.cli.calibrate import DESKTOP_CAPACITY, choose_scale, scaled_rows
+from host_sim.cli.calibrate import choose_scale, desktop_plan, scaled_rows
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(
     __file__)))))
-DATASETS = os.path.normpath(os.path.join(ROOT, "..", "shared", "datasets"))
-HAVE = os.path.isdir(DATASETS)
-LOGS = sorted(f[:-4] for f in os.listdir(DATASETS) if f.endswith(".csv")) if HAVE else []
+SHIPPED = os.path.join(ROOT, "datasets")
+FETCHED = os.path.join(ROOT, "build", "datasets")
+FETCH = "make datasets"
+
+
+def _names(folder, ext):
+    try:
+        return set(f[:-len(ext)] for f in os.listdir(folder) if f.endswith(ext))
+    except OSError:
+        return set()
+
+
+def log_path(name):
+    """The log's CSV (its provenance NAME.json beside it), or None when it is not here."""
+    for folder in (SHIPPED, FETCHED):
+        path = os.path.join(folder, name + ".csv")
+        if os.path.exists(path) and os.path.exists(path[:-4] + ".json"):
+            return path
+    return None
+
+
+def meta(name):
+    with open(log_path(name)[:-4] + ".json") as f:
+        return json.load(f)
+
+
+def missing_reason(names):
+    """A skip message for logs that are not here."""
+    return "%s not in the repository's clone: `%s` fetches %s (datasets/README.md)" % (
+        ", ".join(names), FETCH, "it" if len(names) == 1 else "them")
+
+
+ALL_LOGS = sorted(_names(SHIPPED, ".csv") | _names(os.path.join(SHIPPED, "fetched"), ".json"))
+LOGS = [n for n in ALL_LOGS if log_path(n)]
+MISSING = [n for n in ALL_LOGS if not log_path(n)]
 PLANAR = "hmc5883l_nliaudat_windvane_planar"
 STILL_ROWS = {"qmc5883l_tomisuarez_filtered": 3000, "qmc5883l_tomisuarez_noisy": 3000}
 
@@ -62,13 +99,16 @@ def sphericity(m):
 
 
 def load(name):
-    """(calibrator filled with every row, int rows, evaluated float rows, scale power)."""
+    """(calibrator filled as the calibrate command fills it at its default settings
+    (desktop_plan), int rows, evaluated float rows, scale power)."""
     if name not in _cache:
-        path = os.path.join(DATASETS, name + ".csv")
+        path = log_path(name)
         p, _ = choose_scale(path)
         rows = np.array(list(scaled_rows(path, p)), dtype=np.int64)
-        cal = Calibrator(model=10, capacity=DESKTOP_CAPACITY, max_fit_error=10000)
-        for x, y, z in rows.tolist():
+        capacity, separation, step = desktop_plan(len(rows))
+        cal = Calibrator(model=10, capacity=capacity, separation=separation,
+                         max_fit_error=10000)
+        for x, y, z in rows[::step].tolist():
             cal.add(x, y, z)
         data = np.genfromtxt(path, delimiter=",", names=True)
         floats = np.c_[data["mx"], data["my"], data["mz"]]
@@ -79,7 +119,7 @@ def load(name):
 
 def ours(name, model):
     cal, rows, _, _ = load(name)
-    c = cal.solve(model=model, accept=False)
+    c = cal.solve(model=model, accept=False, checks=False)   # the fit, whatever acceptance says
     out = np.zeros_like(rows)
     buf = [0, 0, 0]
     for i, r in enumerate(rows.tolist()):
@@ -96,3 +136,32 @@ def reference(name, model):
         return sphericity((f - (hi + lo) / 2) * (h.mean() / h))    # the min/max article
     v, invw, _ = numpy_fit(f, model)
     return sphericity((f - v) @ invw.T)
+
+
+def default_command(name):
+    """`python -m host_sim calibrate LOG` at its default settings (model 10, every distinct
+    sample: calibrate.desktop_plan) against a float64 fit of the same model to every row:
+    {"ours", "float64", "ratio"} - the corrected-radius spreads std(|out|) / mean(|out|)
+    over every row of the file - and "refused" (the reason) when the command refuses the
+    log, whose figures are then those of the fit --force gives. None when not even --force
+    fits (the planar log)."""
+    from host_sim.cli import calibrate
+    path = log_path(name)
+    c, rej, info = calibrate.run(calibrate._parser().parse([path, "--force"]))
+    if c is None:
+        return {"refused": rej.reason, "forced": None}
+    rows = np.array(list(scaled_rows(path, info["p"])), dtype=np.int64)
+    out = np.zeros_like(rows)
+    buf = [0, 0, 0]
+    for i, r in enumerate(rows.tolist()):
+        c.correct(r, buf)
+        out[i] = buf
+    data = np.genfromtxt(path, delimiter=",", names=True)
+    f = np.c_[data["mx"], data["my"], data["mz"]]
+    v, invw, _ = numpy_fit(f, 10)
+    ours, ref = sphericity(out), sphericity((f - v) @ invw.T)
+    res = {"ours": ours, "float64": ref, "ratio": ours / ref, "held": c.samples,
+           "rows": len(rows)}
+    if info.get("forced") is not None:
+        res["refused"] = info["forced"].reason
+    return res
