@@ -63,3 +63,90 @@ def test_readme_and_docs_send_no_one_to_a_folder_outside_the_repository():
             assert not outside.search(line), "%s:%d: %s" % (path, n, line.strip())
             for m in re.finditer(r"((?:\.\./)+)", line):
                 assert m.group(1).count("../") <= up, "%s:%d: %s" % (path, n, line.strip())
+
+
+# ---- links and anchors: every relative link in README.md and docs/*.md resolves --------------
+# A link resolves against the folder of the file that holds it (as GitHub renders it); an
+# `#anchor` names a heading of the target by GitHub's slug: lower case, characters other than
+# letters, digits, spaces, '-' and '_' dropped, spaces to '-', a repeated heading gets -1, -2.
+# Links inside code (fenced blocks, `spans`) are text, not links.
+
+_FENCE = re.compile(r"^(```|~~~).*?^\1", re.M | re.S)
+_LINK = re.compile(r"\]\(([^)\s]+)(?:\s+\"[^\"]*\")?\)")
+
+
+def _doc_files():
+    return [os.path.join(ROOT, "README.md")] + sorted(glob.glob(os.path.join(ROOT, "docs",
+                                                                            "*.md")))
+
+
+def slug(heading):
+    """GitHub's anchor for a heading's text."""
+    h = re.sub(r"\[([^\]]*)\]\([^)]*\)", r"\1", heading).strip().lower()
+    return "".join(c for c in h if c.isalnum() or c in " -_").replace(" ", "-")
+
+
+def anchors(path):
+    """Every anchor of a Markdown file: its headings' slugs, and <a name/id="..."> tags."""
+    text = _FENCE.sub("", open(path, encoding="utf-8").read())
+    seen, out = {}, set()
+    for m in re.finditer(r"^#{1,6}\s+(.*?)\s*#*\s*$", text, re.M):
+        s = slug(m.group(1))
+        n = seen.get(s, 0)
+        out.add(s if n == 0 else "%s-%d" % (s, n))
+        seen[s] = n + 1
+    out.update(re.findall(r'<a\s+(?:name|id)="([^"]+)"', text))
+    return out
+
+
+def links(path):
+    """(target, line number) of every relative link in a Markdown file, outside code."""
+    text = open(path, encoding="utf-8").read()
+    # blank out code, keeping the line count, so line numbers stay right
+    text = _FENCE.sub(lambda m: "\n" * m.group(0).count("\n"), text)
+    text = re.sub(r"`[^`\n]*`", "", text)
+    for m in _LINK.finditer(text):
+        target = m.group(1)
+        if not re.match(r"[a-zA-Z][a-zA-Z0-9+.-]*:", target):   # http:, https:, mailto:
+            yield target, text.count("\n", 0, m.start()) + 1
+
+
+def dead_links(files):
+    dead, n = [], 0
+    for f in files:
+        for target, line in links(f):
+            n += 1
+            where = "%s:%d: %s" % (os.path.relpath(f, ROOT), line, target)
+            path, _, frag = target.partition("#")
+            full = os.path.normpath(os.path.join(os.path.dirname(f), path)) if path else f
+            if not os.path.exists(full):
+                dead.append(where + " (no such file: %s)" % os.path.relpath(full, ROOT))
+            elif frag and full.endswith(".md") and frag not in anchors(full):
+                dead.append(where + " (no heading with that anchor in %s)"
+                            % os.path.relpath(full, ROOT))
+    return n, dead
+
+
+def test_github_slugs():
+    assert slug("Offline calibration of a log (`python -m host_sim calibrate`)") == \
+        "offline-calibration-of-a-log-python--m-host_sim-calibrate"
+    assert slug("Storage (`firmware/store.py`, `firmware/slots.py`)") == \
+        "storage-firmwarestorepy-firmwareslotspy"
+    assert slug("`make run`: the story on the simulated board") == \
+        "make-run-the-story-on-the-simulated-board"
+
+
+def test_the_link_check_finds_a_dead_link_and_a_dead_anchor(tmp_path):
+    (tmp_path / "docs").mkdir()
+    a = tmp_path / "docs" / "a.md"
+    (tmp_path / "docs" / "b.md").write_text("# Title\n\n## Second part (`x.py`)\n")
+    a.write_text("[ok](b.md#second-part-xpy) [self](#top) [gone](docs/b.md) "
+                 "[bad](b.md#nothing) `[code](nowhere.md)` [web](https://example.com)\n\n# Top\n")
+    n, dead = dead_links([str(a)])
+    assert n == 4 and len(dead) == 2
+    assert "docs/b.md (no such file" in dead[0] and "b.md#nothing (no heading" in dead[1]
+
+
+def test_every_link_and_anchor_in_readme_and_docs_resolves():
+    n, dead = dead_links(_doc_files())
+    assert n >= 50 and not dead, "\n".join(dead)
