@@ -170,3 +170,211 @@ def test_hmc5883l_overflow_markers_are_dropped_not_a_singular_fit(tmp_path, caps
     out, err = capsys.readouterr()
     r = json.loads(out)
     assert abs(r["offset"][0] - 120) < 5 and "40 sample(s) at the sensor's rails dropped" in err
+
+
+# ---- what a newcomer types: one line on stderr saying what to do, the documented status -----
+# Subprocesses, as a user runs them: no traceback ever, errors on one line.
+
+import os
+import subprocess
+import sys
+
+
+def cli_run(*argv, micro=False):
+    exe = [mp.MICROPYTHON] if micro else [sys.executable]
+    p = subprocess.run(exe + ["-m", "host_sim"] + [str(a) for a in argv], cwd=mp.ROOT,
+                       env=mp._env(micro), capture_output=True, text=True, timeout=300)
+    assert "Traceback" not in p.stderr and "Traceback" not in p.stdout, p.stderr
+    return p.returncode, p.stdout, p.stderr
+
+
+def one_error_line(err):
+    lines = err.splitlines()
+    assert len(lines) == 1 and ": error: " in lines[0], err
+    return lines[0]
+
+
+def qmc_log(tmp_path, n=600, name="qmc.csv", comment=True):
+    """A QMC5883L log at 2 G: 12000 counts/G, 50 uT = 6000 counts around hard iron of 4800,
+    -3600, 3000 counts (the simulated GY-271's), as examples/log_csv.py writes it."""
+    rng = np.random.default_rng(5)
+    u = rng.normal(size=(n, 3))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    pts = np.round(u * 6000 + (4800, -3600, 3000) + rng.normal(scale=3, size=u.shape))
+    p = tmp_path / name
+    head = "# qmc5883l range_code 0 counts_per_gauss 12000\n" if comment else ""
+    p.write_text(head + "mx,my,mz\n" + "".join("%d,%d,%d\n" % tuple(r) for r in pts))
+    return str(p)
+
+
+def test_capacity_is_bounded_by_what_the_calibrator_holds(tmp_path):
+    from firmware.samples import MAX_CAPACITY
+    p = qmc_log(tmp_path)
+    rc, out, err = cli_run("calibrate", p, "--capacity", MAX_CAPACITY + 1)
+    line = one_error_line(err)
+    assert rc == 2 and out == "" and "--capacity" in line and "..%d" % MAX_CAPACITY in line
+    rc, out, err = cli_run("calibrate", p, "--capacity", MAX_CAPACITY, "--json")
+    assert rc == 0, err
+
+
+def test_a_log_of_another_chip_is_counted_once_and_the_warning_says_which(tmp_path):
+    p = qmc_log(tmp_path)
+    rc, out, err = cli_run("calibrate", p, "--sensor", "hmc5883l", "--json")
+    r = json.loads(out)
+    assert rc == 1 and r["rows"] == 600 and r["skipped_rows"] > 500   # not 1176 rows
+    note = [w for w in r["warnings"] if "outside hmc5883l's output" in w]
+    assert len(note) == 1 and "--sensor qmc5883l" in note[0], r["warnings"]
+    assert "log more samples" not in r["hint"] and "--sensor" in r["hint"]
+    assert "outside hmc5883l's output" in err and "refused" in err.splitlines()[-1]
+    rc, out, err = cli_run("calibrate", p, "--sensor", "hmc5883l")
+    assert rc == 1 and "  600 rows (%d skipped)" % r["skipped_rows"] in out
+    # no comment naming the chip: the int16 counts still point at the QMC chips
+    p = qmc_log(tmp_path, name="bare.csv", comment=False)
+    rc, out, _ = cli_run("calibrate", p, "--sensor", "hmc5883l", "--json")
+    assert rc == 1 and any("--sensor qmc5883l or qmc5883p" in w
+                           for w in json.loads(out)["warnings"])
+    # what the warning says works
+    rc, out, err = cli_run("calibrate", p, "--sensor", "qmc5883l", "--json")
+    assert rc == 0 and json.loads(out)["warnings"] == [] and err == ""
+
+
+def test_every_row_outside_the_chip_is_one_line_saying_what_to_give(tmp_path):
+    p = tmp_path / "far.csv"
+    p.write_text("mx,my,mz\n" + "".join("%d,%d,%d\n" % (9000 + k, 5000, -4000)
+                                        for k in range(50)))
+    rc, out, err = cli_run("calibrate", str(p), "--sensor", "hmc5883l")
+    line = one_error_line(err)
+    assert rc == 2 and "no row within -2048..2047" in line and "--sensor qmc5883l" in line
+
+
+def test_a_labelled_log_is_read_with_the_columns_the_error_names(tmp_path):
+    rng = np.random.default_rng(2)
+    u = rng.normal(size=(400, 3))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    pts = np.round(u * 500 + (34, -292, 420))
+    p = tmp_path / "labelled.txt"
+    p.write_text("".join("Mx %d My %d Mz %d\n" % tuple(r) for r in pts))
+    rc, out, err = cli_run("calibrate", str(p))
+    line = one_error_line(err)
+    assert rc == 2 and "--columns 2,4,6" in line
+    rc, out, err = cli_run("calibrate", str(p), "--columns", "2,4,6", "--json")
+    r = json.loads(out)
+    assert rc == 0 and r["rows"] == 400 and np.allclose(r["offset"], (34, -292, 420), atol=3)
+
+
+UNIT_SPELLINGS = {"uT": ("uT", "\u00b5T", "\u03bcT", "ut", "UT", "microtesla", "Microtesla"),
+                  "mG": ("mG", "mg", "milligauss"), "G": ("G", "g", "gauss", "Gauss"),
+                  "nT": ("nT", "nt", "nanotesla"), "counts": ("counts", "COUNTS", "raw")}
+
+
+@pytest.mark.parametrize("unit", sorted(UNIT_SPELLINGS))
+def test_units_are_read_in_every_spelling_the_docs_use(tmp_path, unit):
+    p = sphere_csv(tmp_path, n=500)          # decimal values around 48
+    res = set()
+    for spelling in UNIT_SPELLINGS[unit]:
+        rc, out, err = cli_run("calibrate", p, "--units", spelling, "--json", "--force",
+                               "--date", "2025-01-02T03:04:05Z")
+        assert rc == 0, (spelling, err)
+        r = json.loads(out)
+        res.add(json.dumps([r["invw_q15"], r["offset_counts"], r.get("field_ut")]))
+    assert len(res) == 1
+    rc, out, err = cli_run("calibrate", p, "--units", "furlongs")
+    line = one_error_line(err)
+    assert rc == 2 and "microtesla" in line and "gauss" in line
+
+
+def test_sensor_names_in_any_case_and_breakouts_by_their_name(tmp_path):
+    from boards.breakouts import BREAKOUTS
+    p = qmc_log(tmp_path)
+    base = ["calibrate", p, "--json", "--date", "2025-01-02T03:04:05Z"]
+    rc, out, _ = cli_run(*(base + ["--sensor", "qmc5883l"]))
+    ref = json.loads(out)
+    for name in ("QMC5883L", "Qmc5883l", "qmc-5883l", "gy271", "GY-271", "gy_271"):
+        rc, out, err = cli_run(*(base + ["--sensor", name]))
+        r = json.loads(out)
+        assert rc == 0 and r["sensor"] == "qmc5883l" and r["invw_q15"] == ref["invw_q15"], name
+        if name.lower().startswith("gy"):  # the breakout's other chip is named
+            assert "qmc5883p" in err and any("qmc5883p" in w for w in r["warnings"])
+        else:
+            assert err == ""
+    for name in BREAKOUTS:                 # every breakout boards/breakouts.py knows
+        for spelling in (name, name.upper(), name[:2] + "-" + name[2:]):
+            rc, out, err = cli_run("calibrate", p, "--sensor", spelling, "--json")
+            assert rc in (0, 1) and json.loads(out), (spelling, err)
+    for name, chip in (("gy273", "hmc5883l"), ("GY-87", "hmc5883l")):
+        rc, out, err = cli_run(*(base + ["--sensor", name]))
+        assert '"sensor": "%s"' % chip in out or "%s's output" % chip in out, (name, out)
+
+
+@pytest.mark.parametrize("chip", ["lsm303", "LIS3MDL", "ak09916", "bmm150", "mmc5883"])
+def test_an_unsupported_chip_points_at_the_generic_path_which_fits_it(tmp_path, chip):
+    p = sphere_csv(tmp_path, n=600)          # a log in uT of some chip
+    rc, out, err = cli_run("calibrate", p, "--sensor", chip)
+    line = one_error_line(err)
+    assert rc == 2 and out == "" and "leave out --sensor" in line and "--units" in line
+    rc, out, err = cli_run("calibrate", p, "--units", "uT", "--json")   # what it says
+    r = json.loads(out)
+    assert rc == 0 and abs(r["field"] - 48.0) < 0.1 and r["field_ut"] > 40
+
+
+def test_an_accelerometer_breakout_is_no_magnetometer(tmp_path):
+    rc, out, err = cli_run("calibrate", qmc_log(tmp_path), "--sensor", "GY-521")
+    line = one_error_line(err)
+    assert rc == 2 and "MPU6050" in line and "no magnetometer" in line
+
+
+def test_the_new_spellings_under_micropython(tmp_path):
+    p = qmc_log(tmp_path)
+    for argv in (["--sensor", "GY-271"], ["--units", "\u00b5T", "--force"]):
+        rc, out, err = cli_run("calibrate", p, "--json", *argv, micro=True)
+        assert rc == 0, err
+    rc, out, err = cli_run("calibrate", p, "--sensor", "lsm303", micro=True)
+    assert rc == 2 and "leave out --sensor" in one_error_line(err)
+
+
+# ---- the runner: --help describes each command; nothing escapes as a traceback ---------------
+
+def test_top_level_help_describes_every_command_in_a_line():
+    from host_sim import __main__ as runner
+    rc, out, err = cli_run("--help")
+    assert rc == 0 and err == ""
+    lines = out.splitlines()
+    described = {}
+    for cmd in runner._COMMANDS:
+        mine = [ln for ln in lines if ln.split()[:1] == [cmd]]
+        assert len(mine) == 1 and len(mine[0].split()) >= 5, (cmd, out)
+        described[cmd] = mine[0]
+    assert described["run"] != described["demo"]
+    assert "make run" in described["run"] and "--chip" in described["demo"]
+    assert "exit status" in out and "3 internal error" in out
+    rc, out, err = cli_run()
+    assert rc == 2 and out == "" and "usage" in err
+
+
+@pytest.mark.parametrize("cmd", ["run", "calibrate", "demo", "bench", "quality", "wmm", "field",
+                                 "web", "soak", "serve"])
+def test_bad_usage_of_every_command_is_one_line_exit_2(cmd):
+    rc, out, err = cli_run(cmd, "--no-such-option")
+    line = one_error_line(err)
+    assert rc == 2 and line.startswith("host_sim %s: error: " % cmd) and out == ""
+
+
+def test_the_last_resort_names_the_problem_in_one_line(monkeypatch, capsys):
+    from host_sim import __main__ as runner
+    from host_sim.cli import calibrate
+
+    def boom(opts):
+        raise RuntimeError("an invariant broke\nsecond line")
+    monkeypatch.setattr(calibrate, "body", boom)
+    assert runner.main(["calibrate", "x.csv"]) == 3
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "host_sim calibrate: internal error: RuntimeError: an " \
+                                   "invariant broke second line" in err
+
+    def unreadable(opts):
+        raise PermissionError(13, "Permission denied")
+    monkeypatch.setattr(calibrate, "body", unreadable)
+    assert runner.main(["calibrate", "x.csv"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("host_sim calibrate: error: ")
+    assert runner.main(["nonsense"]) == 2 and capsys.readouterr().err.count("\n") == 1

@@ -16,8 +16,9 @@ whatever it looks like; `--name=value` works too, and `--` ends the options.
 
 Errors: parse() raises UsageError naming the option and the value; main() prints it as ONE
 line, `host_sim <command>: error: <message>`, on stderr and returns 2 (the conventional usage
-status; 0 done, 1 refused). `-h` / `--help` prints help_text(), generated from the
-declarations, on stdout and returns 0.
+status; 0 done, 1 refused; 3 an internal error, from host_sim/__main__.py's last resort, which
+also turns any other exception into one line). `-h` / `--help` prints help_text(), generated
+from the declarations, on stdout and returns 0.
 """
 import sys
 

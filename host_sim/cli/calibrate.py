@@ -15,7 +15,7 @@ and accept, or refuse (exit 1), or with --force fit without the acceptance check
 import json
 import sys
 
-from host_sim.cli import calfile, logfile
+from host_sim.cli import calfile, calopts, logfile
 from host_sim.cli.args import (STATUS_OK, STATUS_REFUSED, Parser, UsageError, decimal_text,
                                warn)
 from host_sim.cli.args import parse_decimal  # noqa: F401  (its earlier home; tests use it)
@@ -72,9 +72,11 @@ def _parser():
     p.option("--force", "flag",
              help="fit even when acceptance refuses (too few samples, planar,\n"
                   "fit error...): the result says forced and why; exit 0")
-    p.option("--sensor", "choice", choices=calfile.SENSOR_NAMES, metavar="CHIP",
-             help="the board's magnetometer: {choices}; the file is\n"
-                  "then in its counts (or --units) and V, B are the board's")
+    p.option("--sensor", calopts.sensor, metavar="CHIP",
+             help="the board's magnetometer: qmc5883l, hmc5883l, qmc5883p, or\n"
+                  "its breakout gy271, gy273, gy87 (any case, '-' ignored); the\n"
+                  "file is then in its counts (or --units) and V, B are the\n"
+                  "board's. Another chip's log: no --sensor, --units or --scale")
     p.option("--range", "str", metavar="G",
              help="its full scale in gauss (qmc5883l 2|8, qmc5883p 30|12|8|2,\n"
                   "hmc5883l 0.88|1.3|1.9|2.5|4.0|4.7|5.6|8.1; default: the\n"
@@ -82,9 +84,11 @@ def _parser():
     p.option("--counts-per-gauss", "int", lo=1, hi=100000, metavar="N",
              help="the board's sensitivity (instead of --sensor/--range):\n"
                   "enables the 10..90 uT field check")
-    p.option("--units", "choice", choices=UNITS, metavar="U",
-             help="the file's units: {choices}; uT/mG/G/nT files are\n"
-                  "converted to the board's counts (or checked against 10..90 uT)")
+    p.option("--units", calopts.units, metavar="U",
+             help="the file's units: counts, uT, mG, G, nT (any case; with a\n"
+                  "micro sign, microtesla, gauss, milligauss, nanotesla too);\n"
+                  "uT/mG/G/nT files are converted to the board's counts (or\n"
+                  "checked against 10..90 uT)")
     p.option("--scale", "decimal", lo="0.000001", hi=1000000, metavar="K",
              help="counts per file unit, instead of --units (e.g. 6.6667 for\n"
                   "an AK09916 log in uT: 0.15 uT per count)")
@@ -96,7 +100,7 @@ def _parser():
              help="thin the samples as a board does (a %d-sample buffer, its\n"
                   "separation rule), e.g. to reproduce a board's fit; default:\n"
                   "every distinct sample of the log" % BOARD_CAPACITY)
-    p.option("--capacity", "int", lo=12, hi=20000, metavar="N",
+    p.option("--capacity", "int", lo=12, hi=calopts.MAX_CAPACITY, metavar="N",
              help="samples the buffer holds (default %d, the most a Calibrator\n"
                   "holds; a longer log is offered every k-th row so none is\n"
                   "evicted; --board-like: %d, as a board)" % (DESKTOP_CAPACITY, BOARD_CAPACITY))
@@ -132,8 +136,14 @@ fit_error_x100, fit_error_percent, samples_used, coverage_percent, date, rows, s
 forced, refusal, warnings, and sensor, range_gauss, range_code, counts_per_gauss, field_ut
 when known; after a refusal {"rejected", "detail", "hint", rows, samples_held}.
 
+--sensor takes a chip or its breakout in any case (GY-271 is read as its QMC5883L, with a
+warning naming the other chip it may carry). A log of a chip the firmware does not drive
+(LSM303, LIS3MDL, AK09916, ...) is fitted without --sensor: give its units (--units uT) or
+--scale; the result is in the file's units (--out needs a supported chip).
+
 exit status: 0 calibrated (or forced); 1 the data was read but the calibration was refused
-(the reason and what to try are printed); 2 bad usage or unreadable input."""
+(the reason and what to try are printed); 2 bad usage or unreadable input; 3 an internal
+error (a bug; one line on stderr, please report it)."""
 
 
 # ---- the board and the conversion --------------------------------------------------------
@@ -142,7 +152,8 @@ class Board:
     """What the options say about the target: sensor, range, counts per gauss (or None)."""
 
     def __init__(self, opts):
-        self.sensor = opts["sensor"]
+        s = opts["sensor"]  # (chip, note): calopts.sensor; a breakout's name says which chip
+        self.sensor, self.note = (s, None) if s is None or isinstance(s, str) else s
         self.range_gauss = None
         self.range_code = None
         self.cpg = opts["counts_per_gauss"]
@@ -260,8 +271,13 @@ def run(opts):
     if log.rows_read == 0:
         if log.skipped:
             ln, msg = log.warnings[0]
-            raise UsageError("%s: no valid data row (%d corrupt; line %d: %s)"
-                             % (path, log.skipped, ln, msg))
+            vals = None
+            if log.names is not None and opts["columns"] is None:
+                vals = calopts.value_columns(log.names, log.columns)
+            raise UsageError("%s: no valid data row (%d corrupt; line %d: %s)%s"
+                             % (path, log.skipped, ln, msg, "" if vals is None else
+                                "; each value follows its label (%s): --columns %d,%d,%d "
+                                "reads them" % ((" ".join(log.names[:6]),) + vals)))
         if opts["skip"]:
             raise UsageError("%s: no data rows left after --skip %d" % (path, opts["skip"]))
         raise UsageError("%s: no data rows%s" % (path, " after the header (line %d)"
@@ -282,6 +298,8 @@ def run(opts):
     used = 0
     markers = 0  # samples holding the HMC5883L's overflow marker: dropped, not "corrupt"
     names = None
+    outside = 0  # rows beyond the stated chip's output: its counts they are not
+    peak = 0     # the largest |value| of those, in counts
     for lineno, row in log.rows():
         v = [logfile.convert(m, d, num, den) for m, d in row]
         if cal.overflow == -4096 and -4096 in v:
@@ -292,6 +310,8 @@ def run(opts):
             if not olo <= v[k] <= ohi:
                 bad = k
         if bad >= 0:
+            outside += 1
+            peak = max(peak, max([abs(x) for x in v]))
             if names is None:
                 names = log.column_names()
             log.bad(lineno, "%s = %s is %d counts, outside %d..%d%s" % (
@@ -301,12 +321,21 @@ def run(opts):
         used += 1
         if (used - 1) % step == 0:
             cal.add(v[0], v[1], v[2])
-    info = {"rows": log.rows_read + log.skipped, "used": used, "railed": cal.railed + markers,
+    # rows: every data row once (log.skipped counts the reader's corrupt rows and, since
+    # log.bad, those outside the output, which log.rows_read counted as read already)
+    rows = log.rows_read + log.skipped - outside
+    note = None
+    if board.sensor is not None and outside * 2 > rows:
+        note = calopts.range_advice(board, opts, outside, rows, peak,
+                                    calopts.named_sensor(path))
+    info = {"rows": rows, "range_note": note, "outside": outside, "used": used, "railed": cal.railed + markers,
             "skipped": log.skipped,
             "warnings": log.warnings, "num": num, "den": den, "p": p, "cpg": cpg,
             "held": cal.count, "separation": cal.separation, "step": step, "board": board,
             "log": log}
     if used == 0:
+        if note is not None:
+            raise UsageError("%s: no row within %d..%d counts: %s" % (path, olo, ohi, note))
         _print_warnings(log)
         raise UsageError("%s: no row within %d..%d counts after conversion (x %s / %s): check "
                          "--units, --scale, --sensor and --range" % (path, olo, ohi, num, den))
@@ -359,7 +388,7 @@ def report(c, info, date):
         "fit_error_percent": c.fit_error / 100,
         "samples_used": c.samples,
         "rows": info["rows"], "skipped_rows": info["skipped"], "rail_samples": info["railed"],
-        "warnings": ["line %d: %s" % w for w in info["warnings"]],
+        "warnings": warning_list(info),
     })
     if info["cpg"]:
         r["field_ut"] = c.field * 100 / info["cpg"]
@@ -368,7 +397,23 @@ def report(c, info, date):
     return r
 
 
-def _print_warnings(log, railed=0):
+def warning_list(info):
+    """The JSON's warnings: the rows skipped (the first few, by line), then what the options
+    and the log say together (a breakout read as its chip; most rows outside the chip)."""
+    out = ["line %d: %s" % w for w in info["warnings"]]
+    for w in (info["board"].note, info.get("range_note")):
+        if w:
+            out.append(w)
+    return out
+
+
+def _print_notes(info):
+    for w in (info["board"].note, info.get("range_note")):
+        if w:
+            warn(COMMAND, w)
+
+
+def _print_warnings(log, railed=0, outside=0):
     if railed:
         warn(COMMAND, "%s: %d sample(s) at the sensor's rails dropped (int16 limits or an "
              "overflow marker: a clipping or overflowing chip)" % (log.path, railed))
@@ -376,7 +421,8 @@ def _print_warnings(log, railed=0):
         warn(COMMAND, "%s: line %d skipped: %s" % (log.path, ln, msg))
     more = log.skipped - len(log.warnings)
     if more > 0:
-        warn(COMMAND, "%s: %d more corrupt rows skipped" % (log.path, more))
+        warn(COMMAND, "%s: %d more %s skipped" % (log.path, more, "corrupt rows" if not outside
+                                                   else "rows (corrupt or outside the output)"))
 
 
 def hint_for(reason, model):
@@ -388,6 +434,9 @@ def hint_for(reason, model):
 
 def _refused(opts, rej, info):
     hint = hint_for(rej.reason, opts["model"])
+    if info.get("range_note"):  # the refusal follows from it: most rows were left out
+        hint = "most rows are outside the chip's output (warning above): --sensor, --range, " \
+               "--units"
     fail = info.get("force_failed")
     if fail is not None:
         hint = "even --force cannot fit: %s: %s" % (fail.reason, fail.detail)
@@ -397,7 +446,7 @@ def _refused(opts, rej, info):
         print(json.dumps({"rejected": rej.reason, "detail": rej.detail, "hint": hint,
                           "rows": info["rows"], "skipped_rows": info["skipped"],
                           "rail_samples": info["railed"],
-                          "samples_held": info["held"]}))
+                          "samples_held": info["held"], "warnings": warning_list(info)}))
     else:
         print("calibration refused: %s" % rej.reason)
         print("  %s" % rej.detail)
@@ -410,7 +459,8 @@ def _refused(opts, rej, info):
 def body(opts):
     date = opts["date"] or calfile.iso_date()
     c, rej, info = run(opts)
-    _print_warnings(info["log"], info["railed"])
+    _print_warnings(info["log"], info["railed"], info["outside"])
+    _print_notes(info)
     if rej is not None:
         return _refused(opts, rej, info)
     forced = info.get("forced")

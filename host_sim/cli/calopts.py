@@ -1,0 +1,124 @@
+"""What the calibrate command makes of the words a user types, and what it says when a log does
+not fit the options given.
+
+    sensor("GY-271")   -> ("qmc5883l", note)   a chip in any case, or a breakout's name
+    units("µT")        -> "uT"                 a unit in any spelling the docs use
+    range_advice(...)                          most rows outside the stated chip's output
+    value_columns(fields, cols)                'Mx 34 My -292 Mz 420': --columns 2,4,6
+
+Each refusal raises ValueError with one line saying what to give instead (args.py turns it into
+`host_sim calibrate: error: --sensor X: ...`, exit 2). Also runs under MicroPython.
+"""
+from firmware.samples import MAX_CAPACITY  # noqa: F401  (--capacity's bound: the Calibrator's)
+from host_sim.cli import calfile
+from host_sim.cli.args import parse_decimal
+
+# Breakouts by their silkscreen name (README's wiring table, boards/breakouts.py): the chip the
+# calibration is for, and what to give when that breakout carries the other chip.
+BREAKOUTS = {
+    "gy271": ("qmc5883l", "a newer GY-271 carries a QMC5883P (I2C 0x2C): --sensor qmc5883p"),
+    "gy273": ("hmc5883l", None),
+    "gy87": ("hmc5883l", "a GY-87 with a QMC5883L: --sensor qmc5883l"),
+}
+NO_MAGNETOMETER = {"gy521": "the GY-521 carries an MPU6050 (accelerometer and gyroscope), "
+                            "no magnetometer"}
+GENERIC = ("for another chip's log leave out --sensor and give the file's units (--units uT, "
+           "mG, G, nT or counts) or --scale COUNTS_PER_UNIT: the fit is the same, reported in "
+           "the file's units (--out needs one of these chips)")
+
+
+def _key(text):
+    return text.strip().lower().replace("-", "").replace("_", "").replace(" ", "")
+
+
+def sensor(text):
+    """--sensor: (chip, note or None); ValueError naming what the firmware drives."""
+    k = _key(text)
+    if k in calfile.SENSOR_NAMES:
+        return k, None
+    if k in BREAKOUTS:
+        chip, other = BREAKOUTS[k]
+        note = "%s read as its %s%s" % (text, chip, "; " + other if other else "")
+        return chip, note
+    known = "%s (breakouts %s)" % (", ".join(calfile.SENSOR_NAMES),
+                                   ", ".join(sorted(BREAKOUTS)))
+    if k in NO_MAGNETOMETER:
+        raise ValueError("%s: give the magnetometer's chip: %s" % (NO_MAGNETOMETER[k], known))
+    raise ValueError("not a chip this firmware drives: %s; %s" % (known, GENERIC))
+
+
+# --units: every spelling -> the one the converter knows (UNITS_PER_GAUSS in calibrate.py)
+UNIT_NAMES = {
+    "counts": "counts", "count": "counts", "raw": "counts", "lsb": "counts",
+    "ut": "uT", "microtesla": "uT", "microteslas": "uT",
+    "mg": "mG", "milligauss": "mG", "mgauss": "mG",
+    "g": "G", "gauss": "G", "gs": "G",
+    "nt": "nT", "nanotesla": "nT", "nanoteslas": "nT",
+}
+UNITS_HELP = ("counts, uT (microtesla; a micro sign reads as u), mG (milligauss), G (gauss), "
+              "nT (nanotesla), in any case")
+
+
+def units(text):
+    """--units: 'µT', 'uT', 'ut', 'microtesla', 'gauss', 'mG', ... -> 'uT', 'G', 'mG', ..."""
+    k = text.strip()
+    for micro in ("\u00b5", "\u03bc"):     # the micro sign and the Greek mu
+        k = k.replace(micro, "u")
+    k = k.lower()
+    if k in UNIT_NAMES:
+        return UNIT_NAMES[k]
+    raise ValueError("expected %s" % UNITS_HELP)
+
+
+def value_columns(fields, cols):
+    """The 1-based columns of the values when a line reads `Mx 34 My -292 Mz 420` and its
+    labels were taken for a header's names (0-based columns `cols`): the column after each
+    label holds a number. None otherwise."""
+    out = []
+    for c in cols:
+        if c + 1 >= len(fields):
+            return None
+        try:
+            parse_decimal(fields[c + 1])
+        except ValueError:
+            return None
+        out.append(c + 2)
+    return tuple(out)
+
+
+def named_sensor(path):
+    """The chip a comment line at the top of the log names (examples/log_csv.py writes
+    `# qmc5883l range_code 0 ...`), or None."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(2048)
+    except OSError:
+        return None
+    for line in head.split(b"\n")[:20]:
+        s = line.strip().lower()
+        if s[:1] == b"#":
+            for name in calfile.SENSOR_NAMES:
+                if name.encode() in s:
+                    return name
+    return None
+
+
+def range_advice(board, opts, outside, rows, peak, named):
+    """One line: `outside` of `rows` rows beyond the stated chip's output, and what to give."""
+    lo, hi = board.output
+    tips = []
+    if named is not None and named != board.sensor:
+        tips.append("the file's comment names %s: --sensor %s" % (named, named))
+    converted = opts["units"] not in (None, "counts") or opts["scale"] is not None
+    if converted:
+        tips.append("check --units / --scale, or a larger --range (fewer counts per gauss)")
+    else:
+        if board.sensor == "hmc5883l" and peak <= 32767 and named is None:
+            tips.append("int16 counts like these are a QMC5883L's or QMC5883P's: --sensor "
+                        "qmc5883l or qmc5883p")
+        tips.append("a file in uT, mG, G or nT: --units")
+    tips.append("another magnetometer's log: leave out --sensor")
+    return ("%d of %d rows (%d %%) are outside %s's output %d..%d counts at %s G (values reach "
+            "%d): not this chip's counts at this range; %s" % (
+                outside, rows, outside * 100 // rows, board.sensor, lo, hi, board.range_gauss,
+                peak, "; ".join(tips)))
