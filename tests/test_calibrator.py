@@ -298,9 +298,6 @@ def test_ten_element_solve_of_a_full_buffer_takes_under_100_ms_on_micropython():
     assert full <= 3 * empty + 20 and empty <= 3 * full + 20
 
 
-@pytest.mark.skipif(not os.path.exists(os.path.join(mp.ROOT, "..", "shared", "datasets",
-                                                   "lsm9ds1_jremington.csv")),
-                    reason="../shared/datasets is not beside the repository")
 def test_calibrator_results_are_bit_identical_on_micropython():
     lines = mp.json_lines(mp.parity(["tests/scenarios/calibrator_parity.py"]))
     assert len(lines) == 7

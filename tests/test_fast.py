@@ -30,8 +30,7 @@ def test_viper_mirrors_match_the_plain_functions_on_micropython():
     assert r["cases"]["state"] > 1000  # orient leaves the same working state
     assert r["cases"]["pipeline"] > 3000
     assert r["cases"]["buffer"] == 5  # the buffers screened each way hold the same samples
-    if os.path.isdir(os.path.join(mp.ROOT, "..", "shared", "datasets")):
-        assert r["log_samples"] >= 3000
+    assert r["log_samples"] >= 2347  # the shipped logs at least (datasets/): 2000 + 347 rows
 
 
 def test_viper_mirrors_allocate_nothing_not_even_a_call_frame():

@@ -6,8 +6,9 @@
 #   screen   vs samples.screen: two SampleBuffers offered the same samples (result, counters,
 #            held samples), at several capacities and separations
 # Inputs: the int16 extremes (+-32767, -32768, -4096, 0, +-1), a small-int generator (no long
-# ints on a 32-bit port), and the real logs in ../shared/datasets (integer-count logs, when the
-# folder is there) through a calibration with strong soft iron. Where the port has no native
+# ints on a 32-bit port), and the real integer-count logs (datasets/, and build/datasets when
+# `make datasets` has fetched the others: datasets/README.md) through a calibration with strong
+# soft iron. Where the port has no native
 # emitter the kernels are absent and only the plain path runs ("fast": false).
 # Also the bytes each kernel allocates per call (micropython.mem_total: a heap frame counts).
 # Prints one JSON object.
@@ -51,9 +52,14 @@ def extreme_vectors():
 
 def log_samples(limit=2000):
     for name in LOGS:
-        try:
-            f = open("../shared/datasets/%s.csv" % name)
-        except OSError:
+        f = None
+        for folder in ("datasets", "build/datasets"):
+            try:
+                f = open("%s/%s.csv" % (folder, name))
+                break
+            except OSError:
+                pass
+        if f is None:
             continue
         f.readline()
         n = 0
