@@ -110,6 +110,13 @@ def test_accuracy_figures(smoke):
     assert rot["10"]["ratio_rms"] > 0
     logs = acc["logs"]
     assert logs and all(isinstance(v, dict) for v in logs.values())
+    # the smoke run's log ships in datasets/: the calibrate command at its default settings
+    # against a float64 fit of every row (docs/calibration.md's table, in full by make bench)
+    from host_sim.cli.benchmarks.accuracy import COMMAND_GOAL, SMOKE_LOG
+    cmd = acc["commands"][SMOKE_LOG]
+    assert "refused" not in cmd and 0 < cmd["ratio"] <= COMMAND_GOAL
+    row = [r for r in d["table"] if r[0].startswith("5 logs: calibrate at default settings")]
+    assert len(row) == 1 and row[0][-1] == "met"
 
 
 def test_yardstick_and_board_estimates(smoke):
