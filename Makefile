@@ -62,22 +62,28 @@ web: $(STAMP) wasm  ## vendor the WebAssembly port into web/ for the browser cal
 
 # tiers: the 32-bit interpreters of the x86-32 and arm tiers, in build/tools (tests/mp.py).
 # The registries carry none, so tools/build-micropython-tiers.sh builds them from a MicroPython
-# source tree (MICROPYTHON_SRC=/path/to/micropython at the pinned tag); a development machine
-# that has prebuilt ones in PREBUILT_TOOLS gets those copied. Without either, those tiers skip
-# and say why.
+# source tree at the pinned tag, v1.28.0 (`make tiers` without one prints the three commands:
+# clone it into build/micropython, its micropython-lib submodule, MICROPYTHON_SRC=... make
+# tiers; gcc-multilib, about 2 min on 2 cores); a development machine that has prebuilt ones in
+# PREBUILT_TOOLS gets those copied. Without either, those tiers skip and say why.
 TOOLS_DIR      := build/tools
 PREBUILT_TOOLS ?= ../shared/tools
 TIER_FILES     := micropython-x86-32 mpy-cross-x86-32 micropython-qemu-mps2-an385-armv6m.elf
-tiers:  ## the 32-bit tiers' MicroPython builds in build/tools (MICROPYTHON_SRC=... to build)
+# the tag tools/build-micropython-tiers.sh pins (PIN_TAG)
+MICROPYTHON_TAG := v1.28.0
+tiers:  ## the 32-bit tiers' MicroPython builds in build/tools (MICROPYTHON_SRC=DIR: a v1.28.0 checkout)
 	@if [ -x $(TOOLS_DIR)/micropython-x86-32 ]; then :; \
 	elif [ -n "$(MICROPYTHON_SRC)" ]; then \
 	  MICROPYTHON_SRC="$(MICROPYTHON_SRC)" tools/build-micropython-tiers.sh all \
-	    || echo "x86-32/arm tiers will skip: tools/build-micropython-tiers.sh failed"; \
+	    || echo "x86-32/arm tiers will skip: tools/build-micropython-tiers.sh failed (it needs MicroPython v1.28.0 with lib/micropython-lib, gcc-multilib for x86-32, gcc-arm-none-eabi for arm)"; \
 	elif [ -x $(PREBUILT_TOOLS)/micropython-x86-32 ]; then \
 	  mkdir -p $(TOOLS_DIR) && for f in $(TIER_FILES); do \
 	    [ -f $(PREBUILT_TOOLS)/$$f ] && cp -p $(PREBUILT_TOOLS)/$$f $(TOOLS_DIR)/; done; \
 	  echo "x86-32/arm tiers: prebuilt interpreters copied from $(PREBUILT_TOOLS) into $(TOOLS_DIR)"; \
-	else echo "x86-32/arm tiers will skip: no build in $(TOOLS_DIR) (MICROPYTHON_SRC=/path/to/micropython make tiers)"; fi
+	else echo "x86-32/arm tiers will skip: no build in $(TOOLS_DIR). To build them (gcc-multilib; about 2 min):"; \
+	  echo "  git clone --depth 1 --branch $(MICROPYTHON_TAG) https://github.com/micropython/micropython build/micropython"; \
+	  echo "  git -C build/micropython submodule update --init lib/micropython-lib"; \
+	  echo "  MICROPYTHON_SRC=build/micropython make tiers"; fi
 
 # arm: the parity scenarios on the Cortex-M qemu firmware (build/tools, make tiers; minutes;
 # not in `make test`). Installs qemu-system-arm from Debian when missing and run as root.

@@ -59,8 +59,13 @@ WASM_PKG = os.path.join(NODE_MODULES, "@micropython",
 # the 32-bit builds (tools/build-micropython-tiers.sh makes them from a MicroPython source
 # tree): ECOMPASS_TOOLS, else build/tools in this repository
 TOOLS = os.environ.get("ECOMPASS_TOOLS", os.path.join(ROOT, "build", "tools"))
-BUILD_HINT = ("MICROPYTHON_SRC=/path/to/micropython-v1.28.0 tools/build-micropython-tiers.sh "
-              "(or ECOMPASS_TOOLS=DIR holding the builds)")
+MICROPYTHON_TAG = "v1.28.0"  # the tag tools/build-micropython-tiers.sh pins (PIN_TAG)
+BUILD_HINT = ("build it from MicroPython %s (gcc-multilib; about 2 min): git clone --depth 1 "
+              "--branch %s https://github.com/micropython/micropython build/micropython && "
+              "git -C build/micropython submodule update --init lib/micropython-lib && "
+              "MICROPYTHON_SRC=build/micropython make tiers (`make tiers` prints these; or "
+              "ECOMPASS_TOOLS=DIR names a folder holding the builds)"
+              % (MICROPYTHON_TAG, MICROPYTHON_TAG))
 X86_32 = os.path.join(TOOLS, "micropython-x86-32")
 QEMU_ELF = os.path.join(TOOLS, "micropython-qemu-mps2-an385-armv6m.elf")
 QEMU_RUN = os.path.join(ROOT, "tools", "run-qemu-mps2.sh")
@@ -89,7 +94,8 @@ def _arm_reason():
     if not shutil.which("qemu-system-arm"):
         return "qemu-system-arm not found (apt-get install -y qemu-system-arm)"
     if not os.path.exists(QEMU_ELF):
-        return "no qemu firmware at %s: %s" % (QEMU_ELF, BUILD_HINT)
+        return "no qemu firmware at %s: %s" % (QEMU_ELF, BUILD_HINT.replace(
+            "gcc-multilib", "gcc-arm-none-eabi"))
     return None
 
 

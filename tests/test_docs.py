@@ -169,3 +169,14 @@ def test_the_link_check_finds_a_dead_link_and_a_dead_anchor(tmp_path):
 def test_every_link_and_anchor_in_readme_and_docs_resolves():
     n, dead = dead_links(_doc_files())
     assert n >= 50 and not dead, "\n".join(dead)
+
+
+def test_the_tier_messages_name_the_tag_the_build_script_pins():
+    # `make tiers` and the tests' skip reasons tell a user which MicroPython to clone
+    from tests import mp
+    script = open(os.path.join(ROOT, "tools", "build-micropython-tiers.sh")).read()
+    tag = re.search(r"^PIN_TAG=(\S+)$", script, re.M).group(1)
+    make = open(os.path.join(ROOT, "Makefile")).read()
+    assert re.search(r"^MICROPYTHON_TAG := (\S+)$", make, re.M).group(1) == tag
+    assert mp.MICROPYTHON_TAG == tag and "--branch %s " % tag in mp.BUILD_HINT
+    assert "MICROPYTHON_SRC=build/micropython make tiers" in mp.BUILD_HINT
