@@ -158,3 +158,40 @@ def test_ten_element_centre_agrees_with_the_authors_published_calibration(name):
     c = cal.solve(model=10, accept=False, checks=False)
     ours_v = np.array(c.offset, dtype=float) / 10 ** p
     assert np.abs(ours_v - np.array(ref)).max() < 0.015 * c.field / 10 ** p
+
+
+def _consistency(name, *extra):
+    """(percent of B between the halves' centres, lag-1 correlation of the residuals, refusal
+    or None) of the calibrate command's 10-element fit: what firmware/acceptance.py's
+    check_consistency was given (docs/faults.md quotes these)."""
+    from firmware import acceptance
+    seen = []
+    orig = acceptance.check_consistency
+
+    def spy(d2, den2, field, n, ee, ep, red, rest):
+        seen.append((100 * (d2 / den2) ** 0.5 / field, ep / ee))
+        return orig(d2, den2, field, n, ee, ep, red, rest)
+
+    acceptance.check_consistency = spy
+    try:
+        c, rej, _ = calibrate.run(calibrate._parser().parse([log_path(name)] + list(extra)))
+    finally:
+        acceptance.check_consistency = orig
+    return seen[0][0], seen[0][1], None if rej is None else rej.reason
+
+
+@pytest.mark.parametrize("name", [n for n in ALL_LOGS if n != PLANAR])
+def test_halves_agree_within_3_percent_at_the_default_but_on_the_inconsistent_log(name):
+    need(name)
+    pct, _, refused = _consistency(name)
+    if REFUSED.get(name) == "inconsistent_samples":
+        assert pct > 3 and refused == "inconsistent_samples"
+    else:
+        assert pct < 3 and refused is None
+
+
+def test_noisy_log_at_a_boards_300_samples_passes_as_noise():
+    # docs/faults.md: its halves are more than 3 % apart there, but the residuals do not
+    # follow from one kept sample to the next (lag-1 correlation below 1/4)
+    pct, rho, refused = _consistency("qmc5883l_tomisuarez_noisy", "--board-like")
+    assert pct > 3 and rho < 0.25 and refused is None
