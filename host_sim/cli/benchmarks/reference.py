@@ -43,7 +43,7 @@ def meta(name):
 
 def missing_reason(names):
     """A skip message for logs that are not here."""
-    return "%s not in the repository's clone: `%s` fetches %s (datasets/README.md)" % (
+    return "%s: not in this clone (not shipped: datasets/README.md); `%s` fetches %s" % (
         ", ".join(names), FETCH, "it" if len(names) == 1 else "them")
 
 
