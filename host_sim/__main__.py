@@ -49,16 +49,14 @@ def _line(cmd, kind, message):
 
 
 def main(argv):
-    if not argv or argv[0] in ("-h", "--help", "help"):
-        if argv:
-            print(help_text())
-            return 0
-        print(help_text(), file=sys.stderr)
-        return STATUS_USAGE
-    cmd = argv[0]
+    if argv and argv[0] in ("-h", "--help", "help"):
+        print(help_text())
+        return 0
+    cmd = argv[0] if argv else None
     if cmd not in _COMMANDS:
-        print("host_sim: error: unknown command %r; expected one of %s (--help says what each "
-              "does)" % (cmd, ", ".join(_COMMANDS)), file=sys.stderr)
+        print("host_sim: error: %s; expected one of %s (python -m host_sim --help says what each "
+              "does)" % ("unknown command %r" % cmd if argv else "no command",
+                         ", ".join(_COMMANDS)), file=sys.stderr)
         return STATUS_USAGE
     try:
         mod = __import__("host_sim.cli." + cmd, None, None, ["main"])

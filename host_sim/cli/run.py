@@ -7,14 +7,14 @@ docs/design.md quotes, between its `<!-- run:begin -->` and `<!-- run:end -->` m
 figures there are the ones the run prints (tests/test_demo.py compares them). It writes only
 for the demo's default world (chip, seed, seconds, samples) and on CPython.
 """
-import os
 import sys
 
 from host_sim.cli import demo
 from host_sim.cli.args import warn
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-DOC = os.path.join(ROOT, "docs", "design.md")
+# docs/design.md of this repository (string operations: MicroPython has no os.path; the doc is
+# written on CPython only)
+DOC = __file__.replace("\\", "/").rsplit("/", 3)[0] + "/docs/design.md"
 BEGIN = "<!-- run:begin -->"
 END = "<!-- run:end -->"
 # the options that change what the run prints; the excerpt is of their defaults
