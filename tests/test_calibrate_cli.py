@@ -262,6 +262,26 @@ def test_a_labelled_log_is_read_with_the_columns_the_error_names(tmp_path):
     assert rc == 0 and r["rows"] == 400 and np.allclose(r["offset"], (34, -292, 420), atol=3)
 
 
+def test_values_glued_to_their_labels_are_refused_with_how_to_strip_them(tmp_path):
+    rng = np.random.default_rng(4)
+    u = rng.normal(size=(300, 3))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    pts = np.round(u * 500 + (34, -292, 420))
+    p = tmp_path / "glued.txt"
+    p.write_text("".join("Mx:%d,My:%d,Mz:%d\n" % tuple(r) for r in pts))
+    rc, out, err = cli_run("calibrate", str(p))
+    line = one_error_line(err)
+    assert rc == 2 and "carry their labels" in line and "--columns 1,2,3" in line
+    sed = line.split("e.g. ")[1].split(" %s" % p)[0]          # sed -E 's/.../g'
+    assert sed.startswith("sed -E '")
+    clean = tmp_path / "clean.csv"                              # what the sed does
+    import re as _re
+    expr = sed.split("'")[1].split("/")
+    clean.write_text(_re.sub(expr[1], expr[2], p.read_text()))
+    rc, out, err = cli_run("calibrate", str(clean), "--columns", "1,2,3", "--json")
+    assert rc == 0 and json.loads(out)["rows"] == 300, err
+
+
 UNIT_SPELLINGS = {"uT": ("uT", "\u00b5T", "\u03bcT", "ut", "UT", "microtesla", "Microtesla"),
                   "mG": ("mG", "mg", "milligauss"), "G": ("G", "g", "gauss", "Gauss"),
                   "nT": ("nT", "nt", "nanotesla"), "counts": ("counts", "COUNTS", "raw")}

@@ -263,11 +263,38 @@ class Log:
         if self.columns is None:
             raise UsageError("%s: no header line naming the x, y, z columns in its first %d "
                              "lines (names such as mx,my,mz / x,y,z / magX,magY,magZ); "
-                             "give --columns X,Y,Z (1-based) for a file without one"
-                             % (self.path, HEADER_SEARCH))
+                             "give --columns X,Y,Z (1-based) for a file without one%s"
+                             % (self.path, HEADER_SEARCH, self._glued_hint()))
         raise UsageError("%s: no line with numbers in columns %d,%d,%d in its first %d lines"
                          % ((self.path,) + tuple(c + 1 for c in self.columns)
                             + (HEADER_SEARCH,)))
+
+    def _glued_hint(self):
+        """'; ...' when the data's fields are label and value in one ('Mx:34,My:-292'), which
+        --columns cannot split: the labels must go first."""
+        for lineno, b in raw_lines(self.path):
+            s = _text(b).strip() if b is not None else ""
+            if not s or s[0] == "#":
+                continue
+            glued = []
+            for k, f in enumerate(split_fields(s, guess_separator(s))):
+                for mark in (":", "="):
+                    if mark in f:
+                        label, value = f.split(mark, 1)
+                        try:
+                            parse_decimal(value)
+                        except ValueError:
+                            continue
+                        if label.strip() and not self._numeric_any([label]):
+                            glued.append(k + 1)
+                        break
+            if len(glued) >= 3:
+                return ("; its values carry their labels (%s): remove the labels first, e.g. "
+                        "sed -E 's/[A-Za-z_]+ *[:=] *//g' %s > clean.csv, then --columns %s"
+                        % (_short(b), self.path, "%d,%d,%d" % tuple(glued[:3])
+                           if len(glued) == 3 else "X,Y,Z"))
+            return ""
+        return ""
 
     def _numeric(self, fields):
         if len(fields) <= max(self.columns):
