@@ -13,8 +13,6 @@ board.GYRO = True: the MPU6050's gyroscope holds the heading through magnets and
 import time
 
 import board
-from firmware.app import status_line
-from firmware.boot import start
 from firmware.compat import drop
 
 # A calibration fitted on the desktop (python -m host_sim calibrate LOG --sensor ... --out
@@ -23,12 +21,31 @@ CAL_FILE = getattr(board, "CALIBRATION_FILE", None) or (
     board.STORE_DIR.rstrip("/") + "/calibration.json")
 
 MOTIONCAL = getattr(board, "MODE", "compass") == "motioncal"
-i2c = board.make_i2c()
 # None on a real board (time.sleep_us, time.ticks_us); the simulated board (boards/host)
 # brings its own clock
 delay_us = getattr(board, "delay_us", None)
+
+
+def wait_s(s):
+    if delay_us is not None:
+        delay_us(s * 1000000)
+    else:
+        time.sleep(s)
+
+
+def free_kb():
+    import gc
+    gc.collect()
+    return gc.mem_free() // 1024 if hasattr(gc, "mem_free") else -1
+
+
+_PY_SHORT_KB = 96  # free heap below which a board running from .py sources is told so
+status_line = None
 while True:
     try:
+        i2c = board.make_i2c()
+        from firmware.app import status_line
+        from firmware.boot import start
         # MotionCal mode: an HMC5883L at 75 Hz for 50 Raw lines/s (the QMC chips take no rate)
         app, note = start(i2c, board.STORE_DIR, cal_file=CAL_FILE,
                           mag_options={"rate": 75} if MOTIONCAL else None, delay_us=delay_us,
@@ -42,17 +59,50 @@ while True:
         break
     except OSError as e:  # SensorNotFound, BusError: wiring or power; say so and retry
         print("eCompass: %s" % e)
-        time.sleep(2)
+        wait_s(2)
+    except MemoryError:  # not even the app fits: say so, and what to do, and try again
+        start = status_line = None
+        drop("app", "boot", "detect", "appsetup", "devinit", "store", "persist", "slots")
+        print("eCompass: out of memory at boot (%d KB free): use the .mpy or frozen "
+              "install (docs/design.md, memory)" % free_kb())
+        wait_s(5)
+    except Exception as e:  # noqa: BLE001 - a board keeps running and says why
+        print("eCompass: cannot start: %s %s" % (type(e).__name__, e))
+        wait_s(5)
 start = None
 drop("boot")  # a running board holds only what it runs (docs/design.md, memory)
-print("eCompass: %s, accelerometer %s, stored calibration: %s" % (
-    app.mag.KIND, "yes" if app.accel else "no", app.load_reason or "loaded"))
-if getattr(board, "GYRO", False) and not MOTIONCAL:
+def announce():
+    """What was found, and what the board will do (one line each)."""
+    if app.no_memory is not None:
+        print("eCompass: %s" % status_line(app))
+    else:
+        print("eCompass: %s, accelerometer %s, stored calibration: %s%s" % (
+            app.mag.KIND, "yes" if app.accel else "no", app.load_reason or "loaded",
+            "" if app.mode == "heading" and not app._calmode_due
+            else ", calibration mode (one job at a time)"))
+    src = getattr(__import__("sys").modules.get("firmware.app"), "__file__", "")
+    if src.endswith(".py") and free_kb() < _PY_SHORT_KB:  # compiled on the board
+        print("eCompass: running from .py sources, %d KB free: .mpy files (make deploy) or "
+              "a frozen build need much less heap (docs/design.md, memory)" % free_kb())
+    if getattr(board, "GYRO", False) and not MOTIONCAL:
+        try:
+            app.use_gyro()  # docs/gyro.md: status "gyro held" while it holds the heading
+            print("eCompass: gyro-aided heading on")
+        except (ImportError, ValueError, MemoryError) as e:  # no part; no MPU6050; no room
+            print("eCompass: no gyro-aided heading: %s" % (e or "out of memory"))
+
+
+def report(a):
     try:
-        app.use_gyro()  # docs/gyro.md: status "gyro held" while it holds the heading
-        print("eCompass: gyro-aided heading on")
-    except (ImportError, ValueError) as e:  # the gyro part not installed; no MPU6050
-        print("eCompass: no gyro-aided heading: %s" % e)
+        print(status_line(a))
+    except MemoryError:  # no room to print this one: the next report tries again
+        pass
+
+
+try:
+    announce()
+except MemoryError:  # the board runs on; its status line says the rest
+    pass
 
 
 def motioncal(rate_hz=50):
@@ -75,4 +125,8 @@ def motioncal(rate_hz=50):
 if MOTIONCAL:
     motioncal()
 else:
-    app.run(None, report=lambda a: print(status_line(a)), every_us=500000)
+    while True:
+        try:
+            app.run(None, report=report, every_us=500000)
+        except MemoryError:  # step() never raises; the loop's own bookkeeping: go on
+            pass

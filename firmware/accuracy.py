@@ -106,6 +106,8 @@ def assess(app):
     """level() for a CompassApp's current state."""
     cal = app.calibration
     c = app.compass
+    if c is None:  # calibration mode, or the app did not fit (firmware/calmode.py)
+        return UNRELIABLE, "no_heading"
     loc = app.location
     st = app.status
     held = st == "gyro held"

@@ -116,6 +116,9 @@ STATUS_TILT = "tilt unavailable"      # the accelerometer is implausible: level-
 STATUS_INTERNAL = "internal error"    # step() caught an unexpected exception (e.g. MemoryError)
 STATUS_JUMP = "heading jumped"        # it moved > 4 deg since the last sample: a magnet moving
 #                                       in, or a turn too fast for the sample rate to follow
+STATUS_NO_MEMORY = "out of memory"  # the heap cannot hold a job the board needs (.no_memory
+#                                       says which: "start", "load"); it keeps running
+STATUS_CALIBRATING = "calibrating"    # calibration mode (firmware/calmode.py): no heading
 STATUS_GYRO_HELD = "gyro held"        # use_gyro(): the field is not used (interference), the
 #                                       gyroscope holds the heading and still vouches for it
 #                                       (firmware/attitude.py)
@@ -135,6 +138,9 @@ _FIELD_TOL_PCT = const(10)    # interference window floor, % (firmware.compass's
 _FIELD_TOL_MAX_PCT = const(50)
 _FIT_SIGMAS = const(3)        # window >= 3 x the fit's RMS radial error
 _US_PER_S = const(1000000)
+_LOAD_NO_MEMORY = "no_memory"  # firmware.persist.LOAD_NO_MEMORY
+_LOAD_RETRY_US = const(5000000)
+_RETRY_PAUSE_US = const(5000)  # the pause of a step while the app itself does not fit  # a load that found no room is tried again after 5 s
 _GAP_CAP_US = const(0x10000000)  # the time since the last read stops counting at 268 s
 _ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
 _ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
@@ -209,6 +215,12 @@ class CompassApp:
     location, quick, accuracy, watch (firmware/health.py FieldWatch), dip (its DipCheck)."""
 
     location = None  # a firmware.location.Location after set_location()
+    mode = "heading"  # "calibrating": calibration mode, one job in RAM (firmware/calmode.py)
+    no_memory = None  # what the heap could not hold: "start", "load", "calibrate" (status line)
+    _args = None     # the constructor's arguments while the heap could not hold the app
+    _calmode_due = False
+    _relearn_due = False
+    _retry_us = 0
     not_installed = None  # "calibrate": calibrate() found no calibration machinery
     quick = None     # the firmware.quickcal.QuickCal of the last quick_calibrate()
     attitude = None  # the firmware.attitude.Attitude of use_gyro()
@@ -219,27 +231,68 @@ class CompassApp:
                  reinit_after=REINIT_AFTER, mag_options=None, learn=None, fast=None):
         self._guard = _ReadGuard()
         self._step_guard = _StepGuard()
+        self.heading_kang = -1
+        self.status = STATUS_STARTING
+        self.steps = 0
+        self.errors = {}
+        args = (i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, store,
+                delay_us, ticks_us, capacity, solve_every, fallback, reinit_after,
+                mag_options, learn, fast)
+        try:
+            self._build(args)
+        except MemoryError:  # no room for the app itself: step() tries again, the status
+            self._args = args  # line says so (a board never stops at a traceback)
+            self.no_memory = "start"
+            self.status = STATUS_NO_MEMORY
+            from firmware import compat  # run()'s clock meanwhile
+            self._ticks = ticks_us or compat.ticks_us
+            self._wrap = ticks_us is None
+
+    def _build(self, args):
         from firmware import appsetup  # construction only: dropped when the app is made
-        appsetup.setup(self, i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg,
-                       store, delay_us, ticks_us, capacity, solve_every, fallback,
-                       reinit_after, mag_options, learn, fast)
-        appsetup = None
-        drop("appsetup", "devinit")  # the drivers' start-up and error texts too
+        try:
+            appsetup.setup(self, *args)
+        finally:
+            appsetup = None
+            drop("appsetup", "devinit")  # the drivers' start-up and error texts too
+        self._args = None
+        self.no_memory = None
         self._use(self._load())
+        self._start_learning()
+
+    def _start_learning(self):
+        # a calibration session when asked for, or while no good one is in force; not while
+        # the stored one could not be read for lack of memory (it is not "uncalibrated")
+        if self.load_reason == _LOAD_NO_MEMORY:
+            self.no_memory = "load"
+            self._retry_us = _LOAD_RETRY_US
+            return
+        learn = self.learn
         if learn or learn is None and not self._good_enough(self.calibration):
             self.calibrate()
 
     # --- storage (firmware/persist.py, loaded for each use) ---------------------------
     def _load(self):
-        from firmware import persist
-        cal = persist.load(self)
+        try:
+            from firmware import persist
+            cal = persist.load(self)
+        except MemoryError:  # no room for the store's code: not "uncalibrated" (_retry)
+            from firmware.calibration import UNCALIBRATED
+            self.load_reason = _LOAD_NO_MEMORY
+            cal = UNCALIBRATED
         persist = None
         drop("persist", "slots")
         return cal
 
     def _save(self, dip_only=False):
-        from firmware import persist
-        persist.save(self, dip_only)
+        try:
+            from firmware import persist
+            persist.save(self, dip_only)
+        except MemoryError:  # no room for the store's code: as a failed save (retried)
+            self.save_errors += 1
+            self.save_reason = _LOAD_NO_MEMORY
+            self._unsaved = True
+            self._save_wait_us = 0
         persist = None
         drop("persist", "slots")
 
@@ -254,9 +307,11 @@ class CompassApp:
     def _use(self, cal):
         # another calibration: its dip (saved with it, else learned afresh), the short
         # averages and any spell start over (firmware/health.py FieldWatch.use)
-        self.watch.use(cal)
         self.calibration = cal
         self._k = cal.k  # _heading's
+        if self.mode != "heading":
+            return  # calibration mode: the heading line takes it when it is made again
+        self.watch.use(cal)
         tol = _FIT_SIGMAS * cal.fit_error // 100
         if tol < _FIELD_TOL_PCT:
             tol = _FIELD_TOL_PCT
@@ -285,16 +340,47 @@ class CompassApp:
         firmware/session.py); the calibration in force stays until a better one is accepted.
         Returns the collector; None when the calibrate part is not installed (then
         .not_installed says so and the heading goes on with the calibration in force)."""
-        if self.collector is None:
+        if self.collector is None and self.mode == "heading":
             try:
-                from firmware import session
+                from firmware import calmode  # the room a session needs beside the heading
             except ImportError:  # package-calibrate.json not installed on this board
                 self.not_installed = "calibrate"
                 return None
-            self._session = session
-            self.collector = session.start(self)
+            if not calmode.room():
+                calmode = None
+                self._calmode_due = True  # the next step lets go of the heading line first
+                return None
+            calmode = None
+            drop("calmode")
+            try:
+                from firmware import session
+                self._session = session
+                self.collector = session.start(self)
+            except ImportError:  # package-calibrate.json not installed on this board
+                self.not_installed = "calibrate"
+                return None
+            except MemoryError:  # no room beside the heading line after all
+                self._session = self.collector = session = None
+                drop("session", "calibrator", "samples", "accum", "solve", "acceptance")
+                self._calmode_due = True
+                return None
             self._locate()
         return self.collector
+
+    def _calmode(self):
+        # calibration mode (firmware/calmode.py): the heading line goes, the session comes
+        self._calmode_due = False
+        try:
+            from firmware import calmode
+        except ImportError:
+            self.not_installed = "calibrate"
+            return
+        c = calmode.enter(self)
+        if c is None:
+            self._retry_us = calmode.RETRY_US
+        elif self._relearn_due:
+            c.relearn(_STALE_AGE_S)
+        self._relearn_due = False
 
     # --- where the board is (firmware/location.py, firmware/quickcal.py) ----------------
     def set_location(self, lat_e7, lon_e7, year_e3=None, table=None):
@@ -361,21 +447,43 @@ class CompassApp:
     # --- the loop ---------------------------------------------------------------------
     def step(self):
         """One sample and a bounded slice of background work; True if a heading came out.
-        Never raises: an unexpected exception becomes the status "internal error"."""
+        Never raises: an unexpected exception becomes the status "internal error", a
+        MemoryError "out of memory"."""
         self.steps = (self.steps + 1) & 0x3FFFFFFF  # a small int for years at 200 Hz
         g = self._step_guard
         with g:
-            self._step()
+            if self._args is not None:
+                self._retry_build()
+            else:
+                self._step()
         if g.error is not None:
             self._internal(g.error)
         return self._ok
 
+    def _retry_build(self):
+        # the app itself did not fit: a sample period's pause per step (the loop does not
+        # spin), another try every 256 steps
+        self._ok = False
+        d = self._args[8]  # delay_us
+        if d is not None:
+            d(_RETRY_PAUSE_US)
+        else:
+            from firmware.compat import sleep_us
+            sleep_us(_RETRY_PAUSE_US)
+        if self.steps & 0xFF == 0:
+            self._build(self._args)
+
     def _step(self):
         self._ok = False
+        if self._calmode_due:
+            self._calmode()
         self._clock()
         st = self._read()
         if st == STATUS_OK:
             st = self._vet()
+        if self.mode != "heading":
+            self._calibrating(st)
+            return
         if st == STATUS_OK:
             st = self._heading()
         if st != STATUS_OK:
@@ -397,10 +505,33 @@ class CompassApp:
         if self.pending is not None and (self.status == STATUS_OK
                                          or self.status == STATUS_INTERFERENCE):
             self.status = STATUS_CHANGED  # the likely cause of the interference, too
+        if self.no_memory is not None and self._ok:
+            self.status = STATUS_NO_MEMORY  # a heading, but not the calibrated one it should be
+
+    def _calibrating(self, st):
+        # calibration mode's step (firmware/calmode.py): the sample checked, kept, solved
+        if st == STATUS_OK:
+            self._fails = 0
+            self._reinit_level = 0
+            self.status = STATUS_CALIBRATING
+            self._select()
+        else:
+            self._failed(st)
+        c = self.collector
+        if c is None:  # the session ended (or the mode could not leave): the heading line
+            from firmware import calmode
+            calmode.leave(self)
+            calmode = None
+            drop("calmode")
+        elif c.job is not None or c.due():
+            self._solve()
 
     def _internal(self, e):
         self._ok = False
         self.last_error = e
+        if isinstance(e, MemoryError):
+            self._flag(STATUS_NO_MEMORY)
+            return
         self._flag(STATUS_INTERNAL)
         c = self.collector
         if c is not None and c.job is not None:
@@ -421,6 +552,8 @@ class CompassApp:
             dt = 0
         if self._unsaved:
             self._retry_save(dt)
+        if self.no_memory is not None:
+            self._retry(dt)
         if self.accel is None and self._accel_auto:
             self._look_for_accel(dt)
         if self._gap_us < _GAP_CAP_US:
@@ -447,6 +580,25 @@ class CompassApp:
         if self._save_wait_us >= _SAVE_RETRY_US:
             self._save()
             self._save_wait_us = 0
+
+    def _retry(self, dt):
+        # what the heap could not hold, tried again: the load every 5 s, a calibration
+        # session every calmode.RETRY_US
+        self._retry_us -= dt
+        if self._retry_us > 0:
+            return
+        what = self.no_memory
+        self.no_memory = None
+        if what == "load":
+            cal = self._load()
+            if self.load_reason == _LOAD_NO_MEMORY:
+                self.no_memory = "load"
+                self._retry_us = _LOAD_RETRY_US
+                return
+            self._use(cal)
+            self._start_learning()
+        elif what == "calibrate":
+            self.calibrate()
 
     def _look_for_accel(self, dt):
         self._accel_wait_us += dt
@@ -540,7 +692,10 @@ class CompassApp:
     def _heading(self):
         self._correct(self._k, self.raw, self._cor)
         self._apply(self._mm, self._cor, self.body)
-        if self.accel is None or not self.tilt:
+        a = self.attitude  # use_gyro(): the gyro step maps gravity (the filter's if bumped)
+        if a is not None and a.predict(self):
+            h = self.compass.update(self.body, self.gravity)
+        elif self.accel is None or not self.tilt:
             h = self.compass.update(self.body)
         else:
             self._apply(self._am, self._acc, self.gravity)
@@ -597,8 +752,9 @@ class CompassApp:
     def _failed(self, st):
         self._flag(st)
         w = self.watch
-        w.restart()
-        if st == STATUS_STALE:
+        if w is not None:  # (none in calibration mode)
+            w.restart()
+        if st == STATUS_STALE and w is not None:
             w.forget(self.health.same)  # a spell begun by this run of repeats: not a field
         self._cfg_due = True  # any anomaly: read the configuration back at the next sample
         if st == STATUS_OVERFLOW:
@@ -623,6 +779,8 @@ class CompassApp:
         c = self.calibrate()
         if c is not None:
             c.relearn(_STALE_AGE_S)
+        elif self._calmode_due:
+            self._relearn_due = True  # calibration mode relearns once it has started
 
     def reinit(self):
         """Re-initialise the drivers (a sensor reset by a brown-out powers up in standby):
@@ -731,7 +889,14 @@ class CompassApp:
         return good
 
 
+_NO_MEMORY_LINE = "status line: out of memory"
+
+
 def status_line(app):
-    """One readable line of the app's state (firmware/status.py line, docs/calibration.md)."""
-    from firmware.status import line
-    return line(app)
+    """One readable line of the app's state (firmware/status.py line, docs/calibration.md).
+    Never raises MemoryError: without room for the line, a fixed one says so."""
+    try:
+        from firmware.status import line
+        return line(app)
+    except MemoryError:
+        return _NO_MEMORY_LINE

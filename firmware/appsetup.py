@@ -38,17 +38,7 @@ def setup(app, i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, s
     app.reinit_after = reinit_after
     app.learn = learn
 
-    kn = kernels() if fast is None or fast is True else None
-    app.fast = kn is not None
-    if kn is None:
-        from firmware import axes, calibration
-        app._correct = calibration.correct
-        app._apply = axes.apply
-    else:
-        app._correct = kn.correct
-        app._apply = kn.apply
-    compass.use_kernels(kn or False)
-    i2cdevice.use_kernels(kn or False)  # the drivers' decode
+    app._fast_opt = fast
 
     app.raw = array("h", (0, 0, 0))       # the last sample, chip axes, counts
     app._cor = array("h", (0, 0, 0))      # corrected, sensor axes
@@ -96,9 +86,7 @@ def setup(app, i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, s
     app._hist_flags = 0        # flags of the history entry due once the save succeeds
 
     app.store = store
-    app.compass = Compass(declination_kang=cdeg_to_kang(declination_cdeg))
-    app.watch = FieldWatch(app.compass, app.body)  # firmware/health.py
-    app.dip = app.watch.dip   # the calibration's dip (DipCheck)
+    heading_line(app, cdeg_to_kang(declination_cdeg))
     app._dip_unsaved = False   # this app saved the fit in force before its dip was known
     app.collector = None
     app._session = None        # firmware.session while a calibration session runs
@@ -118,6 +106,27 @@ def setup(app, i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, s
     app._clean_us = 0
     app._unsaved = False
     app._save_wait_us = 0
+
+
+def heading_line(app, declination_kang):
+    """What showing a heading needs beside the drivers: the kernel set (firmware/fast.py where
+    the port has the emitter), the Compass and the field watch. Made here at construction and
+    again when a calibration mode ends (firmware/calmode.py releases them while it runs)."""
+    fast = app._fast_opt
+    kn = kernels() if fast is None or fast is True else None
+    app.fast = kn is not None
+    if kn is None:
+        from firmware import axes, calibration
+        app._correct = calibration.correct
+        app._apply = axes.apply
+    else:
+        app._correct = kn.correct
+        app._apply = kn.apply
+    compass.use_kernels(kn or False)
+    i2cdevice.use_kernels(kn or False)  # the drivers' decode
+    app.compass = Compass(declination_kang=declination_kang)
+    app.watch = FieldWatch(app.compass, app.body)  # firmware/health.py
+    app.dip = app.watch.dip   # the calibration's dip (DipCheck)
 
 
 def _check_options(model, declination_cdeg, solve_every, reinit_after):

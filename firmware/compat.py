@@ -27,6 +27,9 @@ kernels()         the fast-path module firmware.fast (viper/native code with the
                   the first call to force the plain path (tests compare the two).
 pick(kn, name, plain)  the function `name` of kernel set kn (None: kernels()), or `plain`
                   when there is none (kn False or None): a module's use_kernels().
+free_bytes()      gc.mem_free() after a collection: the heap a job can have now; None where the
+                  port does not tell (CPython). A board holds one job at a time when this is
+                  short (firmware/calmode.py; docs/design.md, memory).
 drop(*names)      forget the firmware modules `names` ("detect", "calibrator", ...): out of
                   sys.modules and off the firmware package, so their code and tables are
                   freed at the next collection once nothing else refers to them (a
@@ -134,3 +137,14 @@ def drop(*names):
         sys.modules.pop("firmware." + name, None)
         if pkg is not None and name in pkg.__dict__:
             delattr(pkg, name)
+
+
+def free_bytes():
+    """gc.mem_free() after a collection, or None (see the module docstring)."""
+    import gc
+    f = getattr(gc, "mem_free", None)
+    if f is None:
+        return None
+    gc.collect()
+    return f()
+

@@ -52,7 +52,7 @@ def save(app, dip_only):
         app.store.save(_record(app))
         if not dip_only:
             app.stored += 1
-        app._dip_unsaved = not app.dip.armed
+        app._dip_unsaved = app.dip is not None and not app.dip.armed
         app._unsaved = False
         app.save_reason = None
         if app._hist_flags and not dip_only and app.collector is not None:
@@ -83,7 +83,7 @@ def _failed(app, reason):
 def _record(app):
     # the payload saved: the calibration in force with the dip it measures, when known
     c = app.calibration
-    d = app.dip
-    if d.armed and c.model is not None and c.dip_kang != d.ref:
+    d = app.dip  # None in calibration mode (firmware/calmode.py): not measured there
+    if d is not None and d.armed and c.model is not None and c.dip_kang != d.ref:
         c = c.with_dip(d.ref)
     return c.to_bytes()

@@ -22,8 +22,7 @@ The steps (CompassApp._step calls solve() when a solve is running or due):
            its limits it is put in force and saved; outside it is kept as .pending ("hardware
            changed?") and not put in force until accept_change().
 """
-from firmware import compass
-from firmware.compat import const, drop
+from firmware.compat import const, drop, kernels
 
 _DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
 _HMC_OVERFLOW = const(-4096)  # the HMC5883L's overflow marker (its datasheet, data registers)
@@ -37,11 +36,12 @@ ENDED = ("accepted", "refused", "solves", "last_reason", "last_detail", "last_mo
 MACHINERY = ("session", "calibrator", "samples", "accum", "solve", "acceptance", "history")
 
 
-def start(app):
-    """A collector for `app` (firmware.calibrator.Collector), with the kernel set it chose."""
+def start(app, fast=True):
+    """A collector for `app` (firmware.calibrator.Collector), with the kernel set it chose
+    (fast False: the plain functions, as in firmware/calmode.py, which lets firmware.fast go)."""
     from firmware import samples
     from firmware.calibrator import Collector
-    samples.use_kernels(compass.KERNELS or False)
+    samples.use_kernels((kernels() if fast and app.fast else None) or False)
     c = Collector(model=app.model, capacity=app.capacity,
                   counts_per_gauss=app.mag.counts_per_gauss, current=app.calibration,
                   solve_every=app.solve_every, fallback=app.fallback,
@@ -108,7 +108,7 @@ def end_if_done(app):
     app.collector = None
     app._hist = None
     app._session = None
-    drop(*MACHINERY)
+    drop(*MACHINERY)  # (in calibration mode the app's next step makes the heading line again)
     return True
 
 

@@ -12,8 +12,7 @@ line(app)      one readable line: heading (marked when not tilt-compensated), st
                heading's source (use_gyro: on field, or held for how long and how well),
                accuracy (firmware/accuracy.py), location. docs/calibration.md explains every field.
 """
-from firmware.compat import const
-from firmware.trig import kang_to_str
+from firmware.compat import const, free_bytes
 
 _QUIET_HINT_US = const(3000000)  # no new direction for 3 s before "planar"
 _STATUS_INTERFERENCE = "interference"  # firmware.app.STATUS_INTERFERENCE
@@ -31,7 +30,7 @@ def progress(app):
             "collecting": col is not None, "solving": solving,
             "solve_model": col.job_model if solving else None,
             "status": app.status,
-            "interference": (app.compass.interference
+            "interference": (app.compass is not None and app.compass.interference
                              or app.status == _STATUS_INTERFERENCE),
             "relearning": app.relearning, "stored": app.stored,
             "save_errors": app.save_errors, "load_reason": app.load_reason,
@@ -97,10 +96,45 @@ def _gyro(a):
                                                   "" if a.vouched else " (too long)")
 
 
+def _free_kb():
+    f = free_bytes()
+    return "?" if f is None else "%d" % (f >> 10)
+
+
+def _no_memory(app):
+    """What the heap could not hold, and what to do instead (docs/design.md, memory)."""
+    what = app.no_memory
+    if what == "load":
+        return "stored calibration not loaded: out of memory, %s KB free (retrying)" % (
+            _free_kb(),)
+    if what == "calibrate":
+        from firmware.calmode import MODE_NEED_KB
+        return ("calibration needs ~%d KB, this board has %s KB free: calibrate in the "
+                "browser page (docs/web.md) or MotionCal mode, or use a .mpy / frozen "
+                "install" % (MODE_NEED_KB, _free_kb()))
+    return "out of memory (%s)" % (what,)
+
+
+def _calibrating(app):
+    """Calibration mode (firmware/calmode.py): no heading; the session's progress."""
+    p = progress(app)
+    parts = ["calibration mode (no heading)", app.status]
+    parts.extend(_story(app, p))
+    if app.save_reason is not None:
+        parts.append("save failed: %s" % app.save_reason)
+    return " | ".join(parts)
+
+
 def line(app):
     """One readable line: heading (marked when not tilt-compensated), status and flags, the
     calibration's stage in words (collecting with its coverage, solving, saved once,
     calibrated, and what to do when a fit is refused), accuracy, location."""
+    if app._args is not None:  # the app itself did not fit (CompassApp tries again)
+        return ("out of memory: the app did not fit in %s KB free: use a .mpy or frozen "
+                "install (docs/design.md, memory); retrying" % _free_kb())
+    if app.mode != "heading":
+        return _calibrating(app)
+    from firmware.trig import kang_to_str
     p = progress(app)
     h = app.heading_kang
     parts = ["heading %s deg%s" % ("---.-" if h < 0 else kang_to_str(h),
@@ -117,8 +151,10 @@ def line(app):
         parts.append(_gyro(a))
     if app.relearning:
         parts.append("relearning")
-    if app.save_errors:
+    if app.save_reason is not None:  # the last save failed (a later one succeeded: None)
         parts.append("save failed: %s" % app.save_reason)
+    if app.no_memory is not None:
+        parts.append(_no_memory(app))
     if app.change is not None:
         parts.append("jump: %s %d outside %d..%d, accept_change() or discard_change()"
                      % app.change)

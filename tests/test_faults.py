@@ -369,7 +369,7 @@ def test_an_unexpected_exception_is_a_status_and_the_loop_goes_on(good_qmc):
     def boom(*a):
         raise MemoryError("heap exhausted")
     app.compass.update = boom
-    assert app.step() is False and app.status == "internal error"
+    assert app.step() is False and app.status == "out of memory"  # says which, and goes on
     assert isinstance(app.last_error, MemoryError)
     app.compass.update = real
     settled(b, app)

@@ -17,8 +17,9 @@ PIPELINE = ["compat", "errors", "fixedpoint", "i2cdevice", "detect", "qmc5883l",
             "history", "health", "app", "fast",
             # the app's capabilities, each loaded for its job and dropped after it (boot,
             # construction, the drivers' start-up and error texts, the store's load and save,
-            # the calibration session, the status line)
-            "boot", "appsetup", "devinit", "persist", "session", "status"]
+            # the calibration session, calibration mode where the heap holds one job at a
+            # time, the status line)
+            "boot", "appsetup", "devinit", "persist", "session", "calmode", "status"]
 CALIBRATION_MACHINERY = {"firmware.calibrator", "firmware.solve", "firmware.accum",
                          "firmware.samples", "firmware.acceptance", "firmware.session",
                          "firmware.history"}
@@ -63,11 +64,11 @@ def _graph(lazy=True):
 def test_firmware_reads_as_the_pipeline_one_module_per_job():
     # beside the pipeline: the field model, where the board is (location, quick calibration),
     # the accuracy level, the MotionCal codec and mode, importing a calibration file at boot,
-    # CircuitPython's bus adapter, the gyro-aided heading's attitude filter
+    # CircuitPython's bus adapter, the gyro-aided heading's attitude filter, the mounting check
     assert set(_modules(FW)) - {"field", "motioncal", "motioncal_mode", "location", "quickcal",
                                 "accuracy", "calimport", "busio_i2c",
                                 "attitude", "attitude_plain", "attitude_fast",
-                                "gyrosetup"} == set(PIPELINE)
+                                "gyrosetup", "mounting", "mountcheck"} == set(PIPELINE)
 
 
 def test_no_import_cycles_in_firmware():

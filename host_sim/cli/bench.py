@@ -418,6 +418,83 @@ def profiles(session, extra_path, cwd, extra=(), heap=None, gyro_session=None):
     return out
 
 
+def board_install(out_dir, kind):
+    """A board's filesystem as `make deploy` (kind "mpy": x86 .mpy files) or `mip` from the
+    sources (kind "py") leaves it: firmware/ and main.py (boards/main.py)."""
+    import shutil
+    if kind == "mpy":
+        build_mpy(out_dir, MPY_CROSS_32, "x86")
+    else:
+        os.makedirs(os.path.join(out_dir, "firmware"), exist_ok=True)
+        for fn in os.listdir(os.path.join(ROOT, "firmware")):
+            if fn.endswith(".py"):
+                shutil.copy(os.path.join(ROOT, "firmware", fn), os.path.join(out_dir, "firmware"))
+    for fn in os.listdir(os.path.join(ROOT, "firmware")):
+        if fn.endswith(".bin"):
+            shutil.copy(os.path.join(ROOT, "firmware", fn), os.path.join(out_dir, "firmware"))
+    shutil.copy(os.path.join(ROOT, "boards", "main.py"), os.path.join(out_dir, "main.py"))
+    return out_dir
+
+
+# boardrun.py's timeline: the figure-8 for DANCE_S, then at rest until END_S (1000 headings
+# and more after a session that ends once the board is put down)
+BOARD_DANCE_S = 60
+BOARD_END_S = 85
+
+
+def board_run(install, session, kb, store_dir):
+    """boards/main.py on the x86-32 build with a heap of `kb` KB over `session`
+    (benchmarks/boardrun.py): {'kb', 'exit', 'traceback', 'lines' (the status lines and
+    announcements printed), 'final' (boardrun's last line), 'complete' (a 10-element
+    calibration saved, the session over, the last status line a good heading)}."""
+    exe = [MICROPYTHON_32, "-X", "heapsize=%dk" % kb,
+           os.path.join(ROOT, "host_sim", "cli", "benchmarks", "boardrun.py"), session,
+           store_dir, str(BOARD_DANCE_S), str(BOARD_END_S)]
+    env = dict(os.environ, MICROPYPATH=".")
+    try:
+        p = subprocess.run(exe, cwd=install, env=env, capture_output=True, text=True,
+                           timeout=300)
+        code, out, err = p.returncode, p.stdout, p.stderr
+    except subprocess.TimeoutExpired as e:
+        code, out, err = "timeout", e.stdout or "", e.stderr or ""
+        out = out.decode() if isinstance(out, bytes) else out
+        err = err.decode() if isinstance(err, bytes) else err
+    lines = [ln for ln in out.splitlines() if ln.strip()]
+    final = lines[-1] if lines and lines[-1].startswith("boardrun:") else None
+    shown = [ln for ln in lines if not ln.startswith("boardrun:")]
+    last = shown[-1] if shown else ""
+    return {"kb": kb, "exit": code, "traceback": "Traceback" in err or code != 0,
+            "stderr": err[-400:], "lines": shown, "final": final,
+            "complete": bool(final and "model 10 stored" in final and "collecting 0" in final
+                             and "mode heading" in final and last.startswith("heading ")
+                             and "---.-" not in last and "calibrated: model 10" in last)}
+
+
+def board_sweep(install, session, kbs, stored_from=None):
+    """board_run at each heap of `kbs`, each with a store of its own: empty, or a copy of
+    `stored_from` (a store directory holding a calibration). A list of board_run results."""
+    import shutil
+    import tempfile
+    out = []
+    for kb in kbs:
+        with tempfile.TemporaryDirectory() as st:
+            if stored_from:
+                for fn in os.listdir(stored_from):
+                    shutil.copy(os.path.join(stored_from, fn), st)
+            out.append(board_run(install, session, kb, st))
+    return out
+
+
+def smallest_complete(results):
+    """The smallest heap (KB) from which every larger heap of the sweep completed, or None."""
+    best = None
+    for r in sorted(results, key=lambda r: -r["kb"]):
+        if not r["complete"]:
+            break
+        best = r["kb"]
+    return best
+
+
 def romfs_image(mpy_pkg, out):
     """A ROMFS image of the compiled firmware package (mpremote romfs build)."""
     import shutil

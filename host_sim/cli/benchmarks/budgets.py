@@ -24,6 +24,14 @@ BUDGETS = {
     # the gyro-aided heading (use_gyro(), .mpy): live heap after boot + 1000 headings, minus
     # the heading line above (docs/gyro.md's goal; 6.5-7.4 KB measured when set)
     "gyro_extra_mpy": 8 * KB,
+    # boards/main.py itself over the replayed figure-8 (benchmarks/boardrun.py, the status
+    # line printed every 0.5 s): the smallest heap from which every larger heap of the sweep
+    # completes (tests/test_heap_sweep.py, 32 KB steps), for a first calibration and for a
+    # board booting on a stored one, from .mpy files and from .py sources
+    "board_calibrate_mpy": 192 * KB,
+    "board_calibrate_py": 320 * KB,
+    "board_heading_mpy": 128 * KB,
+    "board_heading_py": 160 * KB,
     # bytes allocated per sample once the board shows headings
     "bytes_per_sample": 0,
 }

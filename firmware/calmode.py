@@ -1,0 +1,86 @@
+"""Calibration mode: one job in RAM at a time. Where the heap cannot hold the heading line and a
+calibration session together, CompassApp calibrates in this mode: it lets go of what showing a
+heading needs (the Compass, the field watch, the fast kernels and their tables, the status
+line's heading part) and holds only what calibrating needs (the drivers, their sample checks,
+the collector, the solver, the acceptance, the store); once a fit is saved and the session
+ends, the heading line is made again without the session's code. Imported for that and
+dropped after it (firmware.compat.drop).
+
+    app.mode          "heading", or "calibrating" while this mode runs (no heading: the
+                      status is "calibrating", the status line shows the session's progress)
+
+CompassApp enters it from calibrate() (at construction with no good stored calibration, from
+relearning when the iron changed, or when called) when compat.free_bytes() is below
+SESSION_ROOM, or when a session started beside the heading line ran out of memory. When even
+this mode finds no room, the heading line is made again, app.no_memory says what could not be
+done and what to do instead, and the app tries again after RETRY_US. docs/design.md (memory)
+has the figures; make bench measures them (docs/benchmarks.md).
+"""
+from firmware.compat import const, drop, free_bytes
+
+# free heap (bytes, after a collection) a calibration session needs beside the heading line
+# for the board to keep both: below it the board calibrates in this mode. Measured on the
+# x86-32 build (the smallest heap in which the background session completes, less the heading
+# line's live heap; docs/benchmarks.md), with a margin.
+SESSION_ROOM = const(112 * 1024)
+# the smallest heap in which this mode completes a first calibration (.mpy, x86-32 build;
+# docs/benchmarks.md): what the status line says a board needs when even this mode fails
+MODE_NEED_KB = const(128)
+RETRY_US = const(60000000)  # a session that found no room is tried again after 60 s
+MODE_HEADING = "heading"
+MODE_CALIBRATING = "calibrating"
+# the heading line's modules: dropped while this mode runs (their objects let go first)
+HEADING_LINE = ("compass", "fast", "kang_tables", "trig", "accuracy", "status", "location",
+                "field", "attitude", "attitude_fast", "attitude_plain")
+
+
+def room():
+    """True when a session fits beside the heading line (always, where the port does not
+    say how much is free)."""
+    f = free_bytes()
+    return f is None or f >= SESSION_ROOM
+
+
+def enter(app):
+    """Let go of the heading line and start the session; the collector, or None when even
+    that did not fit (then the heading line is back and app.no_memory says so)."""
+    from firmware import compat, i2cdevice
+    app.mode = MODE_CALIBRATING
+    app._decl_kang = app.compass.declination_kang
+    app.compass = app.watch = app.dip = app.attitude = None
+    app._correct = app._apply = None
+    app.heading_kang = -1
+    i2cdevice.use_kernels(False)  # the drivers' plain decode: firmware.fast goes, and
+    app._fast_was = compat.FAST   # no module imported meanwhile brings it back
+    compat.FAST = False
+    compat._kernels = 0
+    drop(*HEADING_LINE)
+    free_bytes()
+    try:
+        from firmware import session
+        app._session = session
+        app.collector = session.start(app, False)
+        return app.collector
+    except MemoryError:
+        app._session = app.collector = None
+        session = None
+        drop(*_MACHINERY)
+        leave(app)
+        app.no_memory = "calibrate"
+        return None
+
+
+def leave(app):
+    """The session is over (its machinery dropped): the heading line again."""
+    free_bytes()
+    from firmware import appsetup, compat
+    compat.FAST = app._fast_was
+    app.mode = MODE_HEADING
+    appsetup.heading_line(app, app._decl_kang)
+    appsetup = None
+    drop("appsetup", "devinit")
+    app._use(app.calibration)
+
+
+# firmware/session.py MACHINERY (named here too: session may not have loaded)
+_MACHINERY = ("session", "calibrator", "samples", "accum", "solve", "acceptance", "history")

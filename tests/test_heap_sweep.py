@@ -1,0 +1,73 @@
+"""Every heap a board may have: boards/main.py itself (host_sim/cli/benchmarks/boardrun.py) on
+the x86-32 build (a collector like a board's), from `.mpy` files (make deploy) and from `.py`
+sources (mip), with an empty store (a first calibration) and with a stored calibration, at
+heaps from 32 KB to 512 KB. No run may end in a traceback: each completes, or its last status
+line says what the board cannot do, and the board keeps running to the end of the scenario.
+`make bench` sweeps in 4 KB steps and writes the smallest heaps (docs/benchmarks.md); here
+the step is HEAP_SWEEP_STEP_KB (32 by default) to keep `make test` short."""
+import os
+import shutil
+
+import pytest
+
+from host_sim.cli import bench
+from host_sim.cli.benchmarks.budgets import BUDGETS, KB
+from tests import mp
+
+X86 = mp.TIERS["x86-32"]
+STEP = int(os.environ.get("HEAP_SWEEP_STEP_KB", "32"))
+HEAPS = list(range(32, 513, STEP))
+# what a board that cannot do its job says instead (firmware/status.py, boards/main.py)
+SAYS_WHY = ("out of memory", "calibration needs", "calibration mode", "not loaded",
+            "save failed: no_memory")
+
+
+@pytest.fixture(scope="module")
+def world(tmp_path_factory):
+    if not X86.available:
+        pytest.skip("x86-32 tier: %s" % X86.reason)
+    d = str(tmp_path_factory.mktemp("sweep"))
+    session = os.path.join(d, "session.bin")
+    bench.write_session(session, smoke=False)
+    out = {"session": session}
+    for kind in ("mpy", "py"):
+        out[kind] = bench.board_install(os.path.join(d, kind), kind)
+    # a store holding the calibration a roomy board makes
+    store = os.path.join(d, "calibrated")
+    os.makedirs(store)
+    r = bench.board_run(out["mpy"], session, 512, store)
+    assert r["complete"], r
+    out["store"] = store
+    return out
+
+
+def _check(results):
+    for r in results:
+        assert not r["traceback"], (r["kb"], r["exit"], r["stderr"])
+        assert r["final"] is not None, (r["kb"], r["lines"][-3:])  # ran to the end
+        last = r["lines"][-1] if r["lines"] else ""
+        assert r["complete"] or any(w in last for w in SAYS_WHY), (r["kb"], last)
+
+
+@pytest.mark.parametrize("kind", ["mpy", "py"])
+@pytest.mark.parametrize("stored", [False, True], ids=["first_calibration", "calibrated"])
+def test_no_heap_ends_in_a_traceback_and_each_board_says_why(world, kind, stored):
+    results = bench.board_sweep(world[kind], world["session"], HEAPS,
+                                world["store"] if stored else None)
+    _check(results)
+    best = bench.smallest_complete(results)
+    assert best is not None, [(r["kb"], r["lines"][-1:]) for r in results]
+    budget = BUDGETS["board_%s_%s" % ("heading" if stored else "calibrate", kind)] // KB
+    assert best <= budget, (best, budget)
+
+
+def test_a_status_line_reads_never_save_failed_none(world):
+    r = bench.board_run(world["mpy"], world["session"], 176,
+                        str(world["store"]) + "-none")  # a fresh, empty store folder
+    assert not any("save failed: None" in ln for ln in r["lines"])
+
+
+@pytest.fixture(autouse=True)
+def _tidy(world):
+    yield
+    shutil.rmtree(str(world["store"]) + "-none", ignore_errors=True)
