@@ -39,7 +39,7 @@ PARTS = {
              "app.py", "status.py", "accuracy.py", "boot.py", "fast.py"),
     # collecting, solving (4, 7, 10 elements), accepting and the history of fits
     "calibrate": ("session.py", "calibrator.py", "samples.py", "accum.py", "solve.py",
-                  "acceptance.py", "history.py"),
+                  "acceptance.py", "history.py", "calmode.py", "mounting.py", "mountcheck.py"),
     # PJRC MotionCal's serial protocol and the board's MotionCal mode
     "motioncal": ("motioncal.py", "motioncal_mode.py"),
     # the World Magnetic Model on the board, set_location(), quick_calibrate()

@@ -1,0 +1,189 @@
+"""The mounting check (firmware/mounting.py) on the desktop: simulated calibration sessions, the
+no-false-alarm soak, and the offline check of a log with accelerometer columns.
+
+    python -m host_sim.cli.mounting [--sessions N] [--seconds S] [--seed K] [--json]
+
+Simulated sessions (session()): a board of host_sim.boards (QMC5883L, HMC5883L, QMC5883P with
+an MPU6050 module, the GY-87 and its QMC5883L clone) with its chips mounted as asked, iron,
+a figure-8 calibration dance (host_sim.motion.figure8) through CompassApp with the MAG_AXES /
+ACCEL_AXES given. Every step with a plausible accelerometer offers (mag raw, accel raw) to a
+firmware.mounting.Pairs, and each calibration the app accepts is checked as the board checks
+it: the verdicts in order, with the time of each.
+
+The soak (soak(), the command above; make soak runs 600 sessions): seeded sessions, each a
+random board, world (field 25-65 uT, inclination -75..75 deg), iron (host_sim.world.random_iron),
+dance (period 24-36 s, pitch amplitude 60-85 deg, roll 120-180 deg, any start heading) and a
+random one of the 24 mountings of each chip WITH its right MAG_AXES / ACCEL_AXES: a verdict
+"wrong" in any check of any session is a false alarm. Printed: sessions, checks, false alarms,
+the verdicts of the last check of each session, the largest spread (sigma) of a right setting.
+"""
+import json
+import sys
+
+from host_sim import motion
+from host_sim.boards import make_board
+from host_sim.prng import Prng
+from host_sim.world import World, mount_inverse, random_iron
+
+from firmware.app import CompassApp
+from firmware import mountcheck, mounting
+
+BOARDS = (("qmc5883l", True), ("hmc5883l", True), ("qmc5883p", True), ("gy87", None),
+          ("gy87-qmc", None))
+MOUNT = (1, -2, -3)   # host_sim.boards: every chip x forward, y left, z up
+MAG_AXES = "x,-y,-z"  # ... and the maps that go with it (boards/breakouts.py)
+ACCEL_AXES = "-x,y,z"
+SECONDS = 40          # a normal dance: the issue's bound, and test_app.py's session
+_AXES = "xyz"
+
+
+def _spec(m, neg=False):
+    return ",".join(("-" if (a < 0) != neg else "") + _AXES[abs(a) - 1] for a in m)
+
+
+def mag_axes(mount):
+    """The MAG_AXES (firmware.axes spec) of a magnetometer mounted `mount` (host_sim.world: a
+    body -> sensor signed permutation): its inverse, sensor -> body."""
+    return _spec(mount_inverse(mount))
+
+
+def accel_axes(mount):
+    """The ACCEL_AXES of an accelerometer mounted `mount`: the inverse negated (AN4248 wants
+    +1 g down, the chip reads +1 g on an axis pointing up)."""
+    return _spec(mount_inverse(mount), neg=True)
+
+
+def rotations():
+    """The 24 mountings that are rotations (det +1), the boards' own first."""
+    out = [MOUNT]
+    for p in ((1, 2, 3), (1, 3, 2), (2, 1, 3), (2, 3, 1), (3, 1, 2), (3, 2, 1)):
+        for s in ((1, 1, 1), (1, 1, -1), (1, -1, 1), (1, -1, -1), (-1, 1, 1), (-1, 1, -1),
+                  (-1, -1, 1), (-1, -1, -1)):
+            m = (p[0] * s[0], p[1] * s[1], p[2] * s[2])
+            inv = (p[0] > p[1]) + (p[0] > p[2]) + (p[1] > p[2])
+            if s[0] * s[1] * s[2] * (-1 if inv & 1 else 1) == 1 and m != MOUNT:
+                out.append(m)
+    return out
+
+
+class Session:
+    """One simulated calibration session with the mounting check (see the module docstring).
+    .checks: (t_s, verdict, axes, sigma, best, bins) after each accepted calibration;
+    .app, .pairs, .board."""
+
+    def __init__(self, chip="qmc5883l", accel=True, mount=MOUNT, accel_mount=MOUNT,
+                 mag_axes=MAG_AXES, accel_axes=ACCEL_AXES, world=None, seed=3,
+                 seconds=SECONDS):
+        if world is None:
+            world = World(field_ut=50.0, inclination_deg=60.0, declination_deg=4.0,
+                          hard_iron_ut=(45.0, -35.0, 30.0),
+                          soft_iron=((1.18, 0.09, -0.06), (0.09, 0.88, 0.07),
+                                     (-0.06, 0.07, 1.04)), motion=motion.figure8())
+        b = make_board(chip, world=world, seed=seed, accel=accel, mount=mount,
+                       accel_mount=accel_mount)
+        self.board = b
+        self.mag_axes = mag_axes
+        self.accel_axes = accel_axes
+        app = CompassApp(b.bus, mag_axes=mag_axes, accel_axes=accel_axes, store=None,
+                         delay_us=b.sleep_us, ticks_us=b.clock.ticks_us)
+        self.app = app
+        self.pairs = mounting.Pairs(app.accel.counts_per_g,
+                                    getattr(app.mag, "period_us", 20000))
+        self.checks = []
+        accepted = 0
+        end = int(seconds * 1000000)
+        while b.clock.now_us < end:
+            if app.step() and app.tilt:
+                self.pairs.feed(app.raw, app._acc)
+            if app.accepted > accepted:
+                accepted = app.accepted
+                self.check(app.calibration)
+
+    def check(self, cal):
+        r = mountcheck.check(self.pairs, cal, self.mag_axes, self.accel_axes)
+        self.checks.append((self.board.clock.now_us // 1000000,) + r + (self.pairs.count,))
+        return r[0]
+
+    @property
+    def verdict(self):
+        """The last check's verdict and MAG_AXES, or (None, None) when no fit was accepted."""
+        return self.checks[-1][1:3] if self.checks else (None, None)
+
+
+def random_session(seed, seconds=SECONDS, wrong=False):
+    """The soak's session `seed`: a random board, world, iron, dance and mounting, with the
+    right MAG_AXES; wrong=True: with the MAG_AXES of another rotation (.right: the right one)."""
+    g = Prng(seed, stream=0x3A7)
+
+    def u(lo, hi):
+        return lo + (hi - lo) * g.uniform()
+
+    chip, accel = BOARDS[g.randrange(len(BOARDS))]
+    rots = rotations()
+    mount = rots[g.randrange(24)]
+    accel_mount = rots[g.randrange(24)]
+    v, w = random_iron(seed)
+    m = motion.figure8(period_s=u(24.0, 36.0), pitch_amp=u(60.0, 85.0),
+                       roll_amp=u(120.0, 180.0), yaw0=u(0.0, 360.0))
+    world = World(field_ut=u(25.0, 65.0), inclination_deg=u(-75.0, 75.0),
+                  declination_deg=u(-20.0, 20.0), hard_iron_ut=v, soft_iron=w, motion=m,
+                  seed=seed)
+    setting = mag_axes(mount)
+    if wrong:
+        other = rots[g.randrange(23)]
+        setting = mag_axes(rots[23] if other == mount else other)
+    s = Session(chip, accel, mount, accel_mount, setting, accel_axes(accel_mount), world,
+                seed=seed, seconds=seconds)
+    s.right = mag_axes(mount)
+    return s
+
+
+def soak(sessions=60, seed=1, seconds=SECONDS):
+    """Run `sessions` random sessions with right settings (see the module docstring)."""
+    out = {"sessions": sessions, "seed": seed, "seconds": seconds, "checks": 0,
+           "false_alarms": 0, "alarms": [], "last": {}, "worst_sigma_q10": 0}
+    for i in range(sessions):
+        s = random_session(seed * 100003 + i, seconds)
+        for c in s.checks:
+            out["checks"] += 1
+            if c[1] == mountcheck.WRONG:
+                out["false_alarms"] += 1
+                out["alarms"].append([seed * 100003 + i, s.board.chip] + list(c))
+            elif c[1] == mountcheck.OK and c[3] > out["worst_sigma_q10"]:
+                out["worst_sigma_q10"] = c[3]
+        last = s.verdict[0] or "no fit"
+        out["last"][last] = out["last"].get(last, 0) + 1
+    return out
+
+
+def report(st):
+    """The soak's lines."""
+    return ["mounting check soak: %d sessions x %d s, seed %d, right settings on random boards, "
+            "worlds and mountings" % (st["sessions"], st["seconds"], st["seed"]),
+            "checks %d (one per accepted fit)  false alarms %d  last verdicts %s  worst sigma "
+            "with ok %.3f" % (st["checks"], st["false_alarms"],
+                              ", ".join("%s %d" % kv for kv in sorted(st["last"].items())),
+                              st["worst_sigma_q10"] / 1024.0)]
+
+
+def main(argv):
+    from host_sim.cli.args import Parser
+    p = Parser("mounting", "[options]", "The mounting check's no-false-alarm soak.")
+    p.option("--sessions", "int", default=600, lo=1, metavar="N", help="sessions")
+    p.option("--seconds", "int", default=SECONDS, lo=5, hi=600, metavar="S",
+             help="seconds of dance per session")
+    p.option("--seed", "int", default=1, lo=0, metavar="K", help="the campaign's seed")
+    p.option("--json", "flag", help="one JSON object")
+
+    def body(o):
+        st = soak(o["sessions"], o["seed"], o["seconds"])
+        if o["json"]:
+            print(json.dumps(st, sort_keys=True))
+        else:
+            print("\n".join(report(st)))
+        return 1 if st["false_alarms"] else 0
+    return p.main(argv, body)
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
