@@ -303,3 +303,80 @@ def test_the_heading_path_never_loads_the_check():
                 names = [node.module] + [node.module + "." + a.name for a in node.names]
                 assert not any(n.startswith(("firmware.mounting", "firmware.mountcheck"))
                                for n in names), (name, node.lineno)
+
+
+# --- offline: python -m host_sim calibrate on a log with accelerometer columns -------------------
+@pytest.fixture(scope="module")
+def logs(tmp_path_factory):
+    """A GY-87's 40 s dance logged as raw counts (ax, ay, az, mx, my, mz), with the HMC5883L
+    mounted as the boards' usual maps say and turned against the MPU6050; the wrong one also
+    with the accelerometer in m/s^2 under other header names, and without its columns."""
+    d = tmp_path_factory.mktemp("mountlogs")
+    out = {}
+    for name, mount in (("right", M.MOUNT), ("wrong", (2, 1, -3))):
+        rows = M.Session("gy87", None, mount=mount, record=True).rows
+        out[name] = str(d / (name + ".csv"))
+        with open(out[name], "w") as f:
+            f.write("ax,ay,az,mx,my,mz\n")
+            f.writelines(",".join(str(v) for v in r) + "\n" for r in rows)
+        if name == "wrong":
+            out["wrong_si"] = str(d / "wrong_si.csv")
+            with open(out["wrong_si"], "w") as f:
+                f.write("# a phone app's export\ntime;accX (m/s^2);accY (m/s^2);accZ (m/s^2);"
+                        "magX;magY;magZ\n")
+                for i, r in enumerate(rows):
+                    f.write("%d;%s;%d;%d;%d\n" % (i, ";".join("%.4f" % (v * 9.80665 / 16384)
+                                                               for v in r[:3]), *r[3:]))
+            out["mag_only"] = str(d / "mag_only.csv")
+            with open(out["mag_only"], "w") as f:
+                f.write("mx,my,mz\n")
+                f.writelines(",".join(str(v) for v in r[3:]) + "\n" for r in rows)
+    return out
+
+
+def _calibrate(args, micro=False):
+    exe = [mp.MICROPYTHON] if micro else [mp.sys.executable]
+    env = dict(os.environ, MICROPYPATH=mp.ROOT, PYTHONPATH=mp.ROOT)
+    return subprocess.run(exe + ["-m", "host_sim", "calibrate"] + args, cwd=mp.ROOT, env=env,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_the_calibrate_command_names_the_mapping_a_log_with_accelerometer_columns_says(logs):
+    r = _calibrate([logs["wrong"], "--sensor", "hmc5883l", "--json"])
+    assert r.returncode == 0, r.stderr
+    m = json.loads(r.stdout)["mounting"]
+    assert (m["verdict"], m["mag_axes"], m["mag_axes_given"]) == ("wrong", "y,x,-z", "x,-y,-z")
+    assert m["pairs"] >= mountcheck.MIN_BINS and m["accel_columns"] == ["ax", "ay", "az"]
+    r = _calibrate([logs["wrong"], "--sensor", "hmc5883l"])
+    assert r.returncode == 0
+    assert 'the data say MAG_AXES = "y,x,-z"' in r.stdout
+    # the setting the data say is confirmed; the right log is confirmed as it is
+    r = _calibrate([logs["wrong"], "--sensor", "hmc5883l", "--mag-axes", "y,x,-z", "--json"])
+    assert json.loads(r.stdout)["mounting"]["verdict"] == "ok"
+    r = _calibrate([logs["right"], "--sensor", "hmc5883l"])
+    assert 'mounting       ok: MAG_AXES "x,-y,-z" agrees with ACCEL_AXES "-x,y,z"' in r.stdout
+
+
+def test_other_units_and_header_names_give_the_same_answer_and_no_columns_no_check(logs):
+    r = _calibrate([logs["wrong_si"], "--sensor", "hmc5883l", "--json"])
+    m = json.loads(r.stdout)["mounting"]
+    assert (m["verdict"], m["mag_axes"]) == ("wrong", "y,x,-z"), m
+    r = _calibrate([logs["mag_only"], "--sensor", "hmc5883l", "--json"])
+    assert r.returncode == 0 and "mounting" not in json.loads(r.stdout)
+
+
+def test_the_check_options_refuse_a_mirror_or_a_typo_in_one_line(logs):
+    for opt, val in (("--mag-axes", "x,y,-z"), ("--accel-axes", "x,-y,-z"),
+                     ("--mag-axes", "x,y")):
+        r = _calibrate([logs["wrong"], "--sensor", "hmc5883l", opt, val])
+        assert r.returncode == 2 and r.stdout == ""
+        lines = r.stderr.strip().splitlines()
+        assert len(lines) == 1 and opt in lines[0], r.stderr
+
+
+def test_the_offline_check_says_the_same_on_micropython(logs):
+    a = _calibrate([logs["wrong"], "--sensor", "hmc5883l"])
+    b = _calibrate([logs["wrong"], "--sensor", "hmc5883l"], micro=True)
+    assert b.returncode == 0, b.stderr
+    pick = [ln for ln in a.stdout.splitlines() if ln.startswith("mounting")]
+    assert pick and pick == [ln for ln in b.stdout.splitlines() if ln.startswith("mounting")]

@@ -15,7 +15,7 @@ and accept, or refuse (exit 1), or with --force fit without the acceptance check
 import json
 import sys
 
-from host_sim.cli import calfile, calopts, logfile
+from host_sim.cli import calfile, calopts, logfile, mounting
 from host_sim.cli.args import (STATUS_OK, STATUS_REFUSED, Parser, UsageError, decimal_text,
                                warn)
 from host_sim.cli.args import parse_decimal  # noqa: F401  (its earlier home; tests use it)
@@ -112,6 +112,7 @@ def _parser():
              help="refuse fits with a larger fit error (default 15 %)")
     p.option("--date", _date, metavar="ISO",
              help="the date written (YYYY-MM-DDTHH:MM:SSZ; default now, UTC)")
+    mounting.options(p)  # --mag-axes, --accel-axes: the mounting check
     p.epilog = EPILOG
     return p
 
@@ -134,7 +135,9 @@ JSON: model, offset, field, invw (W^-1, det 1; file units), scale (counts per fi
 invw_q15, offset_counts, field_counts, field_out_counts (the magnitude the compass checks),
 fit_error_x100, fit_error_percent, samples_used, coverage_percent, date, rows, skipped_rows,
 forced, refusal, warnings, and sensor, range_gauss, range_code, counts_per_gauss, field_ut
-when known; after a refusal {"rejected", "detail", "hint", rows, samples_held}.
+when known; mounting (a log with accelerometer columns: the mounting check, its verdict
+and the MAG_AXES the data say; docs/calibration.md, troubleshooting); after a refusal
+{"rejected", "detail", "hint", rows, samples_held}.
 
 --sensor takes a chip or its breakout in any case (GY-271 is read as its QMC5883L, with a
 warning naming the other chip it may carry). A log of a chip the firmware does not drive
@@ -468,6 +471,9 @@ def body(opts):
         warn(COMMAND, "forced: acceptance refused this fit (%s: %s); it is written as forced"
              % (forced.reason, forced.detail))
     r = report(c, info, date)
+    check = mounting.offline(opts, c, info)  # a log with accelerometer columns
+    if check is not None:
+        r["mounting"] = check
     if opts["out"] is not None:
         try:
             calfile.write(opts["out"], dict([(k, r[k]) for k in calfile.KEYS]))
@@ -477,6 +483,8 @@ def body(opts):
         print(json.dumps(r))
         return STATUS_OK
     _print_text(r, c, info, opts)
+    if check is not None:
+        print("\n".join(mounting.offline_lines(check)))
     return STATUS_OK
 
 

@@ -1,7 +1,18 @@
-"""The mounting check (firmware/mounting.py) on the desktop: simulated calibration sessions, the
-no-false-alarm soak, and the offline check of a log with accelerometer columns.
+"""The mounting check (firmware/mounting.py, firmware/mountcheck.py) on the desktop: the offline
+check of a log with accelerometer columns, simulated calibration sessions, and the
+no-false-alarm soak.
 
-    python -m host_sim.cli.mounting [--sessions N] [--seconds S] [--seed K] [--json]
+    python -m host_sim calibrate LOG.csv     # a log with ax, ay, az beside mx, my, mz: checked
+    python -m host_sim.cli.mounting [--sessions N] [--seconds S] [--seed K] [--json]   # the soak
+
+Offline (offline(), called by the calibrate command after a fit): the accelerometer columns
+are found by their header names (ACCEL_PREFIXES: ax, ay, az / accX.. / acc_x.. / accel_x..),
+scaled so that the median row reads 1 g (any units: counts, g, m/s^2), and each row with its
+magnetometer row, both converted as the fit converted them, is offered to a
+firmware.mounting.Pairs; firmware.mountcheck.check() then judges the fit's calibration with
+the MAG_AXES / ACCEL_AXES given (--mag-axes, --accel-axes; default the breakouts' usual
+"x,-y,-z" / "-x,y,z", boards/breakouts.py). The log's sample rate is not known: the pairs
+take moves up to the slowest rate's (10 Hz), and each bin keeps the stillest row anyway.
 
 Simulated sessions (session()): a board of host_sim.boards (QMC5883L, HMC5883L, QMC5883P with
 an MPU6050 module, the GY-87 and its QMC5883L clone) with its chips mounted as asked, iron,
@@ -20,12 +31,8 @@ the verdicts of the last check of each session, the largest spread (sigma) of a 
 import json
 import sys
 
-from host_sim import motion
-from host_sim.boards import make_board
-from host_sim.prng import Prng
-from host_sim.world import World, mount_inverse, random_iron
+from host_sim.world import World, mount_inverse
 
-from firmware.app import CompassApp
 from firmware import mountcheck, mounting
 
 BOARDS = (("qmc5883l", True), ("hmc5883l", True), ("qmc5883p", True), ("gy87", None),
@@ -69,11 +76,14 @@ def rotations():
 class Session:
     """One simulated calibration session with the mounting check (see the module docstring).
     .checks: (t_s, verdict, axes, sigma, best, bins) after each accepted calibration;
-    .app, .pairs, .board."""
+    .app, .pairs, .board; .rows with record=True."""
 
     def __init__(self, chip="qmc5883l", accel=True, mount=MOUNT, accel_mount=MOUNT,
                  mag_axes=MAG_AXES, accel_axes=ACCEL_AXES, world=None, seed=3,
-                 seconds=SECONDS):
+                 seconds=SECONDS, record=False):
+        from host_sim import motion
+        from host_sim.boards import make_board
+        from firmware.app import CompassApp
         if world is None:
             world = World(field_ut=50.0, inclination_deg=60.0, declination_deg=4.0,
                           hard_iron_ut=(45.0, -35.0, 30.0),
@@ -92,9 +102,12 @@ class Session:
         self.checks = []
         accepted = 0
         end = int(seconds * 1000000)
+        self.rows = []  # record=True: (accel x, y, z, mag x, y, z) raw, per step with both
         while b.clock.now_us < end:
             if app.step() and app.tilt:
                 self.pairs.feed(app.raw, app._acc)
+                if record:
+                    self.rows.append(tuple(app._acc) + tuple(app.raw))
             if app.accepted > accepted:
                 accepted = app.accepted
                 self.check(app.calibration)
@@ -113,6 +126,9 @@ class Session:
 def random_session(seed, seconds=SECONDS, wrong=False):
     """The soak's session `seed`: a random board, world, iron, dance and mounting, with the
     right MAG_AXES; wrong=True: with the MAG_AXES of another rotation (.right: the right one)."""
+    from host_sim import motion
+    from host_sim.prng import Prng
+    from host_sim.world import random_iron
     g = Prng(seed, stream=0x3A7)
 
     def u(lo, hi):
@@ -164,6 +180,129 @@ def report(st):
             "with ok %.3f" % (st["checks"], st["false_alarms"],
                               ", ".join("%s %d" % kv for kv in sorted(st["last"].items())),
                               st["worst_sigma_q10"] / 1024.0)]
+
+
+# ---- offline: a log with accelerometer columns (the calibrate command) ----------------------
+
+ACCEL_PREFIXES = ("a", "acc", "accel", "accelerometer", "acceleration", "rawa", "rawacc",
+                  "accraw", "accelraw")
+ACCEL_SUFFIXES = ("", "g", "ms2", "mss", "raw", "lsb", "counts")
+OFFLINE_CPG = 16384       # the accelerometer rows are scaled to the MPU6050's +-2 g counts
+OFFLINE_PERIOD_US = 100000  # the log's rate is not known: the slowest a driver sets
+
+
+def accel_columns(names):
+    """The 0-based indices of the accelerometer's x, y, z columns among header `names`, or
+    None."""
+    from host_sim.cli.logfile import normalise_name
+    norm = [normalise_name(n) for n in names]
+    for p in ACCEL_PREFIXES:
+        for u in ACCEL_SUFFIXES:
+            keys = [p + a + u for a in "xyz"]
+            if all(k in norm for k in keys):
+                return tuple(norm.index(k) for k in keys)
+    return None
+
+
+def _axes(text, accel=False):
+    from firmware.axes import AxisMap
+    try:
+        m = AxisMap(text)
+    except ValueError as e:
+        raise ValueError(str(e))
+    if m.det != (-1 if accel else 1):
+        raise ValueError("%r is a %s: %s" % (
+            text, "mirror image" if m.det < 0 else "rotation",
+            "an accelerometer's map to AN4248 is a rotation then a negation (e.g. -x,y,z)"
+            if accel else "a magnetometer's map is a rotation (e.g. x,-y,-z)"))
+    return m.spec
+
+
+def mag_axes_opt(text):
+    return _axes(text)
+
+
+def accel_axes_opt(text):
+    return _axes(text, accel=True)
+
+
+def options(p):
+    """The calibrate command's options for the check (host_sim/cli/calibrate.py)."""
+    p.option("--mag-axes", mag_axes_opt, metavar="SPEC",
+             help="the board's MAG_AXES, for the mounting check of a log with\n"
+                  "accelerometer columns (default %s)" % MAG_AXES)
+    p.option("--accel-axes", accel_axes_opt, metavar="SPEC",
+             help="the board's ACCEL_AXES (default %s)" % ACCEL_AXES)
+
+
+def offline(opts, cal, info):
+    """The mounting check of the log the calibrate command fitted (see the module docstring):
+    a dict for its JSON (verdict, mag_axes: what the data say, mag_axes_given, accel_axes,
+    sigma, best: spreads of the dip's sine, pairs: directions held of mounting.BINS, rows),
+    or None when the log has no accelerometer columns."""
+    from host_sim.cli import logfile
+    log = info["log"]
+    cols = accel_columns(log.names) if log.names else None
+    if cols is None:
+        return None
+    acc = logfile.Log(log.path, cols, opts["skip"])
+    rows = []
+    for lineno, row in acc.rows():
+        rows.append((lineno, [m / 10 ** d for m, d in row]))
+    if not rows:
+        return None
+    mags = sorted((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) ** 0.5 for _, a in rows)
+    one_g = mags[len(mags) // 2]
+    if one_g <= 0:
+        return None
+    k = OFFLINE_CPG / one_g
+    accel = dict((ln, [int(round(v * k)) for v in a]) for ln, a in rows)
+    pairs = mounting.Pairs(OFFLINE_CPG, OFFLINE_PERIOD_US)
+    from array import array
+    raw = array("h", (0, 0, 0))
+    a16 = array("h", (0, 0, 0))
+    num, den = info["num"], info["den"]
+    used = 0
+    for lineno, row in logfile.Log(log.path, log.columns, opts["skip"]).rows():
+        a = accel.get(lineno)
+        if a is None:
+            continue
+        v = [logfile.convert(m, d, num, den) for m, d in row]
+        if not all(-32768 <= x <= 32767 for x in v + a):
+            continue
+        for i in range(3):
+            raw[i] = v[i]
+            a16[i] = a[i]
+        pairs.feed(raw, a16)
+        used += 1
+    mag_axes = opts.get("mag_axes") or MAG_AXES
+    accel_axes = opts.get("accel_axes") or ACCEL_AXES
+    v, axes, sigma, best = mountcheck.check(pairs, cal, mag_axes, accel_axes)
+    return {"verdict": v, "mag_axes": axes, "mag_axes_given": mag_axes,
+            "accel_axes": accel_axes, "sigma": sigma / 1024.0, "best": best / 1024.0,
+            "pairs": pairs.count, "bins": mounting.BINS, "rows": used,
+            "accel_columns": [log.names[c] for c in cols]}
+
+
+def offline_lines(r):
+    """The calibrate command's text lines for offline()'s result."""
+    given, axes, acc = r["mag_axes_given"], r["mag_axes"], r["accel_axes"]
+    spread = "%d of %d directions of gravity" % (r["pairs"], r["bins"])
+    v = r["verdict"]
+    if v == mountcheck.OK:
+        return ['mounting       ok: MAG_AXES "%s" agrees with ACCEL_AXES "%s" (the dip steady: '
+                'its sine within %.3f RMS over %s)' % (given, acc, r["sigma"], spread)]
+    if v == mountcheck.WRONG:
+        return ['mounting       WRONG: with ACCEL_AXES "%s" the data say MAG_AXES = "%s" (with '
+                '"%s" the dip swings: its sine by %.2f RMS; %.3f with "%s")'
+                % (acc, axes, given, r["sigma"], r["best"], axes),
+                "               put it in boards/<board>/board.py; examples/check_axes.py "
+                "checks ACCEL_AXES (docs/calibration.md, troubleshooting)"]
+    if v == mountcheck.SPREAD:
+        return ["mounting       not enough spread: %s, or two mappings fit as well (turn the "
+                "board over, not only around)" % spread]
+    return ["mounting       unsteady: no mapping keeps the dip steady (best %.2f RMS): a magnet, "
+            "a shaking hand, or columns that are not the accelerometer" % r["best"]]
 
 
 def main(argv):
