@@ -380,3 +380,30 @@ def test_the_offline_check_says_the_same_on_micropython(logs):
     assert b.returncode == 0, b.stderr
     pick = [ln for ln in a.stdout.splitlines() if ln.startswith("mounting")]
     assert pick and pick == [ln for ln in b.stdout.splitlines() if ln.startswith("mounting")]
+
+
+# --- the guided check: examples/check_axes.py on the simulator ----------------------------------
+_CHECK = ("import sys; sys.path.insert(0, %r); from examples.check_axes import check; "
+          "print(sorted(check(mount=%r, accel_mount=%r).items()))")
+
+
+@pytest.mark.parametrize("mount,accel_mount", [
+    (None, None), ((2, 1, -3), None), (None, (-2, -1, -3)), ((-1, -3, -2), (-2, -1, -3))],
+    ids=["right", "mag-turned", "accel-turned", "both"])
+def test_the_guided_check_names_the_lines_for_board_py(mount, accel_mount):
+    code = _CHECK % (mp.ROOT, mount, accel_mount)
+    out = mp.parity(["-c", code])
+    acc = M.accel_axes(accel_mount or M.MOUNT)
+    mag = M.mag_axes(mount or M.MOUNT)
+    lines = out.splitlines()
+    assert ("pitch and roll move the right way: ACCEL_AXES is right" in lines) == (
+        accel_mount is None)
+    assert any(ln.startswith("the heading holds through the poses") for ln in lines) == (
+        mount is None)
+    if mount is None and accel_mount is None:
+        assert "put these lines" not in out
+    else:
+        i = lines.index("put these lines in boards/<board>/board.py:")
+        assert lines[i + 1:i + 3] == ['ACCEL_AXES = "%s"' % acc, 'MAG_AXES = "%s"' % mag]
+    r = dict(eval(lines[-1]))
+    assert (r["accel_axes"], r["mag_axes"]) == (acc, mag)
