@@ -248,14 +248,19 @@ def _parity_lines(out):
     assert all(s[2:4] == ["wrong", "y,x,-z"] for s in settings_ if s[1] != "y,x,-z")
 
 
-def test_the_same_verdicts_on_cpython_and_the_micropython_unix_port():
-    _parity_lines(mp.parity(["tests/scenarios/mounting_parity.py"]))
+@pytest.fixture(scope="module")
+def cpython_verdicts():
+    out = mp.run(["tests/scenarios/mounting_parity.py"], micro=False)
+    _parity_lines(out)
+    return out
 
 
-def test_the_same_verdicts_on_the_32_bit_tier():
-    if not mp.TIERS["x86-32"].available:
-        pytest.skip("x86-32 tier: %s" % mp.TIERS["x86-32"].reason)
-    _parity_lines(mp.parity_tier(["tests/scenarios/mounting_parity.py"], "x86-32"))
+@pytest.mark.parametrize("tier", ["unix", "wasm", "x86-32"])
+def test_the_same_verdicts_on_every_micropython_tier(tier, cpython_verdicts):
+    t = mp.TIERS[tier]
+    if not t.available:
+        pytest.skip("%s tier: %s" % (tier, t.reason))
+    mp.parity_tier(["tests/scenarios/mounting_parity.py"], tier, expected=cpython_verdicts)
 
 
 def test_feeding_allocates_nothing_on_micropython():
