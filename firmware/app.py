@@ -140,7 +140,8 @@ _FIT_SIGMAS = const(3)        # window >= 3 x the fit's RMS radial error
 _US_PER_S = const(1000000)
 _LOAD_NO_MEMORY = "no_memory"  # firmware.persist.LOAD_NO_MEMORY
 _LOAD_RETRY_US = const(5000000)
-_RETRY_PAUSE_US = const(5000)  # the pause of a step while the app itself does not fit  # a load that found no room is tried again after 5 s
+_RETRY_PAUSE_US = const(5000)
+_CAL_RETRY_US = const(60000000)  # firmware.calmode.RETRY_US  # the pause of a step while the app itself does not fit  # a load that found no room is tried again after 5 s
 _GAP_CAP_US = const(0x10000000)  # the time since the last read stops counting at 268 s
 _ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
 _ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
@@ -372,12 +373,16 @@ class CompassApp:
         self._calmode_due = False
         try:
             from firmware import calmode
+            c = calmode.enter(self)
         except ImportError:
             self.not_installed = "calibrate"
             return
-        c = calmode.enter(self)
+        except MemoryError:  # not even the mode's own code: say so, try again later
+            c = None
+            self.no_memory = "calibrate"
+        calmode = None
         if c is None:
-            self._retry_us = calmode.RETRY_US
+            self._retry_us = _CAL_RETRY_US
         elif self._relearn_due:
             c.relearn(_STALE_AGE_S)
         self._relearn_due = False
@@ -477,6 +482,8 @@ class CompassApp:
         self._ok = False
         if self._calmode_due:
             self._calmode()
+        elif self.mode != "heading" and self.collector is None:
+            self._leave_calmode()  # the session has ended: this sample gets a heading
         self._clock()
         st = self._read()
         if st == STATUS_OK:
@@ -518,13 +525,14 @@ class CompassApp:
         else:
             self._failed(st)
         c = self.collector
-        if c is None:  # the session ended (or the mode could not leave): the heading line
-            from firmware import calmode
-            calmode.leave(self)
-            calmode = None
-            drop("calmode")
-        elif c.job is not None or c.due():
+        if c is not None and (c.job is not None or c.due()):
             self._solve()
+
+    def _leave_calmode(self):
+        from firmware import calmode
+        calmode.leave(self)
+        calmode = None
+        drop("calmode")
 
     def _internal(self, e):
         self._ok = False
