@@ -60,7 +60,6 @@ Every intermediate stays below 2**30 (a product a x b of a Q28 and a Q14 is take
 (a >> 14) b + ((a & 0x3FFF) b >> 14), exact; a time in us likewise with 15 bits); the per-sample path allocates nothing: its
 functions keep their frames within MicroPython's 11 words (see firmware/compass.py).
 """
-from array import array
 
 from firmware.compat import const, drop, kernels
 from firmware.trig import ZERO_VECTOR, atan2, isqrt, norm14, sin
@@ -83,12 +82,19 @@ _ONE28 = const(0x10000000)
 _M14 = const(0x3FFF)
 _CHUNK_US = const(32767)
 _KANG_90 = const(16384)
-_STILL_US = const(1000000)  # a still window...
-_FIRST_US = const(3000000)  # ...and the first: a slow turn has 3 s to move the field
 _SINCE_CAP = const(0x20000000)
+_UNC_CAP = const(0x10000000)  # 2.7e5 cdeg: far past any max_uncertainty_cdeg
 _DT_MAX = const(1000000)  # a longer gap counts as 1 s
 _BIAS_MAX = const(1 << 25)  # 2**13 counts in 1/4096 count: 62 deg/s at +-250 deg/s
-_WINDOW_MAX = const(4096)  # samples in a still window (the sums stay small)
+_BLOCK_US = const(2000000)  # the integral's evidence: 2 s of field-corrected, integrating time
+_PAUSE_US = const(1000000)  # the integral's wait after a hold
+_UNKNOWN_CDPS = const(2000)  # the bias before any evidence: the MPU6050's +-20 deg/s (product
+#                              spec table 6.1, zero-rate output at power-up)
+_KNOWN_CDPS = const(30)   # the bias counts as known within 0.3 deg/s...
+_LOST_CDPS = const(100)   # ...and no longer past 1 deg/s
+_FLOOR_CDPS = const(5)    # no evidence claims better than 0.05 deg/s
+_SETTLE_US = const(6000000)  # 6 s of gravity's correction at the start-up gain: its
+#                              integral has the bias about the level axes (3 time constants)
 
 # state slots (array 'i')
 _Q = const(0)      # 0..3 q (w, x, y, z), Q28
@@ -107,12 +113,9 @@ _E = const(28)     # last heading error (KANG)
 _SINCE = const(29)  # us since the last magnetic correction
 _AREJ = const(30)  # us of accelerometer rejection in a row
 _MREJ = const(31)  # us of the filter's own field rejection in a row
-_WN = const(32)    # still window: samples
-_WT = const(33)    # still window: us
-_WS = const(34)    # 34..36 still window: gyro sums (counts)
+# 32..36: free
 _GP = const(37)    # 37..39 the last gyro sample (counts)
-_WA = const(40)    # 40..42 still window: gravity at its start
-_WB = const(43)    # 43..45 still window: field at its start
+# 40..45: free
 _ACC_LIM = const(46)  # sin of accel_reject, Q14, squared
 _MAG_LIM = const(47)  # mag_reject, KANG
 _HEAD = const(48)
@@ -120,11 +123,22 @@ _PITCH = const(49)
 _ROLL = const(50)
 _SCR = const(51)   # 51..53 scratch
 _C = const(54)     # 54..56 the corrections (1/16 count) for the next sample's rates
-_WLB = const(57)   # still window: the field's tolerance (counts)
+# 57: free
 _UNC = const(58)   # the heading's uncertainty grown since the last correction, 1/1000 cdeg
-_WG = const(59)    # 59..61 still window: the gyro at its start (counts)
+# 59..61: free
 _CA = const(62)    # 62..64 the last gravity correction (1/16 count), held a sample
-_SIZE = const(65)  # (firmware/fast.py's mirrors use these numbers)
+_BLK = const(65)   # the integral's block: its time (< 0: none open; the wait after a hold)
+_CPG = const(66)   # counts per g
+_PULL = const(67)  # the field's recent pull on the heading (KANG x ms, decaying)
+_DPREV = const(68)  # the last block's evidence (cdeg/s)
+_SETTLE = const(69)  # gravity's correction still to run before the tilt holds (us)
+_BOOST = const(70)  # the start-up gains in force: 0 (none) .. 3 (4 times the options')
+_MG = const(71)    # mag_gain (1/1000 per s; at least 1)
+_CDPS = const(72)  # bias (1/4096 count) per cdeg/s
+_SNAP = const(73)  # 73..75 the bias at the block's start (or _sub()'s last call)
+_RUN = const(76)   # predict(): the app step whose gyro step ran
+_ACCOK = const(77)  # predict(): the accelerometer was plausible (app.tilt)
+_SIZE = const(78)  # (firmware/attitude_fast.py's mirrors use these numbers)
 
 
 def mul14(a, b):
@@ -177,38 +191,13 @@ def turn(st, e):
     st[_Q + 2] = mul14(st[_Q + 2], c) + mul14(x, s)
 
 
-def _near(a, b, o, lim):
-    # |a[i] - b[o + i]| <= lim on every axis
-    d = a[0] - b[o]
-    if d > lim or d < -lim:
-        return False
-    d = a[1] - b[o + 1]
-    if d > lim or d < -lim:
-        return False
-    d = a[2] - b[o + 2]
-    return -lim <= d <= lim
-
-
-def _copy3(a, b, o):
-    b[o] = a[0]
-    b[o + 1] = a[1]
-    b[o + 2] = a[2]
-
-
-def _bias_from_window(st, first):
-    # the window's mean rate (1/4096 count): the bias, or a quarter of the way to it
-    n = st[_WN]
-    _blend(st, 0, n, first)
-    _blend(st, 1, n, first)
-    _blend(st, 2, n, first)
-
-
-def _blend(st, i, n, first):
-    m = st[_WS + i]
-    m = ((m // n) << 12) + (((m % n) << 12) // n)  # the mean, 1/4096 count
-    if not first:
-        m = st[_BIAS + i] + ((m - st[_BIAS + i]) >> 2)
-    st[_BIAS + i] = m if -_BIAS_MAX <= m <= _BIAS_MAX else (_BIAS_MAX if m > 0 else -_BIAS_MAX)
+def gravity(st, grav):
+    """The filter's gravity, d x counts_per_g, in grav (int16 counts): the app's in place of
+    an accelerometer that also senses an acceleration (attitude.predict)."""
+    k = st[_CPG]
+    grav[0] = (st[_D] * k) >> 14
+    grav[1] = (st[_D + 1] * k) >> 14
+    grav[2] = (st[_D + 2] * k) >> 14
 
 
 # The steps the filter runs, module-wide: firmware/attitude_plain.py's functions, or their
@@ -251,38 +240,11 @@ class Attitude:
 
     def __init__(self, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g,
                  **options):
-        from firmware.gyrosetup import scales  # construction only: dropped after it
-        k = scales(counts_per_dps_x10, options)
-        scales = None
+        from firmware.gyrosetup import init  # construction only: dropped after it
+        init(self, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g, options)
+        init = None
         drop("gyrosetup")
-        self.gyro = gyro
-        self.gravity = gravity
-        self.field = field
-        self.compass = compass
-        self.recovery_us = k[7]
-        self.max_uncertainty_cdeg = k[8]
-        self.still_counts = counts_per_dps_x10 * 8 // 10  # 0.5 deg/s in 1/16 count
-        self.first_counts = counts_per_dps_x10 // 10  # 1 deg/s in counts
-        self.still_g = counts_per_g >> 6
-        self.base_cdeg = 100            # the field-corrected heading: ~1 deg
-        self.bias_cdeg_per_s = 20       # bias measured while still: within 0.2 deg/s
-        self.unknown_bias_cdeg_per_s = 100  # never still yet: the integral's ~1 deg/s
-        self.bias_estimates = 0
-        self.unc_rate = self.unknown_bias_cdeg_per_s  # _hold's, cdeg/s
-        self.started = False
-        self.accel_rejected = True
-        self._odd = False  # _correct: gravity's turn
-        self._cpg = counts_per_g
-        self.st = st = array("i", bytearray(4 * _SIZE))
-        st[_KI] = k[0]
-        st[_KF] = k[1]
-        st[_KA] = k[2]
-        st[_KM] = k[3]
-        st[_KB] = self.kb = k[4]
-        self.kb_counts = counts_per_dps_x10 * 16  # 10 deg/s in 1/16 count: the integral's limit
-        st[_ACC_LIM] = self.acc_lim = k[5]
-        st[_MAG_LIM] = k[6]
-        st[_Q] = _ONE28
+        self._use(_UNKNOWN_CDPS)
 
     # results
     heading_kang = property(lambda self: self.st[_HEAD])
@@ -309,11 +271,54 @@ class Attitude:
 
     @property
     def uncertainty_cdeg(self):
-        """The heading's uncertainty (0.01 deg): the base while the field corrects it, plus,
-        sample by sample since the last correction, the gyro bias uncertainty of the moment
-        times the time (unknown_bias_cdeg_per_s until a still window measured the bias,
-        bias_cdeg_per_s after)."""
-        return self.base_cdeg + self.st[_UNC] // 1000
+        """The heading's uncertainty (0.01 deg): the base while the field corrects it, plus the
+        lag a bias error of bias_cdps leaves behind the field's pull (bias_cdps / mag_gain),
+        plus, sample by sample since the last correction, bias_cdps of the moment times the
+        time."""
+        st = self.st
+        return self.base_cdeg + self.bias_cdps * 1000 // st[_MG] + st[_UNC] // 1000
+
+    def _use(self, v):
+        # how well the bias is known (cdeg/s), and what follows from it: the uncertainty's
+        # growth and lag; the start-up gains until it is known
+        st = self.st
+        self.bias_cdps = v
+        self.unc_rate = v
+        k = v <= (_LOST_CDPS if self.known else _KNOWN_CDPS)
+        if k and not self.known:
+            st[_SETTLE] = 0  # (the tilt holds)
+            st[_ACC_LIM] = self.acc_lim
+        self.known = k
+        # the start-up gains: the options' times v / 0.3 deg/s, 4 at most (a ramp down as
+        # the bias becomes known)
+        v = 0 if k else v // _KNOWN_CDPS - 1
+        v = 3 if v > 3 else v
+        if v != st[_BOOST]:
+            st[_BOOST] = v
+            k = self._k
+            st[_KA] = k[3 * v]
+            st[_KM] = k[3 * v + 1]
+            st[_KB] = self.kb = k[3 * v + 2]
+            st[_BLK] = -1  # the evidence of another bias_gain is not this one's
+
+    def _verify(self):
+        # the integral's evidence: over a block of field-corrected time the bias moved by
+        # bias_gain x the mean correction, and the mean correction is the bias error the
+        # filter still carries (the field's and gravity's pull balances it), so |moved| /
+        # (bias_gain x time) bounds the error; the larger of the last two blocks is taken
+        st = self.st
+        m = self._sub()  # cdeg/s moved
+        d = self._k[12 + st[_BOOST]] * (st[_BLK] // 1000)  # 1/10**6 per s x ms
+        st[_BLK] = 0
+        if d <= 0:
+            return
+        self.bias_estimates += 1
+        m = m * 1000000 // d
+        d = st[_DPREV]
+        st[_DPREV] = m
+        if d > m:
+            m = d
+        self._use(m if m > _FLOOR_CDPS else _FLOOR_CDPS)
 
     @property
     def vouched(self):
@@ -322,38 +327,85 @@ class Attitude:
     def reset(self):
         """Start again from the next good sample (the bias estimate is kept)."""
         self.started = False
-        self.st[_SINCE] = 0
-        self.st[_UNC] = 0
+        st = self.st
+        st[_PULL] = 0
+        st[_SINCE] = 0
+        st[_UNC] = 0
+        st[_BLK] = -1
+        if not self.known:  # the bias not known and the tilt not held: gravity is taken as
+            st[_SETTLE] = _SETTLE_US  # it comes (no rejection: the gyro cannot vouch
+            st[_ACC_LIM] = 0x3FFFFFFF  # for the tilt) until _SETTLE_US of correction
 
     # --- the app's step (attach, CompassApp.use_gyro) ------------------------------------
+    _run = -2  # predict(): the app step whose gyro step ran
+    _acc_ok = False  # predict(): the accelerometer was plausible (app.tilt)
+
+    def predict(self, app):
+        """The app's step before its compass update, on the sample just read: the
+        accelerometer's gravity mapped into app.gravity (a plausible one), the gyro step and
+        gravity's correction. Once the filter's tilt holds (the bias known, or gravity's
+        correction settled at the start-up gain), a gravity further from the filter's than
+        1/32 g on an axis (1/16 g until the bias is known) - an acceleration, a bump,
+        vibration - is replaced by the filter's, and so is an accelerometer bumped out of the
+        app's 0.75..1.25 g window (not one that is frozen or reads nothing: the chip's
+        fault): the compass's tilt and the field checks (the dip, its steadiness:
+        firmware/health.py) then see the filter's gravity, and a clean field keeps
+        correcting the heading while the board accelerates. True when app.gravity holds the
+        gravity to use (then app.tilt is True)."""
+        t = app.tilt
+        if t:
+            app._apply(app._am, app._acc, app.gravity)
+        elif app.health.asame:  # frozen (firmware/health.py): the chip's fault, not a bump
+            self._gap(app, False)
+            return False
+        st = self.st
+        st[_ACCOK] = t
+        if self._gap(app, True):
+            return t  # started again: the next clean sample starts the filter
+        st[_RUN] = app.steps
+        if not self.started:
+            return t
+        if self._step(app._dt, 6 if t else 2) and t or not (  # FIELD | ACC_OK; turning
+                self.known or st[_SETTLE] <= 0):  # fast, the accelerometer is taken as it is
+            return t
+        app.tilt = True  # (a bumped accelerometer: gravity is the filter's)
+        gravity(st, self.gravity)
+        return True
+
     def follow(self, app):
-        """One call per app step after its field checks: the filter's heading becomes the
-        app's. The field is offered to the filter when the checks pass, on a heading jump (a
-        turn the gyro confirms) and once an interference spell has seen 1 s of samples that
-        raise no flag (firmware/health.py FieldWatch: the magnet has gone, or holds still);
-        the filter takes it only within mag_reject of its own heading. While it holds the
-        heading without the field and vouches for it the status is "gyro held" in place of
+        """One call per app step after its field checks: the field's correction, and the
+        filter's heading becomes the app's once the bias is known (until then the app shows
+        the compass's heading and status: never worse than the compass alone). The field is
+        offered to the filter when the checks pass, on a heading jump (a turn the gyro
+        confirms) and once an interference spell has seen 1 s of samples that raise no flag
+        (firmware/health.py FieldWatch: the magnet has gone, or holds still); the filter
+        takes it only within mag_reject of its own heading. While it holds the heading
+        without the field and vouches for it the status is "gyro held" in place of
         interference / heading jumped; "ok" when this sample's field corrected it."""
-        if self._gap(app):
+        n = app.steps
+        st = self.st
+        if st[_RUN] != n:  # predict() found a gap, or did not run: the next clean
+            if self._at != n:  # sample starts the filter
+                self.reset()
             return
         s = app.status
-        f = 6  # FIELD | ACC_OK
+        f = 6 if st[_ACCOK] else 2  # FIELD | ACC_OK
         if s == _OK or s == _JUMP or s == _INTERFERENCE and app.watch.clean_us >= _OFFER_US:
-            f = 7  # | MAG_OK
-        h = self.update(app._dt, f)
-        if h < 0:
+            f += 1  # | MAG_OK
+        h = self._correct(app._dt, f) if self.started else self._start(f)
+        if h < 0 or not self.known:
             return
-        p = self.st[_D]  # -sin(pitch), Q14
-        if p > _GIMBAL or p < -_GIMBAL:  # near vertical the heading is the compass's: a
+        n = st[_D]  # -sin(pitch), Q14
+        if n > _GIMBAL or n < -_GIMBAL:  # near vertical the heading is the compass's: a
             return  # small tilt error moves psi by tan(pitch) (AN4248 sec. 6)
         app.heading_kang = (h + self.compass.declination_kang) & 0xFFFF
-        if self.st[_SINCE] == 0:  # this sample's field corrected the heading
+        if st[_SINCE] == 0:  # this sample's field corrected the heading
             if s != _OK:
                 app.status = _OK
         elif s == _OK or s == _INTERFERENCE or s == _JUMP:
             app.status = _GYRO_HELD if self.vouched else _INTERFERENCE
 
-    def _gap(self, app):
+    def _gap(self, app, ok):
         # The gyroscope into the body frame (.axes: the accelerometer's axis map negated, as
         # the map turns specific force into AN4248 gravity, Gp = -f, and a rate keeps its sign).
         # True after a step without the gyro (a failed read, a stall: time the filter did not
@@ -363,7 +415,7 @@ class Attitude:
         # starts again from the compass at the next clean sample.
         app._apply(self.axes, self.raw, self.gyro)
         n = app.steps
-        skip = n != self._at + 1 or app._stalled or not app.tilt
+        skip = n != self._at + 1 or app._stalled or not ok
         self._at = n
         if app.calibration is not self._cal:
             self._cal = app.calibration
@@ -401,17 +453,51 @@ class Attitude:
             app.reinits += 1
 
     def update(self, dt, flags):
-        if dt > _DT_MAX or dt < 0:
-            dt = _DT_MAX if dt > 0 else 0
         if not self.started:
             return self._start(flags)
+        self._step(dt, flags)
+        return self._correct(dt, flags)
+
+    def _step(self, dt, flags):
+        # the gyro step, and gravity's correction (every other sample, held for the one
+        # between while the accelerometer stays plausible: its 2 s time constant misses
+        # nothing; the plain path's cost)
+        if dt > _DT_MAX or dt < 0:
+            dt = _DT_MAX if dt > 0 else 0
         st = self.st
         m = rates(st, self.gyro)  # the rate, plus the corrections the last sample asked
         #                           for; m: how fast it turns
-        self._still(dt, flags, m)
-        st[_KB] = self.kb if m <= self.kb_counts else 0  # turning fast: the corrections
-        advance(st, dt)  # carry the integration's errors, not the bias
-        self._correct(dt, flags)
+        if m > self.kb_counts:  # turning fast: the corrections carry the integration's
+            st[_KB] = 0  # errors, not the bias (nor does the tilt hold against a bias not
+            if not self.known:  # known: reset() says why)
+                st[_SETTLE] = _SETTLE_US
+                st[_ACC_LIM] = 0x3FFFFFFF
+            m = 1
+        else:  # nor does it just after a hold (_field)
+            m = st[_BLK]
+            st[_KB] = self.kb if m >= 0 or m == -_PAUSE_US else 0
+            m = 0
+        advance(st, dt)
+        down(st)  # from normalise's q >> 14 (q before its last, tiny, step)
+        self._odd = not self._odd
+        if not flags & ACC_OK:
+            self.accel_rejected = True
+            self._gravity_held(0)
+        elif self._odd:
+            self._gravity(dt << 1)
+        else:
+            self._gravity_held(1)
+        return m
+
+    def _correct(self, dt, flags):
+        # the field's correction; the corrections become the next sample's rates
+        if dt > _DT_MAX or dt < 0:
+            dt = _DT_MAX if dt > 0 else 0
+        st = self.st
+        self._field(dt, flags)
+        st[_C] = st[_U]
+        st[_C + 1] = st[_U + 1]
+        st[_C + 2] = st[_U + 2]
         angles(st)
         return st[_HEAD]
 
@@ -431,25 +517,6 @@ class Attitude:
         self.started = True
         euler(st)
         return st[_HEAD]
-
-    def _correct(self, dt, flags):
-        # the corrections this sample's gravity and field ask for, as rates for the next one;
-        # gravity's every other sample (its 2 s time constant does not miss one: the plain
-        # path's cost), held for the sample between while the accelerometer stays plausible
-        st = self.st
-        down(st)  # from normalise's q >> 14 (q before its last, tiny, step)
-        self._odd = not self._odd
-        if not flags & ACC_OK:
-            self.accel_rejected = True
-            self._gravity_held(0)
-        elif self._odd:
-            self._gravity(dt << 1)
-        else:
-            self._gravity_held(1)
-        self._field(dt, flags)
-        st[_C] = st[_U]
-        st[_C + 1] = st[_U + 1]
-        st[_C + 2] = st[_U + 2]
 
     def _gravity(self, dt):
         st = self.st
@@ -487,6 +554,10 @@ class Attitude:
                 if accel_apply(st):
                     st[_AREJ] = 0
                     self.accel_rejected = False
+                    if st[_SETTLE] > 0:
+                        st[_SETTLE] -= dt
+                        if st[_SETTLE] <= 0:
+                            st[_ACC_LIM] = self.acc_lim  # the tilt holds: rejection on
                     return
         if st[_AREJ] <= self.recovery_us:
             st[_AREJ] += dt
@@ -499,7 +570,7 @@ class Attitude:
         tilt_sine(st, n)
         st[_ACC_LIM] = 0x3FFFFFFF
         accel_apply(st)
-        st[_ACC_LIM] = self.acc_lim
+        st[_ACC_LIM] = self.acc_lim if st[_SETTLE] <= 0 else 0x3FFFFFFF
         self.accel_rejected = False
 
     def _field(self, dt, flags):
@@ -515,69 +586,80 @@ class Attitude:
             st[_MREJ] = 0
         else:
             st[_MREJ] += dt
-            if st[_MREJ] <= self.recovery_us:
+            if st[_MREJ] <= self.recovery_us and self.known:
                 self._hold(dt)
                 return
-            turn(st, e)  # the gyro lost the heading (e.g. past its range): the field's
+            turn(st, e)  # the gyro lost the heading (e.g. past its range), or cannot vouch
+            #              for it (the bias not known yet): the field's
             st[_MREJ] = 0
             e = 0
         yaw_rate(st, e)
         st[_SINCE] = 0
         st[_UNC] = 0
+        p = st[_PULL]  # the field's recent pull: its error x time, decaying in ~0.5 s
+        st[_PULL] = p + (e - (p >> 9)) * (dt >> 10)  # (KANG x ms)
+        self._clean(dt)
+
+    def _clean(self, dt):
+        # a field-corrected sample: the integral's block goes on (while it integrates), or
+        # after a hold its wait (its heading error is no evidence of the bias: the integral
+        # waits _PAUSE_US while the field pulls it in)
+        st = self.st
+        b = st[_BLK]
+        if b < 0:
+            b += dt
+            if b >= 0:
+                self._sub()  # the block starts: the bias now
+                b = 0
+            st[_BLK] = b
+        elif st[_KB]:
+            b += dt
+            st[_BLK] = b
+            if b >= _BLOCK_US:
+                self._verify()
+
+    def _mark(self):
+        # a hold begins: its uncertainty starts at what the field pulled the heading by in
+        # its last ~0.5 s (a magnet creeping in before the app's checks flag it: mag_gain x
+        # its error x time) and grows at the bias uncertainty, or at what the integral moved
+        # the bias by since the block began if more (that pull reached the bias too)
+        st = self.st
+        r = self.bias_cdps
+        if st[_BLK] >= 0:
+            p = self._sub()
+            r = p if p > r else r
+        self.unc_rate = r
+        st[_BLK] = -_PAUSE_US  # a block is field-corrected throughout
+        r = st[_MG] * (st[_BOOST] + 1)  # mag_gain in force (1/1000 per s)
+        p = st[_PULL]
+        p = (p if p > 0 else -p) // 1000 * (r if r < 1000 else 1000) // 1000  # KANG
+        st[_PULL] = 0
+        st[_UNC] = (p if p < 65536 else 65535) * 36000 // 65536 * 1000
 
     def _hold(self, dt):
         st = self.st
+        if st[_SINCE] == 0 and self.started:
+            self._mark()
         if st[_SINCE] < _SINCE_CAP:
             st[_SINCE] += dt
-            st[_UNC] += self.unc_rate * dt // 1000
+        if st[_UNC] < _UNC_CAP:  # cdeg/s x us / 1000 (dt <= 10**6 us, the rate <= 2000)
+            r = self.unc_rate
+            st[_UNC] += dt // 1000 * r + dt % 1000 * r // 1000
 
-    def _still(self, dt, flags, m):
-        """Still-board windows: the gyro's mean rate over 1 s without motion is its bias (m:
-        rates(), how fast it turns)."""
+    def _sub(self):
+        # how far the bias moved since the last call, worst axis, cdeg/s (at most 1000)
         st = self.st
-        if self.bias_estimates:
-            if m > self.still_counts:
-                st[_WN] = 0  # turning: no window (the next slow sample starts one)
-                return
-        elif st[_WN] and not _near(self.gyro, st, _WG, self.first_counts):
-            st[_WN] = 0  # no bias known yet: the gyro must hold within 1 deg/s of the start
-        if st[_WN] == 0 or not self._steady(flags):
-            self._window(flags)
-            return
-        g = self.gyro
-        st[_WN] += 1
-        st[_WT] += dt
-        st[_WS] += g[0]
-        st[_WS + 1] += g[1]
-        st[_WS + 2] += g[2]
-        if st[_WT] >= (_STILL_US if self.bias_estimates else _FIRST_US) or \
-                st[_WN] >= _WINDOW_MAX:
-            _bias_from_window(st, self.bias_estimates == 0)
-            self.bias_estimates += 1
-            self.unc_rate = self.bias_cdeg_per_s
-            self._window(flags)
+        m = 0
+        for i in range(3):
+            d = st[_BIAS + i] - st[_SNAP + i]
+            st[_SNAP + i] = st[_BIAS + i]
+            if d < 0:
+                d = -d
+            if d > m:
+                m = d
+        m //= st[_CDPS]
+        return m if m < 1000 else 1000
 
-    def _steady(self, flags):
-        # gravity within 1/64 g and the field within 1/64 of its components' sum of the
-        # window's start (the gyro less its bias is within 0.5 deg/s: _still)
-        st = self.st
-        if flags & ACC_OK and not _near(self.gravity, st, _WA, self.still_g):
-            return False
-        return not flags & FIELD or _near(self.field, st, _WB, st[_WLB])
-
-    def _window(self, flags):
-        st = self.st
-        g = self.gyro
-        st[_WN] = 1
-        st[_WT] = 0
-        _copy3(g, st, _WS)
-        _copy3(g, st, _WG)
-        if flags & ACC_OK:
-            _copy3(self.gravity, st, _WA)
-        if flags & FIELD:
-            f = self.field
-            _copy3(f, st, _WB)
-            st[_WLB] = (abs(f[0]) + abs(f[1]) + abs(f[2])) >> 6
 
 
 use_kernels()

@@ -151,12 +151,6 @@ def yaw_rate(st, e: int):
 
 
 @micropython.viper
-def _m14(a: int, b: int) -> int:
-    # attitude.mul14
-    return (a >> 14) * b + (((a & 0x3FFF) * b) >> 14)
-
-
-@micropython.viper
 def advance(st, dt: int):
     """attitude_plain.advance (half_angles, integrate and integral in chunks, normalise)."""
     s = ptr32(st)
@@ -187,13 +181,22 @@ def advance(st, dt: int):
         z = (((s[3] + h) & m) - h) >> 14
         for i in range(4):
             s[13 + i] = (((s[i] + h) & m) - h) >> 14
-        d = int(_m14(h0, x)) + int(_m14(h1, y)) + int(_m14(h2, z))
+        # attitude.mul14 written out (a call would box its arguments, and cost code)
+        d = ((h0 >> 14) * x + (((h0 & 0x3FFF) * x) >> 14)
+             + (h1 >> 14) * y + (((h1 & 0x3FFF) * y) >> 14)
+             + (h2 >> 14) * z + (((h2 & 0x3FFF) * z) >> 14))
         s[0] = (((s[0] + h) & m) - h) - d
-        d = int(_m14(h0, w)) + int(_m14(h2, y)) - int(_m14(h1, z))
+        d = ((h0 >> 14) * w + (((h0 & 0x3FFF) * w) >> 14)
+             + (h2 >> 14) * y + (((h2 & 0x3FFF) * y) >> 14)
+             - ((h1 >> 14) * z + (((h1 & 0x3FFF) * z) >> 14)))
         s[1] = (((s[1] + h) & m) - h) + d
-        d = int(_m14(h1, w)) + int(_m14(h0, z)) - int(_m14(h2, x))
+        d = ((h1 >> 14) * w + (((h1 & 0x3FFF) * w) >> 14)
+             + (h0 >> 14) * z + (((h0 & 0x3FFF) * z) >> 14)
+             - ((h2 >> 14) * x + (((h2 & 0x3FFF) * x) >> 14)))
         s[2] = (((s[2] + h) & m) - h) + d
-        d = int(_m14(h2, w)) + int(_m14(h1, x)) - int(_m14(h0, y))
+        d = ((h2 >> 14) * w + (((h2 & 0x3FFF) * w) >> 14)
+             + (h1 >> 14) * x + (((h1 & 0x3FFF) * x) >> 14)
+             - ((h0 >> 14) * y + (((h0 & 0x3FFF) * y) >> 14)))
         s[3] = (((s[3] + h) & m) - h) + d
         if kb:
             for i in range(3):

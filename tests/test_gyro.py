@@ -15,7 +15,7 @@ def test_a_9_ut_magnet_passing_for_5_s_the_gyro_holds_the_heading_within_3_deg()
     assert r["worst_around_deg"] <= 2.5, r     # and around it
     # the heading is held, not flagged: never "interference" during the pass
     assert "interference" not in r["status_during"] and r["status_during"][HELD] > 200, r
-    assert r["bias_estimates"] > 0
+    assert r["bias_estimates"] > 0  # the integral's evidence measured the bias before it
 
 
 def test_the_same_pass_without_the_gyro_is_not_ok():
@@ -61,16 +61,23 @@ def test_the_status_line_and_the_accuracy_say_the_heading_is_held():
     from host_sim.cli.benchmarks import gyroworld as G
     from host_sim import motion
     b = G.board(motion.still(yaw=40), gyro=gyroacc.BIAS)
-    b.world.add_magnet((8.0, 4.0, 0.0), 4, 30, ramp_s=0.3, frame="world")
-    app = G.app(b)
+    b.world.add_magnet((8.0, 4.0, 0.0), 10, 30, ramp_s=0.3, frame="world")
+    app = G.app(b, max_uncertainty_cdeg=150)  # vouched for up to 1.5 deg
     G.run(app, b, 3)
+    # the bias not known yet: the compass's heading and status
     assert "gyro: on field" in status_line(app) and app.accuracy == 3
-    G.run(app, b, 6)
+    assert not app.attitude.known
+    G.run(app, b, 9.9)
+    assert app.attitude.known  # the integral's evidence: two 2 s blocks after the start
+    G.run(app, b, 12)
     line = status_line(app)
     assert app.status == HELD and "| gyro held |" in line and "gyro: held 1." in line, line
     assert (app.accuracy, app.accuracy_reason()) == (2, "gyro_held")
-    # the bias was measured in the first second (0.2 deg/s of uncertainty a second from
-    # then): held past 5 deg of uncertainty (~20 s), it is no longer vouched for
+    # the uncertainty grows at what is known of the bias: held past 1.5 deg, it is no
+    # longer vouched for
+    u = app.attitude.uncertainty_cdeg
+    G.run(app, b, 14)
+    assert app.attitude.uncertainty_cdeg == u + 2 * app.attitude.bias_cdps
     G.run(app, b, 27)
     assert app.status == "interference" and app.accuracy == 0
     assert "(too long)" in status_line(app)

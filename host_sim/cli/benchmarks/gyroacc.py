@@ -14,8 +14,23 @@ still_bias(s, bias) a still board with a gyro bias (deg/s per sensor axis) for s
                     the first minute and at the end (its drift).
 dance(gyro)         the figure-8 calibration gesture (roll +-180, pitch +-85 deg, ~300 deg/s)
                     for 60 s: the worst error of a heading shown as ok or gyro held.
+
+The scenarios of "never worse than the compass alone" (docs/gyro.md), each on the same world
+with the gyro (gyro=True) and without it (False), scored by score() below:
+powerup(gyro)       an unknown bias of up to 5 deg/s per axis (UNKNOWN), the filter on from
+                    power-up: the calibration gesture for 60 s, then 30 s at rest.
+walk(gyro)          two minutes of walking: slow turns (up to ~20 deg/s), the step's bob and
+                    sway (1.8 / 0.9 Hz) and its +-0.15 g surges, never still; bias UNKNOWN.
+bumpy(gyro)         parked for 5 s, then turning back and forth at 20 deg/s for 60 s on a bumpy
+                    ride: +-0.5 g pulses every second and 0.1 g of 11 Hz vibration, a clean
+                    field.
+magnets(gyro)       turning back and forth at 20 deg/s while three magnets (6-12 uT) pass.
+drive(gyro)         a car-like drive: parked 10 s, then 90 s of 90 deg turns (0.3 g sideways),
+                    0.3 g of acceleration and 0.5 g braking, 0.05 g of road vibration.
 The gyro has the default +-500 deg/s range; its bias is (0.5, -0.4, 0.6) deg/s unless said.
 """
+import math
+
 from host_sim import motion
 from host_sim.cli.benchmarks import common
 from host_sim.cli.benchmarks import gyroworld as G
@@ -106,6 +121,191 @@ def dance(gyro=True):
     return out
 
 
+UNKNOWN = {"gyro_bias_dps": (5.0, -4.0, 4.5)}  # sensor axes; body (x, -y, -z) for this mounting
+
+
+def _body_bias(gyro):
+    b = gyro["gyro_bias_dps"]
+    return (b[0], -b[1], -b[2])
+
+
+class Wave:
+    """An acceleration (g, a 3-vector in `frame`) times a signed waveform fn(t_s): vibration,
+    the steps of a walk; World sums it with its pulses (envelope(), vec, frame)."""
+
+    def __init__(self, accel_g, fn, frame="body"):
+        self.vec = (float(accel_g[0]), float(accel_g[1]), float(accel_g[2]))
+        self.fn = fn
+        self.frame = frame
+
+    def envelope(self, t_us):
+        return self.fn(t_us / 1e6)
+
+
+class Walking:
+    """Slow turns (two sines: up to ~20 deg/s), the bob (pitch 8 +- 3 deg at 1.8 Hz) and the
+    sway (roll -4 +- 4 deg at 0.9 Hz) of a walk: never still."""
+    duration_us = None
+
+    def __init__(self, yaw0=30.0):
+        self.yaw0 = yaw0
+
+    def at(self, t_us):
+        s = t_us / 1e6
+        yaw = (self.yaw0 + 60.0 * math.sin(2 * math.pi * s / 40.0)
+               + 25.0 * math.sin(2 * math.pi * s / 17.0 + 1.0))
+        return (yaw % 360.0, 8.0 + 3.0 * math.sin(2 * math.pi * 1.8 * s),
+                -4.0 + 4.0 * math.sin(2 * math.pi * 0.9 * s + 0.3))
+
+
+class Weave:
+    """Back and forth over +-amp deg of yaw at 4 amp / period deg/s (a triangle wave), with a
+    little pitch and roll."""
+    duration_us = None
+
+    def __init__(self, yaw0=100.0, amp=40.0, period=8.0):
+        self.yaw0, self.amp, self.period = yaw0, amp, period
+
+    def at(self, t_us):
+        s = t_us / 1e6
+        p = (s / self.period) % 1.0
+        tri = 4.0 * p - 1.0 if p < 0.5 else 3.0 - 4.0 * p
+        return ((self.yaw0 + self.amp * tri) % 360.0, 2.0 * math.sin(3.1 * s),
+                3.0 * math.sin(2.3 * s))
+
+
+def score(b, app, seconds, gyro, bias=None, after_s=1.0):
+    """Runs `app` on board `b` for `seconds` and scores every sample after after_s: the worst
+    error of a heading shown good ('ok' / 'gyro held'), how many shown good were off by more
+    than 5 deg, the share of samples whose field corrected the heading (the magnetometer-only
+    app: 'ok'), held samples whose error exceeded the stated uncertainty; with the gyro and
+    `bias` (its true value, body axes, deg/s) when the estimate came within 0.2 deg/s of it
+    for good."""
+    out = {"samples": 0, "worst_good_deg": 0.0, "good_over_5": 0, "good": 0, "field": 0,
+           "held": 0, "held_over_unc": 0, "status": {}}
+    cpd = app.accel.counts_per_dps_x10 / 10.0
+    track = {"within_s": None}
+
+    def each(a):
+        t = _t(b)
+        if t < after_s:
+            return
+        out["samples"] += 1
+        st = a.status
+        out["status"][st] = out["status"].get(st, 0) + 1
+        e = abs(G.err_deg(a, b))
+        at = a.attitude
+        if st in GOOD:
+            out["good"] += 1
+            out["worst_good_deg"] = max(out["worst_good_deg"], e)
+            if e > 5.0:
+                out["good_over_5"] += 1
+        if (at.source == "magnetometer") if gyro else st == "ok":
+            out["field"] += 1
+        if st == "gyro held":
+            out["held"] += 1
+            if e * 100.0 > at.uncertainty_cdeg:
+                out["held_over_unc"] += 1
+        if gyro and bias is not None:
+            err = max(abs(v / 4096.0 / cpd - w) for v, w in zip(at.bias, bias))
+            if err <= 0.2:
+                if track["within_s"] is None:
+                    track["within_s"] = t
+            else:
+                track["within_s"] = None
+            out["bias_error_dps"] = err
+    G.run(app, b, seconds, each)
+    out["field_pct"] = 100.0 * out["field"] / max(1, out["samples"])
+    if gyro and bias is not None:
+        out["bias_within_0_2_at_s"] = track["within_s"]
+    return out
+
+
+def powerup(gyro=True, bias=UNKNOWN):
+    # the gesture ends level facing north (its pose at 60 s), and rests there
+    m = motion.sequence([(60, motion.figure8(period_s=30)), (30, motion.still())])
+    b = G.board(m, gyro=bias)
+    return score(b, G.app(b, gyro=gyro), 90, gyro, _body_bias(bias))
+
+
+def walk(gyro=True, bias=UNKNOWN):
+    b = G.board(Walking(), gyro=bias)
+    w = b.world
+    w.accelerations.append(Wave((0.15, 0.0, 0.0), lambda s: math.sin(2 * math.pi * 1.8 * s)))
+    w.accelerations.append(Wave((0.0, 0.1, 0.0), lambda s: math.sin(2 * math.pi * 0.9 * s)))
+    w.accelerations.append(Wave((0.0, 0.0, 0.15), lambda s: math.cos(2 * math.pi * 1.8 * s)))
+    return score(b, G.app(b, gyro=gyro), 120, gyro, _body_bias(bias))
+
+
+def _bumps(w, start, end, g=0.5, vib=0.1):
+    # +-g pulses (0.3 s, alternating up / sideways / forward) every second, and vibration
+    axes = ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0), (1.0, 0.0, 0.0))
+    for i in range(int(start), int(end)):
+        v = axes[i % 3]
+        k = g if i % 2 else -g
+        w.add_acceleration((v[0] * k, v[1] * k, v[2] * k), i + 0.3, i + 0.6, ramp_s=0.1,
+                           frame="body")
+    w.accelerations.append(Wave((vib * 0.5, vib * 0.7, vib), lambda s: math.sin(
+        2 * math.pi * 11.0 * s) * (start <= s <= end)))
+
+
+def bumpy(gyro=True):
+    # parked for 5 s, then the ride
+    b = G.board(motion.sequence([(5, motion.still(yaw=60)), (60, Weave(yaw0=100.0))]),
+                gyro=BIAS)
+    _bumps(b.world, 5, 65)
+    return score(b, G.app(b, gyro=gyro), 65, gyro, after_s=5.0)
+
+
+def magnets(gyro=True):
+    b = G.board(Weave(yaw0=250.0), gyro=BIAS)
+    w = b.world
+    w.add_magnet((5.4, 7.2, 0.0), 12, 16, ramp_s=0.5, frame="world")      # 9 uT
+    w.add_magnet((-6.0, 0.0, 3.0), 25, 28, ramp_s=0.3, frame="world")     # 6.7 uT
+    w.add_magnet((0.0, -9.0, -7.0), 40, 46, ramp_s=1.0, frame="world")    # 11.4 uT
+    return score(b, G.app(b, gyro=gyro), 55, gyro)
+
+
+class Drive:
+    """Parked for 10 s, then straight stretches and 90 deg turns (in 5 s) of a car; the
+    accelerations drive() adds go with it."""
+    duration_us = None
+    TURNS = ((20, 90), (40, -90), (55, 90), (75, 90))
+
+    def at(self, t_us):
+        s = t_us / 1e6
+        yaw = 20.0
+        for t0, d in self.TURNS:
+            if s > t0:
+                yaw += d * min(1.0, (s - t0) / 5.0)
+        return (yaw % 360.0, 1.0, 0.5)
+
+
+def drive(gyro=True):
+    b = G.board(Drive(), gyro=BIAS)
+    w = b.world
+    for t0, d in Drive.TURNS:  # the turn's centripetal acceleration, body y
+        w.add_acceleration((0.0, 0.3 if d > 0 else -0.3, 0.0), t0, t0 + 5, ramp_s=0.5,
+                           frame="body")
+    w.add_acceleration((0.3, 0.0, 0.0), 12, 16, ramp_s=0.5, frame="body")   # pulling away
+    w.add_acceleration((-0.5, 0.0, 0.0), 32, 35, ramp_s=0.3, frame="body")  # braking
+    w.add_acceleration((0.3, 0.0, 0.0), 36, 39, ramp_s=0.5, frame="body")
+    w.add_acceleration((-0.5, 0.0, 0.0), 67, 70, ramp_s=0.3, frame="body")
+    w.add_acceleration((0.3, 0.0, 0.0), 85, 90, ramp_s=0.5, frame="body")
+    w.accelerations.append(Wave((0.02, 0.03, 0.05), lambda s: math.sin(2 * math.pi * 14.0 * s)
+                                * (s > 10.0)))  # the road's vibration
+    return score(b, G.app(b, gyro=gyro), 100, gyro)
+
+
+SCENARIOS = (("powerup", powerup), ("walk", walk), ("bumpy", bumpy), ("magnets", magnets),
+             ("drive", drive))
+
+
+def compare():
+    """Every scenario with and without the gyro: {name: {"gyro": ..., "mag_only": ...}}."""
+    return {name: {"gyro": fn(True), "mag_only": fn(False)} for name, fn in SCENARIOS}
+
+
 def main():
     smoke = common.smoke()
     res = {"interpreter": common.interpreter(),
@@ -115,6 +315,7 @@ def main():
         res["still_600s"] = still_bias(600)
         res["dance_gyro"] = dance(True)
         res["dance_mag_only"] = dance(False)
+        res["compare"] = compare()
     common.emit(res)
 
 
