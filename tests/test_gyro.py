@@ -102,3 +102,64 @@ def test_another_calibration_in_force_starts_the_filter_again_from_the_compass()
     assert not at.started  # the field it followed was the old calibration's
     app.step()
     assert at.started and abs(G.err_deg(app, b)) < 1.0
+
+
+# ------------------------------------------------------- never worse than the compass alone
+# benchmarks/gyroacc.py's scenarios, each on the same simulated world with the gyro and
+# without it (docs/gyro.md's table): the goals as tolerances
+
+@pytest.fixture(scope="module")
+def compare():
+    return gyroacc.compare()
+
+
+CLEAN = ("powerup", "walk", "bumpy", "drive")  # no magnet anywhere
+
+
+@pytest.mark.parametrize("name", CLEAN)
+def test_in_a_clean_field_no_heading_shown_good_is_worse_than_the_compass_alone(compare, name):
+    g, m = compare[name]["gyro"], compare[name]["mag_only"]
+    assert g["worst_good_deg"] <= m["worst_good_deg"] + 0.5, (g, m)
+    assert g["good_over_5"] == 0, g
+
+
+def test_no_heading_shown_good_is_off_by_5_deg_in_any_scenario(compare):
+    assert all(r["gyro"]["good_over_5"] == 0 for r in compare.values()), compare
+
+
+def test_power_up_with_an_unknown_bias_the_dance_and_rest(compare):
+    # 5 / -4 / 4.5 deg/s: the compass's heading is shown until the bias is known, then the
+    # filter's; the bias is measured within 0.2 deg/s once the board rests
+    g = compare["powerup"]["gyro"]
+    assert g["bias_within_0_2_at_s"] is not None and g["bias_error_dps"] <= 0.2, g
+
+
+def test_walking_never_still_learns_an_unknown_bias_within_0_2_deg_per_s_in_60_s(compare):
+    g, m = compare["walk"]["gyro"], compare["walk"]["mag_only"]
+    assert g["bias_within_0_2_at_s"] is not None and g["bias_within_0_2_at_s"] <= 60.0, g
+    # the filter's gravity keeps the field checks working through the steps' accelerations
+    assert g["field_pct"] >= 80.0 and m["field_pct"] < 5.0, (g, m)
+
+
+def test_a_bumpy_ride_in_a_clean_field_keeps_the_field_correcting(compare):
+    g, m = compare["bumpy"]["gyro"], compare["bumpy"]["mag_only"]
+    assert g["field_pct"] >= 90.0 and g["worst_good_deg"] <= 2.0, g
+    assert m["field_pct"] < 10.0, m  # the raw accelerometer's dip flags the clean field
+
+
+def test_magnets_passing_while_the_board_turns_are_held_within_3_deg(compare):
+    g, m = compare["magnets"]["gyro"], compare["magnets"]["mag_only"]
+    assert g["worst_good_deg"] <= 3.0 and g["held"] > 500, g
+    assert m["worst_good_deg"] > 5.0, m  # the compass alone shows some of it as ok
+
+
+def test_a_drive_with_turns_and_braking_stays_within_2_deg(compare):
+    g, m = compare["drive"]["gyro"], compare["drive"]["mag_only"]
+    assert g["worst_good_deg"] <= 2.0 and g["field_pct"] >= 90.0, g
+    assert m["worst_good_deg"] > 5.0, m
+
+
+def test_held_headings_exceed_their_stated_uncertainty_at_most_1_percent_of_the_time(compare):
+    held = sum(r["gyro"]["held"] for r in compare.values())
+    over = sum(r["gyro"]["held_over_unc"] for r in compare.values())
+    assert held > 500 and over <= held // 100, (held, over)
