@@ -93,6 +93,14 @@ def accel_8192_into(raw, counts_per_g, out):
     out[2] = rdiv(raw[2] * ACCEL_PER_G, counts_per_g)
 
 
+def gyro_16_into(raw, counts_per_dps_x10, out):
+    """out[0:3] = raw[0:3] gyroscope counts in 1/16 deg/s (MotionCal's DEG_PER_SEC_PER_COUNT),
+    counts_per_dps_x10 the MPU6050's 10 x counts per deg/s (1310 .. 164); allocates nothing."""
+    out[0] = rdiv(raw[0] * 160, counts_per_dps_x10)
+    out[1] = rdiv(raw[1] * 160, counts_per_dps_x10)
+    out[2] = rdiv(raw[2] * 160, counts_per_dps_x10)
+
+
 def _put_int(buf, n, v):
     # decimal digits of sat16(v) at buf[n:], returns the new end
     v = sat16(v)

@@ -23,10 +23,11 @@ step() = the app's step, then: _listen (poll, feed the packet reader, act on its
 _stream (a Raw line when due), _echo (Cal1/Cal2 again every echo_every_us once a packet is in
 force). It never raises (but KeyboardInterrupt, see below).
 
-What goes out (firmware/motioncal.py has the format): `Raw:ax,ay,az,0,0,0,mx,my,mz` CR LF,
+What goes out (firmware/motioncal.py has the format): `Raw:ax,ay,az,gx,gy,gz,mx,my,mz` CR LF,
 the magnetometer as read (chip axes: the frame the calibration is applied in) in 0.1 uT
-whatever the chip and range, the accelerometer in 1/8192 g, no gyro (zeros: MotionCal only
-draws with it). A packet's outcome is one status line, `mcmode: applied ...` or
+whatever the chip and range, the accelerometer in 1/8192 g and the MPU6050's gyroscope in
+1/16 deg/s (MotionCal's units), both turned into the magnetometer's chip axes; zeros for the
+gyro without an MPU6050 (MotionCal only draws with it). A packet's outcome is one status line, `mcmode: applied ...` or
 `mcmode: rejected <reason>: <detail>`, which MotionCal's parser skips (neither "Raw:" nor
 "Cal1:"/"Cal2:").
 
@@ -56,6 +57,7 @@ At run time (REPL, after Ctrl-C stops boards/main.py): `mode = MotionCalMode(app
 (boards/main.py leaves `app` and `motioncal()`, which does exactly that); Ctrl-C returns.
 """
 import sys
+from array import array
 
 from firmware import motioncal as mc
 from firmware.axes import AxisMap, apply
@@ -107,13 +109,14 @@ def _stdout_write():
     return out.write
 
 
-def _to_chip(m):
-    # the map body -> this sensor's chip axes for a specific force (+1 g up): the inverse of
-    # the sensor -> body permutation m, negated (AN4248's gravity sign is +1 g down)
+def _to_chip(m, force=True):
+    # the map body -> this sensor's chip axes: the inverse of the sensor -> body permutation
+    # m, for a specific force (+1 g up) negated (AN4248's gravity sign is +1 g down), for a
+    # rotation rate not
     inv = [0, 0, 0, 1, 1, 1]
     for i in range(3):
         inv[m[i]] = i
-        inv[3 + m[i]] = 0 if m[3 + i] else 1
+        inv[3 + m[i]] = (0 if m[3 + i] else 1) if force else m[3 + i]
     return bytes(inv)
 
 
@@ -137,6 +140,19 @@ class MotionCalMode:
         self._cpg = app.mag.counts_per_gauss
         self._cpg_acc = app.accel.counts_per_g if app.accel is not None else 0
         self._to_chip = _to_chip(AxisMap(mag_axes).m)
+        self._gyro = None
+        acc = app.accel
+        if acc is not None and hasattr(acc, "gyro_into"):  # an MPU6050: its gyroscope too,
+            g = acc.gyro_into  # read in the accelerometer's burst (use_gyro()'s array, or one
+            if g is None:      # of its own)
+                g = acc.gyro_into = array("h", (0, 0, 0))
+            self._graw = g
+            m = app._am  # the accelerometer's map negated: a rate keeps its sign
+            self._gmap = bytes((m[0], m[1], m[2], 1 - m[3], 1 - m[4], 1 - m[5]))
+            self._grate = _to_chip(AxisMap(mag_axes).m, False)
+            self._gbody = array("h", (0, 0, 0))
+            self._gyro = [0, 0, 0]
+            self._cpd = acc.counts_per_dps_x10
         if ticks_us is None:
             self._ticks = _port_ticks()
             self._wrap = True
@@ -250,7 +266,14 @@ class MotionCalMode:
         if self._cpg_acc:
             apply(self._to_chip, app.gravity, self._acc_chip)
             mc.accel_8192_into(self._acc_chip, self._cpg_acc, self._acc)
-        n = mc.raw_line_into(self.line, self._acc, mc.GYRO_NONE, self._mag)
+        g = self._gyro
+        if g is None:
+            g = mc.GYRO_NONE
+        else:  # the gyroscope in the magnetometer's chip axes, as the accelerometer
+            apply(self._gmap, self._graw, self._gbody)
+            apply(self._grate, self._gbody, self._gbody)
+            mc.gyro_16_into(self._gbody, self._cpd, g)
+        n = mc.raw_line_into(self.line, self._acc, g, self._mag)
         self.write(self._mv[:n])
         self.lines += 1
 

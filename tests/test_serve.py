@@ -304,3 +304,43 @@ def test_motioncal_mode_prints_the_same_on_cpython_and_micropython():
                                        ["applied", 2, 1]]
     assert summary[3] is not None and summary[4] == [-1, 3]  # Ctrl-C raised, kbd_intr restored
     assert summary[10] == 2  # both good packets stored
+
+
+def test_with_an_mpu6050_the_raw_lines_carry_the_gyroscope_in_motioncal_units():
+    # a level GY-87 spinning clockwise at 36 deg/s, its gyroscope biased (0.5, -0.4, 0.6)
+    # deg/s in its own axes: the Raw lines' gx, gy, gz are the rates in 1/16 deg/s
+    # (MotionCal's DEG_PER_SEC_PER_COUNT) in the magnetometer's chip axes (x, -y, -z of the
+    # body here), like the accelerometer's: (0.5, -0.4, -36 + 0.6) x 16
+    from host_sim import motion
+    from host_sim.cli.benchmarks import gyroworld as G
+    from firmware.motioncal_mode import MotionCalMode
+    b = G.board(motion.flat_spin(period_s=10), gyro={"gyro_bias_dps": (0.5, -0.4, 0.6)})
+    app = G.app(b, gyro=False)
+    line = Line()
+    mode = MotionCalMode(app, write=line.out.extend, poll=line.poll, mag_axes="x,-y,-z",
+                         ticks_us=b.clock.ticks_us)
+    for _ in range(300):
+        mode.step()
+    mc = MotionCal()
+    mc.read(bytes(line.out))
+    assert mc.failures == 0 and len(mc.raw) == 300
+    r = mc.raw[20:]
+    mean = [sum(x[3 + i] for x in r) / len(r) for i in range(3)]
+    for got, want in zip(mean, (8.0, -6.4, -566.4)):
+        assert abs(got - want) < 1.0, mean  # within 1/16 deg/s
+    assert mean[2] < 0 and r[0][5] != 0
+
+
+def test_without_a_gyroscope_the_raw_lines_carry_zeros():
+    from host_sim.boards import make_board
+    from firmware.app import CompassApp
+    from firmware.motioncal_mode import MotionCalMode
+    b = make_board("gy271")  # the magnetometer alone
+    app = CompassApp(b.bus, delay_us=b.sleep_us, ticks_us=b.clock.ticks_us, learn=False)
+    line = Line()
+    mode = MotionCalMode(app, write=line.out.extend, poll=line.poll, ticks_us=b.clock.ticks_us)
+    for _ in range(30):
+        mode.step()
+    mc = MotionCal()
+    mc.read(bytes(line.out))
+    assert mc.raw and all(x[3:6] == (0, 0, 0) for x in mc.raw)
