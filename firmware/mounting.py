@@ -14,27 +14,30 @@ gravity alone.
 Pairs keeps at most one pair per direction of gravity: BINS = 24 bins, the chip axis nearest
 to gravity, its sign and the signs of the two others (a cone of 1/24 of the sphere each), so
 a few seconds in one pose count once. A pair is a candidate only when the accelerometer reads
-1 g within _G_TOL_PCT and has moved by less than a board turning one turn per second would
-move it in one sample period; a bin keeps the stillest candidate it was offered (the smallest
-move since the previous step: the least linear acceleration from the hand). Held: .data,
-array('h'), per bin mag x, y, z, accel x, y, z and the move (-1: empty; capped at 32767),
-then the previous step's accelerometer; .count bins filled. 342 bytes; feed() allocates
-nothing (tests/scenarios/mounting_heap.py). Intermediates stay below 2**30 for any int16
-input (tests/test_mounting.py drives tests/intcheck).
+1 g within about 10 % and has moved by less than a board turning one turn per second would
+move it in one sample period; a bin keeps the stillest candidate it was offered: the
+smallest score, the move since the previous step plus how far |a| is off 1 g (the least
+linear acceleration from the hand). Held: .data, array('h'), per bin mag x, y, z, accel x,
+y, z and the score (-1: empty; capped at 32767), then the previous step's accelerometer;
+.count bins filled. 342 bytes; feed() allocates nothing (tests/scenarios/mounting_heap.py).
+Intermediates stay below 2**30 for any int16 input (tests/test_mounting.py drives
+tests/intcheck).
 """
 from array import array
 
 from firmware.compat import const
 
 BINS = const(24)        # 3 nearest axes x 2 signs x 4 sign pairs of the other two
-WIDTH = const(7)        # int16 per bin: mag x, y, z, accel x, y, z, move (-1: empty)
+WIDTH = const(7)        # int16 per bin: mag x, y, z, accel x, y, z, score (-1: empty)
 _PREV = const(168)      # BINS * WIDTH: the previous step's accelerometer
 _G_SHIFT = const(4)     # |a|^2 on a >> 4: int16 counts -> < 3 * 2**24
-_G_TOL_PCT = const(10)  # |a| within 10 % of 1 g: little linear acceleration from the hand
+_G2_TOL_PCT = const(20)  # |a|^2 within 20 % of 1 g^2 (|a| within ~10 % of 1 g): little
+#                           linear acceleration from the hand
 _TURN_US = const(159155)  # 1e6 / 2 pi: a board turning one turn per second moves gravity by
 #                            g * period_us / _TURN_US per step (faster than a hand calibrates)
 _PERIOD_MAX_US = const(100000)  # 10 Hz, the slowest rate the drivers set
 _MOVE_CAP = const(32767)
+_OFF_SHIFT = const(4)   # |a|^2 - g^2 >> 4 beside the move: 1 % off 1 g weighs as a 2 deg move
 
 
 class Pairs:
@@ -53,23 +56,37 @@ class Pairs:
         self.data = d
         self.count = 0
         g = counts_per_g >> _G_SHIFT
-        lo = g * (100 - _G_TOL_PCT) // 100
-        hi = g * (100 + _G_TOL_PCT) // 100
-        self.g_lo = lo * lo
-        self.g_hi = hi * hi
+        self.g2 = g * g
+        self.g_tol = g * g * _G2_TOL_PCT // 100
         g = g * (period_us if period_us < _PERIOD_MAX_US else _PERIOD_MAX_US) // _TURN_US
         self.step2 = g * g
 
     def feed(self, raw, acc):
         """Offer one step's magnetometer and accelerometer samples (chip axes, counts); True
-        when a bin took the pair."""
+        when a bin took the pair (see the module docstring)."""
         q = self._moved(acc)
         if q < 0:
             return False
-        return self._keep(raw, acc, _bin(acc), q)
+        if q > _MOVE_CAP:
+            q = _MOVE_CAP
+        d = self.data
+        b = WIDTH * _bin(acc)
+        if d[b + 6] < 0:
+            self.count += 1
+        elif q >= d[b + 6]:  # the bin holds a stiller pair
+            return False
+        d[b] = raw[0]
+        d[b + 1] = raw[1]
+        d[b + 2] = raw[2]
+        d[b + 3] = acc[0]
+        d[b + 4] = acc[1]
+        d[b + 5] = acc[2]
+        d[b + 6] = q
+        return True
 
     def _moved(self, a):
-        # |da|^2 (on da >> 4) since the last step, or -1 when that is too far or |a| is not 1 g
+        # the score: |da|^2 (on da >> 4) since the last step plus ||a|^2 - g^2| >> 4; -1 when
+        # it moved too far or |a| is not 1 g
         p = self.data
         x = (a[0] - p[_PREV]) >> _G_SHIFT
         y = (a[1] - p[_PREV + 1]) >> _G_SHIFT
@@ -83,27 +100,10 @@ class Pairs:
         x = a[0] >> _G_SHIFT
         y = a[1] >> _G_SHIFT
         z = a[2] >> _G_SHIFT
-        x = x * x + y * y + z * z
-        return q if self.g_lo <= x <= self.g_hi else -1
-
-    def _keep(self, raw, acc, b, q):
-        # bin b takes the pair when it is empty or the pair is stiller than the one it holds
-        d = self.data
-        b *= WIDTH
-        if q > _MOVE_CAP:
-            q = _MOVE_CAP
-        if d[b + 6] < 0:
-            self.count += 1
-        elif q >= d[b + 6]:
-            return False
-        d[b] = raw[0]
-        d[b + 1] = raw[1]
-        d[b + 2] = raw[2]
-        d[b + 3] = acc[0]
-        d[b + 4] = acc[1]
-        d[b + 5] = acc[2]
-        d[b + 6] = q
-        return True
+        x = x * x + y * y + z * z - self.g2
+        if x < 0:
+            x = -x
+        return -1 if x > self.g_tol else q + (x >> _OFF_SHIFT)
 
 
 def _bin(a):

@@ -90,8 +90,15 @@ def test_a_bin_keeps_the_stillest_pair_it_was_offered():
     assert p.feed(_acc(2, 2, 2), _acc(0, 510, 16384))      # moved less: replaces it
     assert not p.feed(_acc(3, 3, 3), _acc(0, 700, 16384))  # moved more: kept out
     b = WIDTH * _bin((0, 510, 16384))
-    assert list(p.data[b:b + 7]) == [2, 2, 2, 0, 510, 16384, 0] and p.count == 1
+    # score: moved 0 since the last step, |a|^2 off 1 g^2 by 31^2 (on a >> 4), >> 4
+    assert list(p.data[b:b + 7]) == [2, 2, 2, 0, 510, 16384, 961 >> 4] and p.count == 1
     assert sum(1 for i in range(BINS) if p.data[WIDTH * i + 6] == -1) == BINS - 1
+    # as still, nearer 1 g: the hand's acceleration less likely in it
+    assert not p.feed(_acc(4, 4, 4), _acc(0, 200, 16384))  # moved: not stiller
+    assert p.feed(_acc(5, 5, 5), _acc(0, 200, 16384))      # still again, 1.0001 g: taken
+    assert not p.feed(_acc(6, 6, 6), _acc(0, 200, 16800))  # moved and 2.5 % off 1 g
+    assert not p.feed(_acc(6, 6, 6), _acc(0, 200, 16800))  # still, but further off 1 g
+    assert list(p.data[b:b + 7]) == [5, 5, 5, 0, 200, 16384, 144 >> 4] and p.count == 1
 
 
 def test_the_pairs_refuse_options_naming_the_argument_and_its_unit():
@@ -123,18 +130,17 @@ def test_every_wrong_magnetometer_rotation_is_found_and_the_right_one_named(chip
     assert len(found) == 23
 
 
-def test_no_false_alarm_over_a_seeded_soak_of_right_settings():
+def test_no_false_alarm_over_a_seeded_soak_of_right_settings_on_rough_boards():
     st = M.soak(SOAK_SESSIONS, seed=1)
     assert st["false_alarms"] == 0, st["alarms"]
     assert st["checks"] >= SOAK_SESSIONS
     # nearly every session ends confirming its setting; the others had too little spread
     assert st["last"].get(mountcheck.OK, 0) >= SOAK_SESSIONS - 3, st["last"]
-    assert st["worst_sigma_q10"] <= mountcheck.STEADY_Q10
 
 
-def test_wrong_settings_on_random_boards_and_worlds_are_found():
+def test_wrong_settings_on_random_rough_boards_and_worlds_are_found():
     for i in range(12):
-        s = M.random_session(7 * 100003 + i, wrong=True)
+        s = M.random_session(7 * 100003 + i, wrong=True, rough=True)
         assert s.verdict == (mountcheck.WRONG, s.right), (i, s.checks)
 
 

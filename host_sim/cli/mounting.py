@@ -24,8 +24,10 @@ it: the verdicts in order, with the time of each.
 The soak (soak(), the command above; make soak runs 600 sessions): seeded sessions, each a
 random board, world (field 25-65 uT, inclination -75..75 deg), iron (host_sim.world.random_iron),
 dance (period 24-36 s, pitch amplitude 60-85 deg, roll 120-180 deg, any start heading) and a
-random one of the 24 mountings of each chip WITH its right MAG_AXES / ACCEL_AXES: a verdict
-"wrong" in any check of any session is a false alarm. Printed: sessions, checks, false alarms,
+random one of the 24 mountings of each chip WITH its right MAG_AXES / ACCEL_AXES, and what a
+real board and hand add (random_session's rough: accelerometer offsets, the chips 0-3 deg
+apart, the hand's accelerations): a verdict "wrong" in any check of any session is a false
+alarm. Printed: sessions, checks, false alarms,
 the verdicts of the last check of each session, the largest spread (sigma) of a right setting.
 """
 import json
@@ -75,12 +77,13 @@ def rotations():
 
 class Session:
     """One simulated calibration session with the mounting check (see the module docstring).
-    .checks: (t_s, verdict, axes, sigma, best, bins) after each accepted calibration;
+    .checks: (t_s, verdict, axes, sigma, best, bins) after each accepted calibration, and
+    once more at the end when the last said nothing (spread or unsteady);
     .app, .pairs, .board; .rows with record=True."""
 
     def __init__(self, chip="qmc5883l", accel=True, mount=MOUNT, accel_mount=MOUNT,
                  mag_axes=MAG_AXES, accel_axes=ACCEL_AXES, world=None, seed=3,
-                 seconds=SECONDS, record=False):
+                 seconds=SECONDS, record=False, accel_bias=None):
         from host_sim import motion
         from host_sim.boards import make_board
         from firmware.app import CompassApp
@@ -91,6 +94,8 @@ class Session:
                                      (-0.06, 0.07, 1.04)), motion=motion.figure8())
         b = make_board(chip, world=world, seed=seed, accel=accel, mount=mount,
                        accel_mount=accel_mount)
+        if accel_bias is not None:  # the MPU6050's zero-g offsets, g per chip axis
+            b.accel.bias_g = tuple(accel_bias)
         self.board = b
         self.mag_axes = mag_axes
         self.accel_axes = accel_axes
@@ -111,6 +116,8 @@ class Session:
             if app.accepted > accepted:
                 accepted = app.accepted
                 self.check(app.calibration)
+        if self.checks and self.checks[-1][1] in (mountcheck.SPREAD, mountcheck.UNSTEADY):
+            self.check(app.calibration)  # the session's end: with every pair it kept
 
     def check(self, cal):
         r = mountcheck.check(self.pairs, cal, self.mag_axes, self.accel_axes)
@@ -123,9 +130,13 @@ class Session:
         return self.checks[-1][1:3] if self.checks else (None, None)
 
 
-def random_session(seed, seconds=SECONDS, wrong=False):
+def random_session(seed, seconds=SECONDS, wrong=False, rough=False):
     """The soak's session `seed`: a random board, world, iron, dance and mounting, with the
-    right MAG_AXES; wrong=True: with the MAG_AXES of another rotation (.right: the right one)."""
+    right MAG_AXES; wrong=True: with the MAG_AXES of another rotation (.right: the right one).
+    rough=True adds what a real board and hand add: the accelerometer's zero-g offsets (up to
+    the MPU6050's +-50 mg on x and y, +-80 mg on z), the magnetometer turned up to 3 deg
+    against the accelerometer (a soft iron that is no longer symmetric: the fit cannot take
+    the turn out), and the hand's accelerations (0.05-0.3 g for 0.3-1 s every 1.5-4 s)."""
     from host_sim import motion
     from host_sim.prng import Prng
     from host_sim.world import random_iron
@@ -148,10 +159,42 @@ def random_session(seed, seconds=SECONDS, wrong=False):
     if wrong:
         other = rots[g.randrange(23)]
         setting = mag_axes(rots[23] if other == mount else other)
+    bias = None
+    if rough is True:
+        rough = "bias,turn,hand"
+    if rough:
+        bias = (u(-0.05, 0.05), u(-0.05, 0.05), u(-0.08, 0.08))
+        turned = _turned(w, u(0.0, 3.0), (u(-1, 1), u(-1, 1), u(-1, 1)))
+        if "bias" not in rough:
+            bias = None
+        if "turn" in rough:
+            world.set_iron(v, turned)
+        t = u(0.5, 2.0) if "hand" in rough else seconds
+        while t < seconds:
+            d = u(0.3, 1.0)
+            a = u(0.05, 0.3)
+            e = (u(-1, 1), u(-1, 1), u(-1, 1))
+            n = (e[0] ** 2 + e[1] ** 2 + e[2] ** 2) ** 0.5 or 1.0
+            world.add_acceleration((a * e[0] / n, a * e[1] / n, a * e[2] / n), t, t + d,
+                                   ramp_s=0.15)
+            t += d + u(1.5, 4.0)
     s = Session(chip, accel, mount, accel_mount, setting, accel_axes(accel_mount), world,
-                seed=seed, seconds=seconds)
+                seed=seed, seconds=seconds, accel_bias=bias)
     s.right = mag_axes(mount)
     return s
+
+
+def _turned(w, deg, axis):
+    # the soft-iron matrix w followed by a turn of `deg` about `axis` (Rodrigues' formula)
+    import math
+    n = math.sqrt(axis[0] ** 2 + axis[1] ** 2 + axis[2] ** 2) or 1.0
+    x, y, z = axis[0] / n, axis[1] / n, axis[2] / n
+    c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+    r = ((c + x * x * (1 - c), x * y * (1 - c) - z * s, x * z * (1 - c) + y * s),
+         (y * x * (1 - c) + z * s, c + y * y * (1 - c), y * z * (1 - c) - x * s),
+         (z * x * (1 - c) - y * s, z * y * (1 - c) + x * s, c + z * z * (1 - c)))
+    return tuple(tuple(sum(w[i][k] * r[k][j] for k in range(3)) for j in range(3))
+                 for i in range(3))
 
 
 def soak(sessions=60, seed=1, seconds=SECONDS):
@@ -159,7 +202,7 @@ def soak(sessions=60, seed=1, seconds=SECONDS):
     out = {"sessions": sessions, "seed": seed, "seconds": seconds, "checks": 0,
            "false_alarms": 0, "alarms": [], "last": {}, "worst_sigma_q10": 0}
     for i in range(sessions):
-        s = random_session(seed * 100003 + i, seconds)
+        s = random_session(seed * 100003 + i, seconds, rough=True)
         for c in s.checks:
             out["checks"] += 1
             if c[1] == mountcheck.WRONG:
@@ -175,9 +218,10 @@ def soak(sessions=60, seed=1, seconds=SECONDS):
 def report(st):
     """The soak's lines."""
     return ["mounting check soak: %d sessions x %d s, seed %d, right settings on random boards, "
-            "worlds and mountings" % (st["sessions"], st["seconds"], st["seed"]),
-            "checks %d (one per accepted fit)  false alarms %d  last verdicts %s  worst sigma "
-            "with ok %.3f" % (st["checks"], st["false_alarms"],
+            "worlds and mountings, offsets, misalignment and the hand's accelerations"
+            % (st["sessions"], st["seconds"], st["seed"]),
+            "checks %d (after each accepted fit, and at the end)  false alarms %d  last verdicts "
+            "%s  worst sigma with ok %.3f" % (st["checks"], st["false_alarms"],
                               ", ".join("%s %d" % kv for kv in sorted(st["last"].items())),
                               st["worst_sigma_q10"] / 1024.0)]
 
