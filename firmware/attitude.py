@@ -15,7 +15,8 @@ Attitude(gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g, gain=5
   gain           accelerometer correction, 1/1000 rad/s per rad of tilt error (500: a 2 s
                  time constant); mag_gain the same for the heading error.
   bias_gain      the integral term, 1/1000 of the correction fed into the gyro bias each
-                 second (0: off); the bias is also measured while the board is still.
+                 second (0: off). All three run at up to 4 times the option (the start-up
+                 gains) while the bias is not known.
   accel_reject_cdeg, mag_reject_cdeg  an accelerometer whose gravity direction differs
                  from the filter's by more (or whose |a| is off 1 g by more than 10 %), and a
                  field whose heading differs by more, are not used; after recovery_us of
@@ -27,13 +28,18 @@ Attitude(gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g, gain=5
 update(dt_us, flags) -> heading (KANG, magnetic), -1 until started; flags: MAG_OK (the app's
 field checks pass this sample), FIELD (a calibrated field was read), ACC_OK (a plausible
 accelerometer). The filter starts (and, after reset(), starts again) at the compass's
-attitude on the first sample with all three.
+attitude on the first sample with all three. In the app: predict(app) before its compass
+update (the gyro step and gravity's; the filter's gravity in app.gravity while the board
+accelerates) and follow(app) after its field checks (the field's correction; the filter's
+heading and status the app's once the bias is known).
 After it: heading_kang, pitch_kang, roll_kang (KANG, AN4248 theta and phi), source
 (SOURCE_MAG: the last sample's field corrected the heading; SOURCE_GYRO: held by the gyro
 alone), since_mag_us (since the last magnetic correction), uncertainty_cdeg (grows while
 the field is not used, by the gyro bias uncertainty), vouched (the uncertainty is within
-max_uncertainty_cdeg), bias (gyro bias per body axis, 1/4096 count), bias_estimates (still
-spells measured), accel_rejected (the last sample's accelerometer was not used).
+max_uncertainty_cdeg), bias (gyro bias per body axis, 1/4096 count), bias_cdps (how well it
+is known, 0.01 deg/s), known (within 0.3 deg/s, until past 1 deg/s), bias_estimates (the
+integral's blocks of evidence), accel_rejected (the last sample's accelerometer was not
+used).
 
 The filter (Mahony's complementary filter on a quaternion; the kinematics q' = q (0, w) / 2):
   state    q, body -> world (NED), Q28 in st[0..3]; the rotation matrix C (AN4248's R
@@ -47,18 +53,19 @@ The filter (Mahony's complementary filter on a quaternion; the kinematics q' = q
            sample, held for the one between.
   field    m = C b, the field in the filter's level frame; its direction atan2(my, mx) is the
            heading error, corrected by a rotation about the down axis, times mag_gain.
-  bias     the integral of the corrections (bias_gain; while every axis turns slower than 10
-           deg/s: faster, the corrections carry the integration's own errors), and while the
-           board is still, windows of 1 s (the first: 3 s) in which the gyro stays within
-           1 deg/s of the window's first sample for the first estimate, then within 0.5
-           deg/s of the bias, gravity within 1/64 g and the field within 1/64 of its size;
-           a steady turn slower than ~0.7 deg/s can pass for bias until the integral sees
-           it) the
-           window's mean rate: the first window sets it, later ones move it a quarter of the
-           way.
+  bias     the integral of the corrections (bias_gain; while every axis turns slower than 60
+           deg/s: faster, the corrections carry the integration's own errors; not in the 1 s
+           after a hold). Its evidence: over 2 s of field-corrected, integrating time the bias
+           moves by bias_gain x the mean correction, which is the bias error the filter still
+           carries (the field's and gravity's pull balance it), so |moved| / (bias_gain x
+           time) bounds it: bias_cdps, the larger of the last two blocks.
+  held     the uncertainty starts at the field's pull in its last ~0.5 s (mag_gain x its
+           error x time) and grows at bias_cdps (or at what the bias moved in the block cut
+           short, if more).
 Every intermediate stays below 2**30 (a product a x b of a Q28 and a Q14 is taken as
-(a >> 14) b + ((a & 0x3FFF) b >> 14), exact; a time in us likewise with 15 bits); the per-sample path allocates nothing: its
-functions keep their frames within MicroPython's 11 words (see firmware/compass.py).
+(a >> 14) b + ((a & 0x3FFF) b >> 14), exact; a time in us likewise with 15 bits); the
+per-sample path allocates nothing: its functions keep their frames within MicroPython's 11
+words (see firmware/compass.py).
 """
 
 from firmware.compat import const, drop, kernels
@@ -634,7 +641,7 @@ class Attitude:
         p = st[_PULL]
         p = (p if p > 0 else -p) // 1000 * (r if r < 1000 else 1000) // 1000  # KANG
         st[_PULL] = 0
-        st[_UNC] = (p if p < 65536 else 65535) * 36000 // 65536 * 1000
+        st[_UNC] = (p if p < 16384 else 16384) * 36000 // 65536 * 1000  # (90 deg at most)
 
     def _hold(self, dt):
         st = self.st

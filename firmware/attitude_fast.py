@@ -145,6 +145,10 @@ def yaw_rate(st, e: int):
     h <<= 30  # at run time: the literal 2**30 would be an object on a 32-bit port
     m = h + (h - 1)
     c = 0 - ((e * s[26]) >> 12)
+    if c > 65535:
+        c = 65535
+    elif c < -65535:
+        c = -65535
     for i in range(3):
         d = ((s[17 + i] + 0x20000) & 0x3FFFF) - 0x20000
         s[7 + i] = (((s[7 + i] + h) & m) - h) + ((c * d) >> 14)

@@ -137,8 +137,13 @@ def field_error(st):
 
 
 def yaw_rate(st, e):
-    """Turn the rates about the down axis by mag_gain x the heading error e (KANG)."""
+    """Turn the rates about the down axis by mag_gain x the heading error e (KANG), at most
+    65535 (1/16 count: 4096 counts, 31 deg/s and more: c x d stays below 2**30)."""
     c = -((e * st[_KM]) >> 12)
+    if c > 65535:
+        c = 65535
+    elif c < -65535:
+        c = -65535
     st[_U] += (c * st[_D]) >> 14
     st[_U + 1] += (c * st[_D + 1]) >> 14
     st[_U + 2] += (c * st[_D + 2]) >> 14

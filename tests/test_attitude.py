@@ -231,13 +231,55 @@ def checked_filter(pose, gains):
 def test_every_intermediate_stays_below_2_30_for_any_input(pose, gains, samples):
     t, a = checked_filter(pose, gains)
     a.update(DT, ALL)
+    own = array("h", (0, 0, 0))
     for g, grav, f, dt, flags in samples:
         t.gyro[:] = array("h", g)
         t.grav[:] = array("h", grav)
         t.field[:] = array("h", f)
         h = a.update(dt, flags)
         assert 0 <= h <= 65535
+        CHECKED.gravity(a.st, own)  # predict()'s: the filter's gravity for the app
     assert STATS.max_abs < 1 << 30 and STATS_PLAIN.max_abs < 1 << 30
+
+
+def test_the_bound_holds_through_the_evidence_holds_and_the_start_up_gains():
+    # the integral's blocks, a hold after the field pulled as hard as it can (a field turning
+    # at 360 deg/s, taken whatever its error: mag_reject 180 deg, the largest gains), the
+    # filter's gravity, the start-up gains ramping
+    t = Truth()
+    t.set((10, 0, 0))
+    plain = t.filter(gain=1000, mag_gain=1000, bias_gain=1000, mag_reject_cdeg=18000)
+    a = object.__new__(CHECKED.Attitude)
+    a.__dict__.update(plain.__dict__)
+    grav = array("h", (0, 0, 0))
+    pulled = 0
+    for i in range(1500):
+        s = i % 300
+        th = math.radians(7.2 * i)
+        t.gyro[:] = array("h", (300 if s < 150 else -300, 0, 0))
+        t.field[:] = array("h", (round(2000 * math.cos(th)), round(2000 * math.sin(th)), 3464))
+        # a 1 s step just before each hold: the largest pull a sample can add
+        a.update(1000000 if s == 199 else 20000, ALL if s < 200 else FIELD | ACC_OK)
+        CHECKED.gravity(a.st, grav)
+        if s == 200:
+            pulled = max(pulled, a.st[58] // 1000)  # the hold's uncertainty at its start
+    assert pulled >= 9000  # the pull's cap (90 deg) was reached
+    assert STATS.max_abs < 1 << 30 and STATS_PLAIN.max_abs < 1 << 30
+
+
+def test_the_slot_numbers_agree_across_the_filters_modules():
+    import re
+
+    def slots(name):
+        with open("firmware/%s.py" % name) as f:
+            return dict(re.findall(r"^(_[A-Z_0-9]+) = const\((\d+)\)", f.read(), re.M))
+    main = slots("attitude")
+    for other in ("attitude_plain", "gyrosetup"):
+        o = slots(other)
+        common = set(main) & set(o) - {"_TIMES", "_UNKNOWN_CDPS", "_SETTLE_US",
+                                       "_BIAS_MAX", "_CHUNK_US", "_ONE28", "_M14"}
+        assert len(common) >= 10, (other, common)
+        assert {k: main[k] for k in common} == {k: o[k] for k in common}, other
 
 
 def test_the_bound_holds_at_full_scale_rates_for_minutes():
