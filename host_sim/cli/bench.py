@@ -1118,7 +1118,7 @@ def rows_gyro(res):
                   verdict(f["error_1s_after_deg"] <= 2)))
         s = g["still_60s"]
         R.append(("9 gyro: bias 3 deg/s, still 60 s: bias estimate error [deg/s]",
-                  "%.3f (%d still windows)" % (s["bias_error_dps"], s["bias_estimates"]), "",
+                  "%.3f (%d evidence blocks)" % (s["bias_error_dps"], s["bias_estimates"]), "",
                   "goal <= 0.2", verdict(s["bias_error_dps"] <= 0.2)))
         s = g.get("still_600s")
         if s:
@@ -1132,6 +1132,11 @@ def rows_gyro(res):
                       "[deg]", "%.2f (mag-only %.2f)" % (
                           d["worst_good_deg"], g["dance_mag_only"]["worst_good_deg"]), "",
                       "<= 5 (docs/faults.md)", verdict(d["worst_good_deg"] <= 5)))
+        c = g.get("compare")
+        if c:
+            from host_sim.cli.benchmarks.gyroacc import compare_rows
+            for label, goal, measured, ok in compare_rows(c):
+                R.append(("9 gyro: " + label, measured, "", "goal " + goal, verdict(ok)))
     for label in ("x86-32", "micropython"):
         c = _get(res, "gyrobench", label) or {}
         if "error" in c:
@@ -1526,6 +1531,9 @@ def gyro_section(res):
         rows.append(("figure-8 gesture (~300 deg/s) 60 s: worst error shown `ok` or held",
                      "<= 5 deg", "%.1f deg (magnetometer only %.1f)" % (
                          d["worst_good_deg"], g["dance_mag_only"]["worst_good_deg"])))
+    if g.get("compare"):
+        from host_sim.cli.benchmarks.gyroacc import compare_rows
+        rows.extend(r[:3] for r in compare_rows(g["compare"]))
     if "after" in (p.get("gyro") or {}) and "after" in (p.get("heading") or {}):
         rows.append(("extra live heap (32-bit, .mpy); bytes per sample", "<= 8 KB; 0",
                      "%s; %s" % (_kbf(p["gyro"]["after"] - p["heading"]["after"]),
