@@ -100,6 +100,7 @@ _UNKNOWN_CDPS = const(2000)  # the bias before any evidence: the MPU6050's +-20 
 _KNOWN_CDPS = const(30)   # the bias counts as known within 0.3 deg/s...
 _LOST_CDPS = const(100)   # ...and no longer past 1 deg/s
 _FLOOR_CDPS = const(5)    # no evidence claims better than 0.05 deg/s
+_AGREE_CDEG = const(200)  # a field ends a hold within its uncertainty, at most 2 deg
 _SETTLE_US = const(6000000)  # 6 s of gravity's correction at the start-up gain: its
 #                              integral has the bias about the level axes (3 time constants)
 
@@ -384,9 +385,10 @@ class Attitude:
         filter's heading becomes the app's once the bias is known (until then the app shows
         the compass's heading and status: never worse than the compass alone). The field is
         offered to the filter when the checks pass, on a heading jump (a turn the gyro
-        confirms) and once an interference spell has seen 1 s of samples that raise no flag
-        (firmware/health.py FieldWatch: the magnet has gone, or holds still); the filter
-        takes it only within mag_reject of its own heading. While it holds the heading
+        confirms) and, unless the filter holds a heading it no longer vouches for, once an
+        interference spell has seen 1 s of samples that raise no flag (firmware/health.py
+        FieldWatch: the magnet has gone, or holds still); the filter takes it only within mag_reject of its own
+        heading, and to end a hold within the held heading's uncertainty. While it holds the heading
         without the field and vouches for it the status is "gyro held" in place of
         interference / heading jumped; "ok" when this sample's field corrected it."""
         n = app.steps
@@ -397,7 +399,8 @@ class Attitude:
             return
         s = app.status
         f = 6 if st[_ACCOK] else 2  # FIELD | ACC_OK
-        if s == _OK or s == _JUMP or s == _INTERFERENCE and app.watch.clean_us >= _OFFER_US:
+        if s == _OK or s == _JUMP or (s == _INTERFERENCE and app.watch.clean_us >= _OFFER_US
+                                      and (self.vouched or not self.known)):
             f += 1  # | MAG_OK
         h = self._correct(app._dt, f) if self.started else self._start(f)
         if h < 0 or not self.known:
@@ -588,16 +591,16 @@ class Attitude:
             return
         e = field_error(st)
         st[_E] = e
-        lim = st[_MAG_LIM]
+        lim = st[_MAG_LIM] if st[_SINCE] == 0 else self._lim()
         if -lim <= e <= lim:
             st[_MREJ] = 0
         else:
             st[_MREJ] += dt
-            if st[_MREJ] <= self.recovery_us and self.known:
+            if self.known and (st[_MREJ] <= self.recovery_us or self.vouched):
                 self._hold(dt)
                 return
             turn(st, e)  # the gyro lost the heading (e.g. past its range), or cannot vouch
-            #              for it (the bias not known yet): the field's
+            #              for it (the bias not known, or held too long): the field's
             st[_MREJ] = 0
             e = 0
         yaw_rate(st, e)
@@ -606,6 +609,17 @@ class Attitude:
         p = st[_PULL]  # the field's recent pull: its error x time, decaying in ~0.5 s
         st[_PULL] = p + (e - (p >> 9)) * (dt >> 10)  # (KANG x ms)
         self._clean(dt)
+
+    def _lim(self):
+        # the agreement a field needs to end a hold the gyro vouches for: the held heading's
+        # uncertainty (a field further off is still disturbed: a magnet that stays put),
+        # within mag_reject
+        m = self.st[_MAG_LIM]
+        if not (self.known and self.vouched):
+            return m
+        u = self.uncertainty_cdeg
+        u = (u if u < _AGREE_CDEG else _AGREE_CDEG) * 182 // 100  # cdeg -> KANG
+        return u if u < m else m
 
     def _clean(self, dt):
         # a field-corrected sample: the integral's block goes on (while it integrates), or

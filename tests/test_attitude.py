@@ -172,22 +172,48 @@ def test_an_acceleration_is_rejected_and_the_tilt_held():
     assert not a.accel_rejected
 
 
-def test_a_field_that_disagrees_is_held_off_then_believed_after_the_recovery_period():
-    t, a = started((0, 0, 0), recovery_us=2000000)
+def test_a_field_that_disagrees_is_held_off_then_believed_once_the_hold_is_not_vouched():
+    # vouched for up to 1.5 deg: the hold starts near 1.1 deg and grows by what is known of
+    # the bias (0.05 deg/s here): ~8 s
+    t, a = started((0, 0, 0), recovery_us=2000000, max_uncertainty_cdeg=150)
     for i in range(250):  # 5 s still: the bias is measured (until then the field's word goes)
         t.set((0, 0, 0))
         a.update(DT, ALL)
     assert a.known
-    for i in range(50):  # the field turns 40 deg at once (the app's checks see nothing)
-        t.set((0, 0, 0), magnet=(0, -1700, 0))
+    n = 0
+    while a.source != attitude.SOURCE_MAG or n == 0:  # the field turns 40 deg at once (the
+        t.set((0, 0, 0), magnet=(0, -1700, 0))  # app's checks see nothing)
+        was = a.vouched
         a.update(DT, ALL)
-        assert abs(err_deg(kang_deg(a.heading_kang), 0)) < 0.2 and a.source == attitude.SOURCE_GYRO
-    for i in range(60):
-        t.set((0, 0, 0), magnet=(0, -1700, 0))
-        a.update(DT, ALL)
-    # 2 s on, the filter took the field's word (snapped to it)
-    assert a.source == attitude.SOURCE_MAG
+        n += 1
+        assert n < 1000
+        if a.source == attitude.SOURCE_GYRO:
+            assert abs(err_deg(kang_deg(a.heading_kang), 0)) < 0.2
+    # held past the recovery period while the gyro vouched for the heading, then the filter
+    # took the field's word (snapped to it: the heading shows it from the next sample)
+    assert n * DT > 2000000 and not was
+    a.update(DT, ALL)
     assert abs(err_deg(kang_deg(a.heading_kang), math.degrees(math.atan2(1700, 2000)))) < 1.0
+
+
+def test_a_field_that_disagrees_with_a_held_heading_by_twice_its_uncertainty_is_not_taken():
+    # a magnet the app's checks flag, then one that stays put and that they no longer flag:
+    # 6 deg off the held heading (its uncertainty ~1.2 deg), it does not end the hold
+    t, a = started((0, 0, 0))
+    for i in range(250):
+        t.set((0, 0, 0))
+        a.update(DT, ALL)
+    for i in range(50):
+        t.set((0, 0, 0), magnet=(0, -210, 0))
+        a.update(DT, FIELD | ACC_OK)
+    for i in range(500):
+        t.set((0, 0, 0), magnet=(0, -210, 0))
+        a.update(DT, ALL)
+        assert a.source == attitude.SOURCE_GYRO and a.vouched
+        assert abs(err_deg(kang_deg(a.heading_kang), 0)) < 0.3
+    t.set((0, 0, 0))  # it has gone: the field agrees and ends the hold
+    a.update(DT, ALL)
+    assert a.source == attitude.SOURCE_MAG
 
 
 @pytest.mark.parametrize("name,value", [("gain", -1), ("gain", 1001), ("mag_gain", 2.5),
