@@ -43,11 +43,13 @@ _AXES = "xyz"
 
 
 def _settings():
+    # the board's board.py (on the host: boards/host/board.py, which get_bus() imported)
     try:
         import board
     except ImportError:
         board = None
-    return (getattr(board, "MAG_AXES", "x,-y,-z"), getattr(board, "ACCEL_AXES", "-x,y,z"))
+    return (getattr(board, "MAG_AXES", "x,-y,-z"), getattr(board, "ACCEL_AXES", "-x,y,z"),
+            getattr(board, "STORE_DIR", "/"))
 
 
 def _rotations():
@@ -146,7 +148,7 @@ def check(seed=1, mount=None, accel_mount=None):
     ACCEL_AXES / MAG_AXES found."""
     i2c, delay_us = get_bus(seed)
     host = delay_us is not None
-    mag_axes, accel_axes = _settings()
+    mag_axes, accel_axes, store_dir = _settings()
     if host:
         import board
         from host_sim import motion
@@ -158,7 +160,8 @@ def check(seed=1, mount=None, accel_mount=None):
                          ticks_us=board.ticks_us)
     else:
         from firmware.store import CalStore
-        app = CompassApp(i2c, mag_axes=mag_axes, accel_axes=accel_axes, store=CalStore("/"))
+        app = CompassApp(i2c, mag_axes=mag_axes, accel_axes=accel_axes,
+                         store=CalStore(store_dir))  # the calibration boards/main.py stored
     if app.accel is None:
         print("no accelerometer found: nothing to check (MAG_AXES alone cannot be wrong for a "
               "level board's heading)")
