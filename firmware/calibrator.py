@@ -20,11 +20,11 @@ samples.COVERAGE_CHUNK samples of the coverage count (tests/test_slices.py bound
 """
 from array import array
 
-from firmware import accum, acceptance, solve
+from firmware import accum, acceptance
 from firmware.acceptance import (DEFAULT_MAX_FIT_ERROR, MIN_SAMPLES, MIN_SAMPLES_GEOMETRY,
                                  REASON_PLANAR, REASON_SINGULAR, reject)
 from firmware.calibration import MINMAX, MODELS, UNCALIBRATED, Calibration, correct
-from firmware.compat import const
+from firmware.compat import const, drop
 from firmware.errors import CalibrationRejected
 from firmware.fixedpoint import rdiv
 from firmware.samples import (NOT_INT, REJECTED, REPLACED, SampleBuffer, bad_sample,
@@ -44,6 +44,22 @@ _FIT_ERROR_DOUBLING_S = const(60000)  # aging: NXP's e-folding time of 24 h = 59
 # operations (~1 ms on an RP2040); the caller decides how many fit between samples (the app
 # runs a quarter of the sample period's worth per step, firmware/app.py).
 DEFAULT_SLICE_GROUP = const(1)
+solve = None  # firmware.solve, loaded by the first solve (release_solver() lets it go)
+
+
+def _load_solver():
+    global solve
+    if solve is None:
+        from firmware import solve as s
+        solve = s
+
+
+def release_solver():
+    """Let the solver's code go until the next solve loads it again: calibration mode does so
+    between solves, so saving a fit never holds the solver too (firmware/calmode.py)."""
+    global solve
+    solve = None
+    drop("solve")
 _CONSISTENCY_CHUNK = const(2)  # samples per slice of the consistency sums (~14 long-int ops
 #                                each once the sums pass 2**30)
 
@@ -301,6 +317,7 @@ class Calibrator:
 
     def _solve_slices(self, model, accept, checks=True):
         # the solve as named steps; each yield ends a slice (see solve_steps)
+        _load_solver()
         self._strict = checks
         self.overridden = []
         model = self._pick_model(model)

@@ -22,7 +22,7 @@ from firmware.compat import const, drop, free_bytes
 # for the board to keep both: below it the board calibrates in this mode. Measured on the
 # x86-32 build (the smallest heap in which the background session completes, less the heading
 # line's live heap; docs/benchmarks.md), with a margin.
-SESSION_ROOM = const(32 * 1024)
+SESSION_ROOM = const(112 * 1024)
 # the smallest heap in which this mode completes a first calibration (.mpy, x86-32 build;
 # docs/benchmarks.md): what the status line says a board needs when even this mode fails
 MODE_NEED_KB = const(128)

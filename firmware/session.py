@@ -57,8 +57,13 @@ def solve(app):
     n = app._slices_per_step
     while n and c.job is not None:
         cal = c.slice()
+        if c.job is None and app.mode != "heading":
+            _phase_done(app)
         if cal is not None:
             accept(app, cal)
+            if app.mode != "heading":
+                app._hist = None  # calibration mode: the history's code goes too
+                drop("history")
         n -= 1
     d = app._wall_diff(app._wall(), t)
     app.slices = (app.slices + 1) & 0x3FFFFFFF
@@ -66,6 +71,13 @@ def solve(app):
         app.worst_stall_us = d
     if app.collector is not None and app.collector.job is None:
         end_if_done(app)
+
+
+def _phase_done(app):
+    # calibration mode (firmware/calmode.py): the solver's code goes when a solve ends, so
+    # the save that may follow does not hold it too; the next solve loads it again
+    from firmware.calibrator import release_solver
+    release_solver()
 
 
 def accept(app, cal):
@@ -99,7 +111,10 @@ def end_if_done(app):
     """End the session when its job is done (see the module docstring): the collector, the
     history and the calibration machinery leave. True when it ended."""
     c = app.collector
-    if (app.learn or app.pending is not None or app._unsaved or c.relearning
+    # calibration mode ends with its fit in force even when the save failed: the heading line
+    # retries it (CompassApp._retry_save) with the session's heap free again
+    unsaved = app._unsaved and app.mode == "heading"
+    if (app.learn or app.pending is not None or unsaved or c.relearning
             or c.job is not None or c.kept or c.since_kept_us < _DONE_QUIET_US
             or not app._good_enough(app.calibration)):
         return False
