@@ -10,6 +10,7 @@ board.MODE = "motioncal": stream to PJRC MotionCal instead and take its Send Cal
 board.GYRO = True: the MPU6050's gyroscope holds the heading through magnets and fast turns
 (docs/gyro.md).
 """
+import sys
 import time
 
 import board
@@ -40,11 +41,11 @@ def free_kb():
 
 
 _PY_SHORT_KB = 96  # free heap below which a board running from .py sources is told so
-status_line = None
+status_line = status_view = None
 while True:
     try:
         i2c = board.make_i2c()
-        from firmware.app import status_line
+        from firmware.app import status_line, status_view
         from firmware.boot import start
         # MotionCal mode: an HMC5883L at 75 Hz for 50 Raw lines/s (the QMC chips take no rate)
         app, note = start(i2c, board.STORE_DIR, cal_file=CAL_FILE,
@@ -61,7 +62,7 @@ while True:
         print("eCompass: %s" % e)
         wait_s(2)
     except MemoryError:  # not even the app fits: say so, and what to do, and try again
-        start = status_line = None
+        start = status_line = status_view = None
         drop("app", "boot", "detect", "appsetup", "devinit", "store", "persist", "slots")
         print("eCompass: out of memory at boot (%d KB free): use the .mpy or frozen "
               "install (docs/design.md, memory)" % free_kb())
@@ -92,9 +93,14 @@ def announce():
             print("eCompass: no gyro-aided heading: %s" % (e or "out of memory"))
 
 
+_out = getattr(sys.stdout, "buffer", sys.stdout)
+
+
 def report(a):
+    # the status line from the buffer firmware/status.py keeps: no garbage every half second
     try:
-        print(status_line(a))
+        _out.write(status_view(a))
+        _out.write(b"\n")
     except MemoryError:  # no room to print this one: the next report tries again
         pass
 

@@ -220,6 +220,7 @@ class CompassApp:
     no_memory = None  # what the heap could not hold: "start", "load", "calibrate" (status line)
     _args = None     # the constructor's arguments while the heap could not hold the app
     _calmode_due = False
+    _saved_shown = 0  # app.stored when the status line last said "saved"
     _relearn_due = False
     _retry_us = 0
     not_installed = None  # "calibrate": calibrate() found no calibration machinery
@@ -482,7 +483,7 @@ class CompassApp:
         self._ok = False
         if self._calmode_due:
             self._calmode()
-        elif self.mode != "heading" and self.collector is None:
+        elif self.mode != "heading" and self.collector is None and self.no_memory is None:
             self._leave_calmode()  # the session has ended: this sample gets a heading
         self._clock()
         st = self._read()
@@ -520,7 +521,7 @@ class CompassApp:
         if st == STATUS_OK:
             self._fails = 0
             self._reinit_level = 0
-            self.status = STATUS_CALIBRATING
+            self.status = STATUS_CALIBRATING if self.collector is not None else STATUS_NO_MEMORY
             self._select()
         else:
             self._failed(st)
@@ -529,8 +530,13 @@ class CompassApp:
             self._solve()
 
     def _leave_calmode(self):
-        from firmware import calmode
-        calmode.leave(self)
+        try:
+            from firmware import calmode
+            calmode.leave(self)
+        except MemoryError:  # no room for the heading line yet: no heading, said, retried
+            self.mode = "calibrating"
+            self.no_memory = "heading"
+            self._retry_us = _LOAD_RETRY_US
         calmode = None
         drop("calmode")
 
@@ -607,6 +613,11 @@ class CompassApp:
             self._start_learning()
         elif what == "calibrate":
             self.calibrate()
+        elif what == "heading":
+            self._leave_calmode()
+            if self.mode == "heading" and not self._good_enough(self.calibration):
+                self.no_memory = "calibrate"  # the session that did not fit, again later
+                self._retry_us = _CAL_RETRY_US
 
     def _look_for_accel(self, dt):
         self._accel_wait_us += dt
@@ -897,7 +908,8 @@ class CompassApp:
         return good
 
 
-_NO_MEMORY_LINE = "status line: out of memory"
+_NO_MEMORY_LINE = ("status line: out of memory (a .mpy or frozen install needs less: "
+                   "docs/design.md, memory)")
 
 
 def status_line(app):
@@ -908,3 +920,17 @@ def status_line(app):
         return line(app)
     except MemoryError:
         return _NO_MEMORY_LINE
+
+
+_NO_MEMORY_VIEW = (b"status line: out of memory (a .mpy or frozen install needs less: "
+                   b"docs/design.md, memory)")
+
+
+def status_view(app):
+    """status_line() as a memoryview of a buffer firmware/status.py holds (valid until the
+    next call), allocating nothing else: what boards/main.py writes every half second."""
+    try:
+        from firmware.status import view
+        return view(app)
+    except MemoryError:
+        return _NO_MEMORY_VIEW

@@ -65,8 +65,12 @@ def enter(app):
         app._session = app.collector = None
         session = None
         drop(*_MACHINERY)
-        leave(app)
         app.no_memory = "calibrate"
+        try:
+            leave(app)
+        except MemoryError:  # not even the heading line: CompassApp retries it
+            app.mode = MODE_CALIBRATING
+            app.no_memory = "heading"
         return None
 
 
@@ -76,7 +80,7 @@ def leave(app):
     from firmware import appsetup, compat
     compat.FAST = app._fast_was
     app.mode = MODE_HEADING
-    appsetup.heading_line(app, app._decl_kang)
+    appsetup.heading_line(app, app._decl_kang)  # MemoryError: the app says so and retries
     appsetup = None
     drop("appsetup", "devinit")
     app._use(app.calibration)

@@ -6,16 +6,28 @@ half second (boards/main.py), imported at the first report.
 
 progress(app)  the calibration's state as a dict (coverage, samples, model, fit error, the
                last refusal, counters, status, interference, store and history figures).
-line(app)      one readable line: heading (marked when not tilt-compensated), status and
-               flags, the calibration's stage in words (collecting with its coverage, solving,
-               saved once, calibrated, and what to do when a fit is refused), the gyro-aided
+view(app)      one readable line, written into a buffer this module holds (LINE_MAX bytes):
+               a memoryview of it, valid until the next call. It allocates nothing but that
+               view (16 bytes on a 32-bit port; tests/scenarios/status_alloc.py), so a board
+               printing it every half second leaves no garbage (boards/main.py writes it).
+               The line: heading (marked when not tilt-compensated), status and flags, the
+               calibration's stage in words (collecting with its coverage, solving, saved
+               once, calibrated, and what to do when a fit is refused), the gyro-aided
                heading's source (use_gyro: on field, or held for how long and how well),
-               accuracy (firmware/accuracy.py), location. docs/calibration.md explains every field.
+               what the heap could not hold, accuracy (firmware/accuracy.py), location.
+               docs/calibration.md explains every field.
+line(app)      the same line as a str.
 """
 from firmware.compat import const, free_bytes
+from firmware.trig import kang_decideg
 
 _QUIET_HINT_US = const(3000000)  # no new direction for 3 s before "planar"
 _STATUS_INTERFERENCE = "interference"  # firmware.app.STATUS_INTERFERENCE
+LINE_MAX = const(400)  # bytes: the longest line (a jump, the location, a hint) fits
+_MODE_NEED_KB = const(128)  # firmware.calmode.MODE_NEED_KB (not imported: it is dropped)
+_buf = bytearray(LINE_MAX)
+_mv = memoryview(_buf)
+_n = 0
 
 
 def progress(app):
@@ -38,8 +50,71 @@ def progress(app):
             "history_errors": app.history_errors}
 
 
+# --- writing into the buffer: a str's characters are small ints (no copy is made) ----------
+def _put(s):
+    global _n
+    n = _n
+    for i in range(len(s)):
+        if n >= LINE_MAX:
+            break
+        _buf[n] = ord(s[i])
+        n += 1
+    _n = n
+
+
+def _int(v):
+    global _n
+    if v < 0:
+        _put("-")
+        v = -v
+    d = 1
+    while d * 10 <= v:
+        d *= 10
+    n = _n
+    while d:
+        if n < LINE_MAX:
+            _buf[n] = 48 + v // d
+            n += 1
+        v %= d
+        d //= 10
+    _n = n
+
+
+def _any(v):  # a model (4, 7, 10 or "minmax"), a reason: as %s would
+    if type(v) is int:
+        _int(v)
+    elif v is None:
+        _put("None")
+    else:
+        _put(v)
+
+
+def _sep():
+    _put(" | ")
+
+
+def _fixed(v, div):
+    # v / div with one digit per power of ten in div, e.g. 1234 / 100 -> "12.34"
+    if v < 0:
+        _put("-")
+        v = -v
+    _int(v // div)
+    _put(".")
+    div //= 10
+    r = v % (div * 10)
+    while div:
+        _int(r // div)
+        r %= div
+        div //= 10
+
+
+def _deg(angle_kang, signed=False):
+    _fixed(kang_decideg(angle_kang, signed), 10)
+
+
 def _pct(x100):
-    return "%d.%02d %%" % (x100 // 100, x100 % 100)
+    _fixed(x100, 100)
+    _put(" %")
 
 
 # what a refusal asks the user to do (status_line); a reason not here is shown as is
@@ -55,117 +130,204 @@ _HINTS = {"planar": "rotate about another axis, not only around",
           "no_memory": "out of memory while solving"}
 
 
-def _story(app, p):
+def _model_fit(c):
+    _put("model ")
+    _any(c.model)
+    _put(" fit ")
+    _pct(c.fit_error)
+
+
+def _story(app):
     """The calibration's stage in words: collecting (coverage), solving, saved (once),
     calibrated, and why not yet."""
-    out = []
-    model = p["model"]
+    c = app.calibration
     col = app.collector
-    if app.stored != app.__dict__.get("_saved_shown", 0):
+    if app.stored != app._saved_shown:
         app._saved_shown = app.stored
-        out.append("saved")  # shown once after each save
+        _sep()
+        _put("saved")  # shown once after each save
+    _sep()
     if col is None:
-        out.append("calibrated: model %s fit %s" % (model, _pct(p["fit_error"]))
-                   if model is not None else "uncalibrated")
+        if c.model is not None:
+            _put("calibrated: ")
+            _model_fit(c)
+        else:
+            _put("uncalibrated")
         if app.not_installed:
-            out.append("cannot calibrate: install package-%s.json" % app.not_installed)
-        return out
-    out.append("%s; collecting %d %% (%d samples)" % (
-        "model %s fit %s" % (model, _pct(p["fit_error"])) if model is not None
-        else "uncalibrated", p["coverage"], p["samples"]))
-    if p["solving"]:
-        out.append("solving %s" % (p["solve_model"],))
-    reason = p["last_reason"]
+            _put(" | cannot calibrate: install package-")
+            _put(app.not_installed)
+            _put(".json")
+        return
+    if c.model is not None:
+        _model_fit(c)
+    else:
+        _put("uncalibrated")
+    _put("; collecting ")
+    _int(app.coverage())
+    _put(" % (")
+    _int(col.calibrator.count)
+    _put(" samples)")
+    if col.job is not None:
+        _put(" | solving ")
+        _any(col.job_model)
+    reason = app.last_reason
     # "planar" only once the user has stopped adding new directions (the collector is quiet):
     # the first samples of a correct figure-8 lie near a plane too
     if reason == "planar" and col.since_kept_us < _QUIET_HINT_US:
         reason = "too_few_samples"
     if reason and reason != "not_better":
-        out.append(_HINTS.get(reason, reason))
-    return out
+        _sep()
+        _put(_HINTS.get(reason, reason))
 
 
 def _gyro(a):
+    _sep()
     if not a.started:
-        return "gyro: starting"
+        _put("gyro: starting")
+        return
     if a.source == "magnetometer":
-        return "gyro: on field"
-    t = a.since_mag_us // 100000
-    u = a.uncertainty_cdeg
-    return "gyro: held %d.%d s +-%d.%d deg%s" % (t // 10, t % 10, u // 100, u % 100 // 10,
-                                                  "" if a.vouched else " (too long)")
+        _put("gyro: on field")
+        return
+    _put("gyro: held ")
+    _fixed(a.since_mag_us // 100000, 10)
+    _put(" s +-")
+    _fixed(a.uncertainty_cdeg // 10, 10)
+    _put(" deg")
+    if not a.vouched:
+        _put(" (too long)")
 
 
 def _free_kb():
     f = free_bytes()
-    return "?" if f is None else "%d" % (f >> 10)
+    if f is None:
+        _put("?")
+    else:
+        _int(f >> 10)
 
 
 def _no_memory(app):
     """What the heap could not hold, and what to do instead (docs/design.md, memory)."""
     what = app.no_memory
+    _sep()
     if what == "load":
-        return "stored calibration not loaded: out of memory, %s KB free (retrying)" % (
-            _free_kb(),)
-    if what == "calibrate":
-        from firmware.calmode import MODE_NEED_KB
-        return ("calibration needs ~%d KB, this board has %s KB free: calibrate in the "
-                "browser page (docs/web.md) or MotionCal mode, or use a .mpy / frozen "
-                "install" % (MODE_NEED_KB, _free_kb()))
-    return "out of memory (%s)" % (what,)
+        _put("stored calibration not loaded: out of memory, ")
+        _free_kb()
+        _put(" KB free (retrying)")
+    elif what == "heading":
+        _put("no room to show a heading again: ")
+        _free_kb()
+        _put(" KB free (retrying)")
+    elif what == "calibrate":
+        _put("calibration needs ~")
+        _int(_MODE_NEED_KB)
+        _put(" KB, this board has ")
+        _free_kb()
+        _put(" KB free: calibrate in the browser page (docs/web.md) or MotionCal mode, or "
+             "use a .mpy / frozen install")
+    else:
+        _put("out of memory (")
+        _any(what)
+        _put(")")
+
+
+def _save_failed(app):
+    if app.save_reason is not None:  # the last save failed (a later one succeeded: None)
+        _put(" | save failed: ")
+        _put(app.save_reason)
 
 
 def _calibrating(app):
     """Calibration mode (firmware/calmode.py): no heading; the session's progress."""
-    p = progress(app)
-    parts = ["calibration mode (no heading)", app.status]
-    parts.extend(_story(app, p))
-    if app.save_reason is not None:
-        parts.append("save failed: %s" % app.save_reason)
-    return " | ".join(parts)
+    _put("calibration mode (no heading) | ")
+    _put(app.status)
+    _story(app)
+    _save_failed(app)
+    if app.no_memory is not None:
+        _no_memory(app)
+
+
+def _heading_line(app):
+    h = app.heading_kang
+    _put("heading ")
+    if h < 0:
+        _put("---.-")
+    else:
+        _deg(h)
+    _put(" deg")
+    if app.accel is None or not app.tilt:
+        _put(" (level, no tilt)")
+    _sep()
+    _put(app.status)
+    c = app.compass
+    if c.interference or c.dip_high or c.gimbal:
+        _put(" | flags ")
+        k = _n
+        if c.interference:
+            _put("interference")
+        if c.dip_high:
+            _put("," if _n > k else "")
+            _put("dip>75")
+        if c.gimbal:
+            _put("," if _n > k else "")
+            _put("pitch>80")
+    _story(app)
+    a = app.attitude
+    if a is not None:  # use_gyro() (docs/gyro.md)
+        _gyro(a)
+    if app.relearning:
+        _put(" | relearning")
+    _save_failed(app)
+    if app.no_memory is not None:
+        _no_memory(app)
+    ch = app.change
+    if ch is not None:
+        _put(" | jump: ")
+        _put(ch[0])
+        _put(" ")
+        _int(ch[1])
+        _put(" outside ")
+        _int(ch[2])
+        _put("..")
+        _int(ch[3])
+        _put(", accept_change() or discard_change()")
+    from firmware.accuracy import NAMES, assess
+    lvl, why = assess(app)
+    _put(" | accuracy ")
+    _int(lvl)
+    _put(" ")
+    _put(NAMES[lvl])
+    if why != NAMES[lvl]:
+        _put(" (")
+        _put(why)
+        _put(")")
+    loc = app.location
+    if loc is not None:
+        if loc.usable:
+            _put(" | decl ")
+            _deg(loc.declination_kang, True)
+            _put(" deg (model)")
+        else:
+            _put(" | decl manual")
+        if loc.status != "ok":
+            _put(" | location: ")
+            _put(loc.status)
+
+
+def view(app):
+    """The line in this module's buffer: a memoryview, valid until the next call."""
+    global _n
+    _n = 0
+    if app._args is not None:  # the app itself did not fit (CompassApp tries again)
+        _put("out of memory: the app did not fit in ")
+        _free_kb()
+        _put(" KB free: use a .mpy or frozen install (docs/design.md, memory); retrying")
+    elif app.mode != "heading":
+        _calibrating(app)
+    else:
+        _heading_line(app)
+    return _mv[:_n]
 
 
 def line(app):
-    """One readable line: heading (marked when not tilt-compensated), status and flags, the
-    calibration's stage in words (collecting with its coverage, solving, saved once,
-    calibrated, and what to do when a fit is refused), accuracy, location."""
-    if app._args is not None:  # the app itself did not fit (CompassApp tries again)
-        return ("out of memory: the app did not fit in %s KB free: use a .mpy or frozen "
-                "install (docs/design.md, memory); retrying" % _free_kb())
-    if app.mode != "heading":
-        return _calibrating(app)
-    from firmware.trig import kang_to_str
-    p = progress(app)
-    h = app.heading_kang
-    parts = ["heading %s deg%s" % ("---.-" if h < 0 else kang_to_str(h),
-                                   "" if app.accel is not None and app.tilt
-                                   else " (level, no tilt)"), app.status]
-    c = app.compass
-    flags = [n for n, f in (("interference", c.interference), ("dip>75", c.dip_high),
-                            ("pitch>80", c.gimbal)) if f]
-    if flags:
-        parts.append("flags " + ",".join(flags))
-    parts.extend(_story(app, p))
-    a = app.attitude
-    if a is not None:  # use_gyro() (docs/gyro.md)
-        parts.append(_gyro(a))
-    if app.relearning:
-        parts.append("relearning")
-    if app.save_reason is not None:  # the last save failed (a later one succeeded: None)
-        parts.append("save failed: %s" % app.save_reason)
-    if app.no_memory is not None:
-        parts.append(_no_memory(app))
-    if app.change is not None:
-        parts.append("jump: %s %d outside %d..%d, accept_change() or discard_change()"
-                     % app.change)
-    from firmware.accuracy import NAMES, assess
-    lvl, why = assess(app)
-    parts.append("accuracy %d %s%s" % (lvl, NAMES[lvl], "" if why == NAMES[lvl]
-                                       else " (%s)" % why))
-    loc = app.location
-    if loc is not None:
-        parts.append("decl %s deg (model)" % kang_to_str(loc.declination_kang, True)
-                     if loc.usable else "decl manual")
-        if loc.status != "ok":
-            parts.append("location: %s" % loc.status)
-    return " | ".join(parts)
+    """One readable line (view()'s, as a str)."""
+    return bytes(view(app)).decode()

@@ -92,8 +92,8 @@ def cdeg_to_kang(cdeg):
     return rdiv(cdeg * 2048, 1125)
 
 
-def kang_to_str(angle_kang, signed=False):
-    """Degrees with one decimal: '0.0'..'359.9', or '-180.0'..'179.9' when signed."""
+def kang_decideg(angle_kang, signed=False):
+    """Tenths of a degree, rounded: 0..3599, or -1800..1799 when signed."""
     a = angle_kang & 0xFFFF
     if signed and a >= _KANG_180:
         a -= KANG_PER_TURN
@@ -102,6 +102,12 @@ def kang_to_str(angle_kang, signed=False):
         d = 0
     elif d == 1800 and signed:  # 179.95 deg and up: the signed range ends at 179.9
         d = -1800
+    return d
+
+
+def kang_to_str(angle_kang, signed=False):
+    """Degrees with one decimal: '0.0'..'359.9', or '-180.0'..'179.9' when signed."""
+    d = kang_decideg(angle_kang, signed)
     if d < 0:
         return "-%d.%d" % (-d // 10, -d % 10)
     return "%d.%d" % (d // 10, d % 10)

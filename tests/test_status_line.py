@@ -56,3 +56,20 @@ def test_without_an_accelerometer_the_heading_is_marked_as_not_tilt_compensated(
     app = W.make_app(b, accel=False)
     ln = lines(app, b, 2)[-1]
     assert ln.startswith("heading ") and "(level, no tilt)" in ln.split(" | ")[0]
+
+
+def test_the_status_line_a_board_prints_allocates_a_few_hundred_bytes_not_kilobytes():
+    # boards/main.py writes status_view(app): the line in firmware/status.py's own buffer.
+    # What is left per call on the 32-bit build is call frames MicroPython takes from the heap
+    # (frames over 11 words: accuracy.level's ten parameters, the line's own); it was ~2 KB
+    # when the line was joined from strings and app.__dict__ was copied.
+    import json
+    from tests import mp
+    t = mp.TIERS["x86-32"]
+    if not t.available:
+        import pytest
+        pytest.skip("x86-32 tier: %s" % t.reason)
+    out = json.loads(mp.run(["tests/scenarios/status_alloc.py"], "x86-32",
+                            heap="4M").strip().splitlines()[-1])
+    assert out["view_collecting"] <= 400 and out["view_calibrated"] <= 400, out
+    assert out["calibrated_line"].startswith("heading ")
