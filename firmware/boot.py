@@ -38,12 +38,19 @@ def _import(cal_file, store, mag):
 
 
 def start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_options):
-    from firmware.app import CompassApp
+    # one step at a time, each step's code let go before the next loads (docs/design.md,
+    # memory): the chips, the store, a calibration file, then the app
     from firmware import detect
     opts = dict(mag_options or {})
     if delay_us is not None:
         opts["delay_us"] = delay_us
     mag = detect.detect(i2c, **opts)
+    if "accel" not in app_options:
+        acc = detect.detect_accel(i2c)
+        if acc:  # (absent: the app looks for one again now and then)
+            app_options["accel"] = acc
+    detect = None
+    drop("detect", "devinit")
     store = None
     note = None
     if store_dir is not None:
@@ -53,5 +60,6 @@ def start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_
             cal_file = store_dir.rstrip("/") + "/calibration.json"
         if _exists(cal_file):  # the importer (and its JSON parser) only when there is a file
             note = _import(cal_file, store, mag)
+    from firmware.app import CompassApp
     app = CompassApp(i2c, mag=mag, store=store, delay_us=delay_us, **app_options)
     return app, note
