@@ -207,3 +207,16 @@ def test_board_time_from_qemu_instruction_counts_is_repeatable_and_plausible():
     # an M0+ at 125 MHz: 1 to 3 cycles for each instruction the M3 guest counts
     assert all(1.0 < k < 3.0 for k in e["cycles_per_instr"].values()), e["cycles_per_instr"]
     assert 0 < e["slices_past_5ms"] <= e["slices"] and e["solve_ms"][0] > 50
+
+
+def test_the_bench_sweeps_boards_main_and_no_run_ends_in_a_traceback(smoke):
+    d, _ = smoke
+    bs = d["results"].get("board_sweep")
+    if bs is None:
+        pytest.skip("no x86-32 tier: the sweep needs its collector")
+    assert "error" not in bs, bs
+    for name in ("mpy_first", "mpy_stored", "py_first", "py_stored"):
+        assert bs[name]["heaps"] == 3 and bs[name]["tracebacks"] == [], (name, bs[name])
+    assert bs["mpy_stored"]["smallest_kb"] is not None  # 160 and 320 KB boot a calibrated board
+    lines = bench.board_sweep_rows(d["results"])
+    assert any(ln.startswith("| .mpy files") for ln in lines)

@@ -271,9 +271,66 @@ def collect(smoke, log=print):
             res["gyrobench"][label] = run_script("gyrobench", interp, [gyro] + args)
     if os.path.exists(MICROPYTHON_32):
         res["memory32"] = memory32(session, build, smoke, log)
+        res["board_sweep"] = board_sweeps(session, build, smoke, log)
     else:
         res["memory32"] = {"error": "no 32-bit MicroPython at %s" % MICROPYTHON_32}
     return res
+
+
+SWEEP_KB = (32, 320, 4)  # boards/main.py's heaps in make bench (tests/test_heap_sweep.py: 32 KB)
+
+
+def board_sweeps(session, build, smoke, log=print):
+    """boards/main.py at every heap of SWEEP_KB (smoke: three), from .mpy and .py, with an
+    empty store and with a stored calibration: {'mpy_first': {'smallest_kb', 'tracebacks',
+    'heaps'}, ...}. The smallest heap from which every larger one completes (smallest_complete)."""
+    import tempfile
+    lo, hi, step = SWEEP_KB
+    kbs = [64, 160, 320] if smoke else list(range(lo, hi + 1, step))
+    out = {}
+    with tempfile.TemporaryDirectory() as d:
+        inst = {k: board_install(os.path.join(d, k), k) for k in ("mpy", "py")}
+        store = os.path.join(d, "calibrated")
+        os.makedirs(store)
+        if not board_run(inst["mpy"], session, 512, store)["complete"]:
+            return {"error": "no calibration completed in 512 KB to boot from"}
+        for kind in ("mpy", "py"):
+            for stored in (False, True):
+                name = "%s_%s" % (kind, "stored" if stored else "first")
+                log("  board sweep %s (%d heaps)" % (name, len(kbs)))
+                rs = board_sweep(inst[kind], session, kbs, store if stored else None)
+                out[name] = {"smallest_kb": smallest_complete(rs),
+                             "tracebacks": [r["kb"] for r in rs if r["traceback"]],
+                             "heaps": len(rs)}
+    return out
+
+
+def board_sweep_rows(res):
+    """The heap sweep of boards/main.py (board_sweeps) as markdown lines."""
+    bs = res.get("board_sweep") or {}
+    if not bs or "error" in bs:
+        return ["boards/main.py heap sweep: %s" % (bs.get("error") or "not run")]
+
+    def kb(name):
+        v = (bs.get(name) or {}).get("smallest_kb")
+        return v * 1024 if v else None
+
+    def fits(n):
+        return ", ".join(b for b, heap in BOARD_HEAP if n is not None and n <= heap) or "neither"
+    lo, hi, step = SWEEP_KB
+    lines = ["`boards/main.py` itself, its status line printed every 0.5 s, over a replayed "
+             "figure-8 then at rest (host_sim/cli/benchmarks/boardrun.py), at every heap from "
+             "%d to %d KB in %d KB steps: the smallest heap from which every larger one "
+             "completes, and the runs that ended in a traceback (the goal: none)." % (lo, hi, step),
+             "", "| install | first calibration on the board | fits | a calibrated board boots "
+             "| fits | tracebacks |", "|---|---|---|---|---|---|"]
+    for kind, label in (("mpy", ".mpy files (make deploy)"), ("py", ".py sources (mip)")):
+        f, c = kb(kind + "_first"), kb(kind + "_stored")
+        tb = sum(len((bs.get(kind + x) or {}).get("tracebacks") or ())
+                 for x in ("_first", "_stored"))
+        lines.append("| %s | %s | %s | %s | %s | %d |" % (label, _kbf(f), fits(f), _kbf(c),
+                                                         fits(c), tb))
+    return lines
 
 
 QEMU_ELF = os.path.join(TOOLS, "micropython-qemu-mps2-an385-armv6m.elf")
@@ -1360,7 +1417,8 @@ def readme_section(R, m, derived, res=None):
         summary(res or {}, derived),
         "",
         soak_section(res or {}),
-    ] + modheap_section(res or {}) + quickcal_section(res or {}) + [
+    ] + ["", "### Every heap: boards/main.py swept", ""] + board_sweep_rows(res or {}) + [
+        ""] + modheap_section(res or {}) + quickcal_section(res or {}) + [
         END,
     ]
     return "\n".join(lines)
@@ -1453,6 +1511,7 @@ def boards_section(res):
              "| deployment | heading from a stored calibration (live heap) | fits | "
              "first calibration on the board (smallest heap) | fits | after that session |",
              "|---|---|---|---|---|---|"] + rows + [
+             ""] + board_sweep_rows(res) + [
              "", "| part (`package-PART.json`) | for | heap with all its modules loaded "
              "(the core's boot code leaves after boot), .mpy / ROMFS |", "|---|---|---|"]
     for part in names:
