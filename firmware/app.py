@@ -221,6 +221,7 @@ class CompassApp:
     _args = None     # the constructor's arguments while the heap could not hold the app
     _calmode_due = False
     _saved_shown = 0  # app.stored when the status line last said "saved"
+    _gyro_options = None  # use_gyro()'s options while it is in use
     _relearn_due = False
     _retry_us = 0
     not_installed = None  # "calibrate": calibrate() found no calibration machinery
@@ -437,6 +438,7 @@ class CompassApp:
         a = attach(self, attitude.Attitude, options)
         attach = None
         drop("gyrosetup")
+        self._gyro_options = options  # calibration mode lets the filter go, then remakes it
         return a
 
     @property

@@ -84,6 +84,11 @@ def leave(app):
     appsetup = None
     drop("appsetup", "devinit")
     app._use(app.calibration)
+    if app._gyro_options is not None:  # the gyro-aided heading it had, made again
+        try:
+            app.use_gyro(**app._gyro_options)
+        except MemoryError:
+            app._gyro_options = None  # (status line: no "gyro:" part; use_gyro() again)
 
 
 # firmware/session.py MACHINERY (named here too: session may not have loaded)

@@ -1,0 +1,59 @@
+"""Calibration mode (firmware/calmode.py): where the heap cannot hold the heading line and a
+session together, the board calibrates holding only what calibrating needs, then shows
+headings again without the session's code. Forced here by saying there is no room (CPython
+cannot measure its heap); tests/test_heap_sweep.py runs it where the heap is really short."""
+import sys
+
+import pytest
+
+from host_sim import motion
+
+sys.path.insert(0, "tests/scenarios")
+import app_world as W  # noqa: E402
+
+from firmware import compat  # noqa: E402
+from firmware.app import status_line  # noqa: E402
+from firmware.store import CalStore  # noqa: E402
+
+HEADING_LINE = {"firmware.compass", "firmware.fast", "firmware.kang_tables"}
+
+
+@pytest.fixture
+def no_room(monkeypatch):
+    # 1 KB free, whenever asked (firmware/calmode.py is imported afresh for each use)
+    monkeypatch.setattr(compat, "free_bytes", lambda: 1024)
+
+
+def test_a_board_without_room_calibrates_in_calibration_mode_then_shows_headings(no_room):
+    fs = W.MemFs()
+    b = W.make_sim("gy271", m=motion.figure8(), seed=3)
+    app = W.make_app(b, store=CalStore("/", fs=fs))
+    app.step()
+    assert app.mode == "calibrating" and app.compass is None and app.watch is None
+    assert not HEADING_LINE & set(sys.modules)  # the heading line's code let go
+    lines = []
+    while b.clock.now_us < 90000000 and app.mode != "heading":
+        ok = app.step()
+        assert not ok or app.mode == "heading"  # no heading while calibrating
+        if app.steps % 100 == 0:
+            lines.append(status_line(app))
+    assert app.mode == "heading", lines[-3:]
+    assert lines[0].startswith("calibration mode (no heading) | calibrating | uncalibrated")
+    assert app.calibration.model == 10 and app.stored >= 1 and app.collector is None
+    assert "firmware.session" not in sys.modules and "firmware.solve" not in sys.modules
+    # the heading line again, on the fit just saved
+    W.run_until(app, b, b.clock.now_us / 1e6 + 2)
+    assert app.step() is True and app.compass is not None
+    assert status_line(app).split(" | ")[1] in ("ok", "interference", "heading jumped")
+
+
+def test_calibration_mode_relearns_the_same_way(no_room):
+    fs = W.MemFs()
+    W.stored_calibration(fs)
+    b = W.make_sim("gy271", m=motion.figure8(), seed=4)
+    app = W.make_app(b, store=CalStore("/", fs=fs))
+    assert app.mode == "heading" and app.collector is None  # a good stored fit: no session
+    assert app.calibrate() is None and app._calmode_due  # no room: the next step enters it
+    app.step()
+    assert app.mode == "calibrating" and app.collector is not None
+    assert app.calibration.model == 10  # the stored fit stays in force meanwhile
