@@ -438,7 +438,8 @@ class CompassApp:
         a = attach(self, attitude.Attitude, options)
         attach = None
         drop("gyrosetup")
-        self._gyro_options = options  # calibration mode lets the filter go, then remakes it
+        # calibration mode lets the filter go, then remakes it (no options: nothing held)
+        self._gyro_options = options if options else ()
         return a
 
     @property

@@ -86,7 +86,11 @@ def leave(app):
     app._use(app.calibration)
     if app._gyro_options is not None:  # the gyro-aided heading it had, made again
         try:
-            app.use_gyro(**app._gyro_options)
+            opts = app._gyro_options
+            if opts:
+                app.use_gyro(**opts)
+            else:
+                app.use_gyro()
         except MemoryError:
             app._gyro_options = None  # (status line: no "gyro:" part; use_gyro() again)
 
