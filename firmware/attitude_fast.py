@@ -212,24 +212,24 @@ def advance(st, dt: int):
                 elif v < 0 - lim:
                     v = 0 - lim
                 s[4 + i] = v
+        # normalise, after each chunk: |q| back to 1 before the next (a long gap's many chunks)
+        w = (((s[0] + h) & m) - h) >> 14
+        x = (((s[1] + h) & m) - h) >> 14
+        y = (((s[2] + h) & m) - h) >> 14
+        z = (((s[3] + h) & m) - h) >> 14
+        s[13] = w
+        s[14] = x
+        s[15] = y
+        s[16] = z
+        e = ((1 << 28) - (w * w + x * x + y * y + z * z)) >> 15
+        if e > 8191:
+            e = 8191
+        elif e < -8191:
+            e = -8191
+        for i in range(4):
+            q = ((s[i] + h) & m) - h
+            s[i] = q + (q >> 14) * e + (((q & 0x3FFF) * e) >> 14)
         dt -= c
-    # normalise
-    w = (((s[0] + h) & m) - h) >> 14
-    x = (((s[1] + h) & m) - h) >> 14
-    y = (((s[2] + h) & m) - h) >> 14
-    z = (((s[3] + h) & m) - h) >> 14
-    s[13] = w
-    s[14] = x
-    s[15] = y
-    s[16] = z
-    e = ((1 << 28) - (w * w + x * x + y * y + z * z)) >> 15
-    if e > 8191:
-        e = 8191
-    elif e < -8191:
-        e = -8191
-    for i in range(4):
-        q = ((s[i] + h) & m) - h
-        s[i] = q + (q >> 14) * e + (((q & 0x3FFF) * e) >> 14)
 
 
 @micropython.viper

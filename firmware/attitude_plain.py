@@ -259,16 +259,17 @@ def normalise(st):
 
 
 def advance(st, dt):
-    """The gyro step over dt in chunks below 32768 us (the integral term with each), then
-    |q| back to 1."""
+    """The gyro step over dt in chunks below 32768 us (the integral term with each), |q|
+    back to 1 after each (a long gap's many chunks would otherwise grow it past what one
+    Newton step brings back)."""
     half_angles(st)
     while dt > 0:
         c = dt if dt < _CHUNK_US else _CHUNK_US
         integrate(st, c)
         if st[_KB]:
             integral(st, c)
+        normalise(st)
         dt -= c
-    normalise(st)
 
 
 def angles(st):
