@@ -71,3 +71,14 @@ def test_a_status_line_reads_never_save_failed_none(world):
 def _tidy(world):
     yield
     shutil.rmtree(str(world["store"]) + "-none", ignore_errors=True)
+
+
+def test_a_board_running_from_sources_says_so_when_its_heap_is_short(world):
+    import tempfile
+    with tempfile.TemporaryDirectory() as st:
+        r = bench.board_run(world["py"], world["session"], 160, st)
+    assert any(ln.startswith("eCompass: running from .py sources") for ln in r["lines"]), \
+        r["lines"][:4]
+    with tempfile.TemporaryDirectory() as st:
+        r = bench.board_run(world["mpy"], world["session"], 160, st)
+    assert not any("running from .py sources" in ln for ln in r["lines"])
