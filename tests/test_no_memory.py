@@ -1,0 +1,88 @@
+"""A MemoryError never escapes CompassApp(), step() or status_line(), and the board says what
+it could not do (docs/design.md, memory). Here the heap "runs out" where a job's code is
+imported (CPython has no heap to fill); tests/test_heap_sweep.py fills a real one."""
+import builtins
+import sys
+
+import pytest
+
+from host_sim import motion
+
+sys.path.insert(0, "tests/scenarios")
+import app_world as W  # noqa: E402
+
+from firmware.app import status_line  # noqa: E402
+from firmware.store import CalStore  # noqa: E402
+
+
+@pytest.fixture
+def no_room_for(monkeypatch):
+    """no_room_for.names: the firmware modules whose import raises MemoryError meanwhile."""
+    real = builtins.__import__
+
+    class Gate:
+        names = set()
+
+    def imp(name, globals=None, locals=None, fromlist=(), level=0):
+        wanted = {name[len("firmware."):]} if name.startswith("firmware.") else set()
+        if name == "firmware" and fromlist:
+            wanted |= set(fromlist)
+        if wanted & Gate.names:
+            raise MemoryError("memory allocation failed (test)")
+        return real(name, globals, locals, fromlist, level)
+    monkeypatch.setattr(builtins, "__import__", imp)
+    return Gate
+
+
+def _calibrated_store():
+    fs = W.MemFs()
+    W.stored_calibration(fs)
+    return CalStore("/", fs=fs)
+
+
+def test_a_load_short_of_memory_is_not_uncalibrated_and_is_tried_again(no_room_for):
+    no_room_for.names = {"persist"}
+    b = W.make_sim("gy271", m=motion.still(30.0, 10.0, 0.0), seed=4)
+    app = W.make_app(b, store=_calibrated_store())
+    assert app.load_reason == "no_memory" and app.no_memory == "load"
+    assert app.collector is None  # no session for a board that has a calibration
+    W.run_until(app, b, 1.0)
+    ln = status_line(app)
+    assert app.status == "out of memory" and "stored calibration not loaded" in ln
+    no_room_for.names = set()
+    W.run_until(app, b, 7.0)  # retried every 5 s
+    assert app.calibration.model == 10 and app.no_memory is None and app.status != "out of memory"
+
+
+def test_no_room_for_a_session_says_what_calibrating_needs_and_keeps_the_heading(no_room_for):
+    no_room_for.names = {"session"}
+    b = W.make_sim("gy271", m=motion.figure8(), seed=3)
+    app = W.make_app(b, store=CalStore("/", fs=W.MemFs()))
+    W.run_until(app, b, 2.0)
+    assert app.mode == "heading" and app.collector is None and app.no_memory == "calibrate"
+    ln = status_line(app)
+    assert "calibration needs ~" in ln and "browser page" in ln, ln
+    assert app.status == "out of memory" and app.heading_kang >= 0
+    no_room_for.names = set()
+    W.run_until(app, b, 65.0)  # tried again after 60 s
+    assert app.collector is not None or app.calibration.model is not None
+
+
+def test_the_app_that_did_not_fit_keeps_stepping_says_so_and_is_made_when_there_is_room(
+        no_room_for):
+    no_room_for.names = {"appsetup"}
+    b = W.make_sim("gy271", m=motion.still(30.0, 10.0, 0.0), seed=4)
+    app = W.make_app(b, store=_calibrated_store())
+    assert app.no_memory == "start" and app.step() is False
+    assert "the app did not fit" in status_line(app)
+    no_room_for.names = set()
+    for _ in range(300):  # tried again every 256 steps
+        app.step()
+    assert app._args is None and app.calibration.model == 10 and app.step() is True
+
+
+def test_the_status_line_without_room_is_a_fixed_line(no_room_for):
+    b = W.make_sim("gy271", m=motion.still(30.0, 10.0, 0.0), seed=4)
+    app = W.make_app(b, store=_calibrated_store())
+    no_room_for.names = {"status"}
+    assert status_line(app).startswith("status line: out of memory")
