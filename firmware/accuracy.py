@@ -15,6 +15,9 @@ that applies gives the level and the reason.
   0      no_heading        the last step gave no heading (bus error, timeout, overflow,
                            zero field or gravity)
   0      uncalibrated      no calibration in force
+  0      mag_axes          the mounting check found MAG_AXES wrong for this board: the heading
+                           is wrong once it tilts (status "check MAG_AXES: ...",
+                           firmware/mountcheck.py)
   2      gyro_held         use_gyro(): the field is not used (a magnet, a fast turn) and the
                            gyroscope holds the heading within its vouched uncertainty
                            (docs/gyro.md; status "gyro held")
@@ -110,6 +113,8 @@ def assess(app):
         return UNRELIABLE, "no_heading"
     loc = app.location
     st = app.status
+    if st is not None and st == app._axes_status:
+        return UNRELIABLE, "mag_axes"
     held = st == "gyro held"
     return level(model=cal.model, fit_error=cal.fit_error, coverage=cal.coverage,
                  heading=st == "ok" or st == "interference" or st == "heading jumped" or held,

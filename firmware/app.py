@@ -227,6 +227,9 @@ class CompassApp:
     not_installed = None  # "calibrate": calibrate() found no calibration machinery
     quick = None     # the firmware.quickcal.QuickCal of the last quick_calibrate()
     attitude = None  # the firmware.attitude.Attitude of use_gyro()
+    mounting = None  # (verdict, MAG_AXES the data say) of the last mounting check
+    #                  (firmware/mountcheck.py), None before any
+    _axes_status = None  # the status while that check names another MAG_AXES
 
     def __init__(self, i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z",
                  model=10, declination_cdeg=0, store=None, delay_us=None, ticks_us=None,
@@ -516,6 +519,10 @@ class CompassApp:
         if self.pending is not None and (self.status == STATUS_OK
                                          or self.status == STATUS_INTERFERENCE):
             self.status = STATUS_CHANGED  # the likely cause of the interference, too
+        if self._axes_status is not None and (self.status == STATUS_OK
+                                              or self.status == STATUS_INTERFERENCE):
+            self.status = self._axes_status  # the mounting check: MAG_AXES is wrong (the
+            #                                  dip it swings is the interference's cause too)
         if self.no_memory is not None and self._ok:
             self.status = STATUS_NO_MEMORY  # a heading, but not the calibrated one it should be
 
@@ -768,8 +775,11 @@ class CompassApp:
     def _select(self):
         # while collecting, _vet read the configuration back after every sample: no sample
         # taken at another gain or range reaches the fit
-        if self.collector is not None:
-            self.collector.feed(self.raw)
+        c = self.collector
+        if c is not None:
+            c.feed(self.raw)
+            if c.pairs is not None and self.tilt:  # the mounting check's (firmware/mounting.py)
+                c.pairs.feed(self.raw, self._acc)
 
     def _failed(self, st):
         self._flag(st)

@@ -572,6 +572,7 @@ class Collector:
         self.last_detail = None
         self.last_model = None     # the model of the last solve attempt
         self.relearning = False
+        self.pairs = None          # firmware.mounting.Pairs, set by the session
         self._cov = 0
         self._cov_dirty = True
 
@@ -661,6 +662,7 @@ class Collector:
         fit replace it (its fit error is aged by stale_age_s)."""
         self.relearning = True
         self.job = None
+        self.pairs = None  # taken with the old iron: no mounting check in this session
         self.calibrator.clear()
         self.calibrator.age(stale_age_s)
         self._cov_dirty = True

@@ -35,19 +35,24 @@ board has turned over (tests/test_mounting.py measures both on the simulator). T
 A right setting could give WRONG only if its own sigma were >= UNSTEADY_Q10 while another's
 were <= STEADY_Q10, a factor of two apart.
 check() returns (verdict, axes: the steadiest mapping's MAG_AXES, sigma: the spread of the
-setting in use, best: the steadiest one's), the spreads in Q10 (1024 = 1). check() allocates one work array of
+setting in use, best: the steadiest one's), the spreads in Q10 (1024 = 1). judge(app) runs
+it for a CompassApp's calibration session (firmware/session.py mount_check, after each fit
+put in force and at the session's end when the last check could not tell): app.mounting,
+and the status shown in place of "ok" while the data name another MAG_AXES. norm14 comes
+from firmware.trig, imported for the check; in calibration mode (firmware/calmode.py), where
+the heading line's trig is not loaded, it and its tables are let go again after it. check() allocates one work array of
 63 ints and the axes string (and parses spec strings when given them in place of
 AxisMap.m arrays); 24 pairs x 24 rotations, once per accepted fit. Every intermediate stays
 below 2**30 (tests/test_mounting.py drives tests/intcheck).
 """
+import sys
 from array import array
 
 from firmware.axes import AxisMap, apply
 from firmware.calibration import correct
-from firmware.compat import const
+from firmware.compat import const, drop
 from firmware.fixedpoint import isqrt, rdiv
 from firmware.mounting import BINS, WIDTH
-from firmware.trig import ZERO_VECTOR, norm14
 
 OK = "ok"
 WRONG = "wrong"
@@ -70,9 +75,9 @@ _SIGNS = b"\x00\x06\x05\x03\x00\x06\x05\x03\x00\x06\x05\x03\x07\x01\x02\x04\x07\
 _AXES = "xyz"
 
 
-def _unit(t, w, o):
+def _unit(t, w, o, trig):
     # w[o:o+3] = the vector t as a unit vector in Q14 (|component| <= 16384); False for 0
-    if norm14(t, w, o) == ZERO_VECTOR:
+    if trig.norm14(t, w, o) == trig.ZERO_VECTOR:
         return False
     x = w[o]
     y = w[o + 1]
@@ -84,7 +89,7 @@ def _unit(t, w, o):
     return True
 
 
-def _body(d, o, k, mm, am, w, t):
+def _body(d, o, k, mm, am, w, t, trig):
     # the pair at d[o:]: its field (calibrated, body frame) in w[0:3] and gravity in w[3:6],
     # as unit vectors; t: a 3-element scratch array
     t[0] = d[o]
@@ -92,13 +97,13 @@ def _body(d, o, k, mm, am, w, t):
     t[2] = d[o + 2]
     correct(k, t, t)  # the field, sensor axes (correct reads all of t before it writes)
     apply(mm, t, t)
-    if not _unit(t, w, 0):
+    if not _unit(t, w, 0, trig):
         return False
     t[0] = d[o + 3]
     t[1] = d[o + 4]
     t[2] = d[o + 5]
     apply(am, t, t)
-    return _unit(t, w, 3)
+    return _unit(t, w, 3, trig)
 
 
 def _cosines(w):
@@ -159,11 +164,18 @@ def check(pairs, cal, mag_axes, accel_axes):
     t = array("i", bytes(12))
     d = pairs.data
     n = 0
+    # firmware.trig's norm14: in calibration mode (firmware/calmode.py) the heading line's
+    # trig and its tables are not loaded; then they are loaded for this check and let go
+    loaded = "firmware.trig" in sys.modules
+    from firmware import trig
     for i in range(BINS):
         o = WIDTH * i
-        if d[o + 6] >= 0 and _body(d, o, k, mm, am, w, t):
+        if d[o + 6] >= 0 and _body(d, o, k, mm, am, w, t, trig):
             _cosines(w)
             n += 1
+    trig = None
+    if not loaded:
+        drop("trig", "kang_tables")
     best = second = 0x3FFFFFFF
     kb = 0
     for r in range(24):
@@ -187,6 +199,21 @@ def check(pairs, cal, mag_axes, accel_axes):
     else:
         v = WRONG
     return v, _spec(mm, kb), cur, best
+
+
+def judge(app):
+    """The check of a CompassApp's calibration session (firmware/session.py mount_check):
+    the pairs its collector kept, the calibration in force, the app's maps. Sets
+    app.mounting = (verdict, axes) and, when the verdict is WRONG, app._axes_status, the
+    status the app shows in place of "ok" (`check MAG_AXES: the data say "y,x,-z"`); OK
+    clears it; SPREAD and UNSTEADY leave it as it was. Returns the verdict."""
+    v, axes, sigma, best = check(app.collector.pairs, app.calibration, app._mm, app._am)
+    app.mounting = (v, axes)
+    if v == WRONG:
+        app._axes_status = 'check MAG_AXES: the data say "%s"' % axes
+    elif v == OK:
+        app._axes_status = None
+    return v
 
 
 def _sigma(s, q, n):

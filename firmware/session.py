@@ -33,7 +33,8 @@ _FLAG_BASELINE = const(4)
 # what a finished session leaves for CompassApp's counters (accepted, refused, ...)
 ENDED = ("accepted", "refused", "solves", "last_reason", "last_detail", "last_model")
 # the calibration machinery: loaded for a session, dropped at its end
-MACHINERY = ("session", "calibrator", "samples", "accum", "solve", "acceptance", "history")
+MACHINERY = ("session", "calibrator", "samples", "accum", "solve", "acceptance", "history",
+             "mounting")
 
 
 def start(app, fast=True):
@@ -46,6 +47,10 @@ def start(app, fast=True):
                   counts_per_gauss=app.mag.counts_per_gauss, current=app.calibration,
                   solve_every=app.solve_every, fallback=app.fallback,
                   overflow=_HMC_OVERFLOW if app.mag.KIND == "hmc5883l" else None)
+    if app.accel is not None:  # the mounting check's pairs (firmware/mounting.py)
+        from firmware.mounting import Pairs
+        c.pairs = Pairs(app.accel.counts_per_g,
+                        getattr(app.mag, "period_us", _DEFAULT_PERIOD_US))
     return c
 
 
@@ -98,6 +103,7 @@ def accept(app, cal):
         if app._hist is not None:
             app._hist_flags = _FLAG_ACCEPTED
         app._save()
+        mount_check(app)
     else:
         app.pending = cal
         app.change = jump
@@ -118,6 +124,9 @@ def end_if_done(app):
             or c.job is not None or c.kept or c.since_kept_us < _DONE_QUIET_US
             or not app._good_enough(app.calibration)):
         return False
+    m = app.mounting
+    if m is None or m[0] != "ok" and m[0] != "wrong":
+        mount_check(app)  # once more with every pair kept, when the last could not tell
     for name in ENDED:
         app._ended[name] = getattr(c, name)
     app.collector = None
@@ -125,6 +134,19 @@ def end_if_done(app):
     app._session = None
     drop(*MACHINERY)  # (in calibration mode the app's next step makes the heading line again)
     return True
+
+
+def mount_check(app):
+    """The mounting check (firmware/mountcheck.py: loaded for it, dropped after) of the pairs
+    kept against the calibration in force: app.mounting, and app._axes_status the status
+    while it names another MAG_AXES."""
+    if app.collector.pairs is not None and app.calibration.model is not None:
+        try:
+            from firmware import mountcheck
+            mountcheck.judge(app)
+        except MemoryError:
+            pass  # no room now: the next fit, or the session's end, checks again
+        drop("mountcheck")
 
 
 def history_check(app, cal):

@@ -421,3 +421,33 @@ def test_the_guided_check_names_the_lines_for_board_py(mount, accel_mount):
         assert lines[i + 1:i + 3] == ['ACCEL_AXES = "%s"' % acc, 'MAG_AXES = "%s"' % mag]
     r = dict(eval(lines[-1]))
     assert (r["accel_axes"], r["mag_axes"]) == (acc, mag)
+
+
+# --- on the board: the calibration session runs the check ---------------------------------------
+def test_on_the_board_a_wrong_setting_is_said_and_the_heading_not_presented_as_good():
+    from firmware.app import status_line
+    s = M.Session("gy87", None, mount=(2, 1, -3), statuses=True)
+    app = s.app
+    note = 'check MAG_AXES: the data say "y,x,-z"'
+    assert app.mounting[:2] == (mountcheck.WRONG, "y,x,-z")
+    assert app.status == note and "| %s |" % note in status_line(app)
+    assert app.accuracy == 0 and app.accuracy_reason() == "mag_axes"
+    # from the first check that named it, never "ok" again
+    first = s.statuses.index(note)
+    assert "ok" not in s.statuses[first:]
+    # the board put down: the session ends and its modules leave; the note stays
+    import sys
+    s.board.world.motion = motion.still(30.0, 0.0, 0.0)
+    for _ in range(50 * 20):
+        app.step()
+    assert app.collector is None
+    assert "firmware.mounting" not in sys.modules and "firmware.mountcheck" not in sys.modules
+    assert app.status == note and app.accuracy_reason() == "mag_axes"
+
+
+def test_on_the_board_a_right_setting_is_never_questioned():
+    for chip, accel in M.BOARDS:
+        s = M.Session(chip, accel, statuses=True)
+        assert s.app.mounting[0] == mountcheck.OK, (chip, s.app.mounting)
+        assert not any(st.startswith("check MAG_AXES") for st in s.statuses), chip
+        assert s.app.status == "ok" and s.app.accuracy_reason() != "mag_axes"

@@ -79,11 +79,12 @@ class Session:
     """One simulated calibration session with the mounting check (see the module docstring).
     .checks: (t_s, verdict, axes, sigma, best, bins) after each accepted calibration, and
     once more at the end when the last said nothing (spread or unsteady);
-    .app, .pairs, .board; .rows with record=True."""
+    .app, .pairs, .board; .rows with record=True, .statuses with statuses=True (the app
+    runs the check itself too, firmware/session.py: .app.mounting)."""
 
     def __init__(self, chip="qmc5883l", accel=True, mount=MOUNT, accel_mount=MOUNT,
                  mag_axes=MAG_AXES, accel_axes=ACCEL_AXES, world=None, seed=3,
-                 seconds=SECONDS, record=False, accel_bias=None):
+                 seconds=SECONDS, record=False, accel_bias=None, statuses=False):
         from host_sim import motion
         from host_sim.boards import make_board
         from firmware.app import CompassApp
@@ -108,11 +109,14 @@ class Session:
         accepted = 0
         end = int(seconds * 1000000)
         self.rows = []  # record=True: (accel x, y, z, mag x, y, z) raw, per step with both
+        self.statuses = []  # statuses=True: app.status after every step
         while b.clock.now_us < end:
             if app.step() and app.tilt:
                 self.pairs.feed(app.raw, app._acc)
                 if record:
                     self.rows.append(tuple(app._acc) + tuple(app.raw))
+            if statuses:
+                self.statuses.append(app.status)
             if app.accepted > accepted:
                 accepted = app.accepted
                 self.check(app.calibration)
