@@ -36,8 +36,8 @@ A right setting could give WRONG only if its own sigma were >= UNSTEADY_Q10 whil
 were <= STEADY_Q10, a factor of two apart.
 check() returns (verdict, axes: the steadiest mapping's MAG_AXES, sigma: the spread of the
 setting in use, best: the steadiest one's), the spreads in Q10 (1024 = 1). judge(app) runs
-it for a CompassApp's calibration session (firmware/session.py mount_check, after each fit
-put in force and at the session's end when the last check could not tell): app.mounting,
+it for a CompassApp's calibration session (firmware/session.py mount_check: after each fit
+put in force until a check gives an answer, and at the session's end): app.mounting,
 and the status shown in place of "ok" while the data name another MAG_AXES. norm14 comes
 from firmware.trig, imported for the check; in calibration mode (firmware/calmode.py), where
 the heading line's trig is not loaded, it and its tables are let go again after it. check() allocates one work array of
@@ -52,14 +52,13 @@ from firmware.axes import AxisMap, apply
 from firmware.calibration import correct
 from firmware.compat import const, drop
 from firmware.fixedpoint import isqrt, rdiv
-from firmware.mounting import BINS, WIDTH
+from firmware.mounting import BINS, MIN_BINS, WIDTH
 
 OK = "ok"
 WRONG = "wrong"
 SPREAD = "spread"
 UNSTEADY = "unsteady"
 
-MIN_BINS = const(8)        # a third of the directions: gravity has left one face of the cube
 STEADY_Q10 = const(102)    # sigma <= 0.10 (1024 = 1): 6 deg RMS of dip at 0 deg, 11 at 60
 UNSTEADY_Q10 = const(205)  # sigma >= 0.20: twice that; no right mapping is this unsteady
 _SHIFT_Q10 = const(4)      # Q14 cosine -> Q10: |c| <= 1025, so _sigma stays below 2**30

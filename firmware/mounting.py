@@ -29,6 +29,8 @@ from firmware.compat import const
 
 BINS = const(24)        # 3 nearest axes x 2 signs x 4 sign pairs of the other two
 WIDTH = const(7)        # int16 per bin: mag x, y, z, accel x, y, z, score (-1: empty)
+MIN_BINS = const(8)     # bins a check needs (firmware/mountcheck.py): a third of the
+#                         directions, gravity has left one face of the cube
 _PREV = const(168)      # BINS * WIDTH: the previous step's accelerometer
 _G_SHIFT = const(4)     # |a|^2 on a >> 4: int16 counts -> < 3 * 2**24
 _G2_TOL_PCT = const(20)  # |a|^2 within 20 % of 1 g^2 (|a| within ~10 % of 1 g): little

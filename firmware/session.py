@@ -102,8 +102,8 @@ def accept(app, cal):
         app._use(cal)
         if app._hist is not None:
             app._hist_flags = _FLAG_ACCEPTED
+        mount_check(app)  # before the save: its code and work are gone when the save runs
         app._save()
-        mount_check(app)
     else:
         app.pending = cal
         app.change = jump
@@ -124,9 +124,7 @@ def end_if_done(app):
             or c.job is not None or c.kept or c.since_kept_us < _DONE_QUIET_US
             or not app._good_enough(app.calibration)):
         return False
-    m = app.mounting
-    if m is None or m[0] != "ok" and m[0] != "wrong":
-        mount_check(app)  # once more with every pair kept, when the last could not tell
+    mount_check(app)  # once more with every pair kept, when no check could tell yet
     for name in ENDED:
         app._ended[name] = getattr(c, name)
     app.collector = None
@@ -138,15 +136,23 @@ def end_if_done(app):
 
 def mount_check(app):
     """The mounting check (firmware/mountcheck.py: loaded for it, dropped after) of the pairs
-    kept against the calibration in force: app.mounting, and app._axes_status the status
-    while it names another MAG_AXES."""
-    if app.collector.pairs is not None and app.calibration.model is not None:
-        try:
-            from firmware import mountcheck
-            mountcheck.judge(app)
-        except MemoryError:
-            pass  # no room now: the next fit, or the session's end, checks again
-        drop("mountcheck")
+    kept against the calibration in force, until one gives an answer (ok or wrong; a board
+    short of heap loads its code as seldom as that): app.mounting, and app._axes_status the
+    status while it names another MAG_AXES."""
+    p = app.collector.pairs
+    m = app.mounting
+    if (p is None or app.calibration.model is None
+            or m is not None and (m[0] == "ok" or m[0] == "wrong")):
+        return
+    from firmware.mounting import MIN_BINS
+    if p.count < MIN_BINS:
+        return  # too few directions of gravity yet
+    try:
+        from firmware import mountcheck
+        mountcheck.judge(app)
+    except MemoryError:
+        pass  # no room now: the next fit, or the session's end, checks again
+    drop("mountcheck")
 
 
 def history_check(app, cal):
