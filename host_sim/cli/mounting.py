@@ -27,8 +27,9 @@ dance (period 24-36 s, pitch amplitude 60-85 deg, roll 120-180 deg, any start he
 random one of the 24 mountings of each chip WITH its right MAG_AXES / ACCEL_AXES, and what a
 real board and hand add (random_session's rough: accelerometer offsets, the chips 0-3 deg
 apart, the hand's accelerations): a verdict "wrong" in any check of any session is a false
-alarm. Printed: sessions, checks, false alarms,
-the verdicts of the last check of each session, the largest spread (sigma) of a right setting.
+alarm, and so is the app's own check (firmware/session.py) saying "wrong". Printed: sessions,
+checks, false alarms, the verdicts of the last check of each session and of the app's own,
+the largest spread (sigma) of a right setting.
 """
 import json
 import sys
@@ -204,7 +205,7 @@ def _turned(w, deg, axis):
 def soak(sessions=60, seed=1, seconds=SECONDS):
     """Run `sessions` random sessions with right settings (see the module docstring)."""
     out = {"sessions": sessions, "seed": seed, "seconds": seconds, "checks": 0,
-           "false_alarms": 0, "alarms": [], "last": {}, "worst_sigma_q10": 0}
+           "false_alarms": 0, "alarms": [], "last": {}, "board": {}, "worst_sigma_q10": 0}
     for i in range(sessions):
         s = random_session(seed * 100003 + i, seconds, rough=True)
         for c in s.checks:
@@ -216,6 +217,12 @@ def soak(sessions=60, seed=1, seconds=SECONDS):
                 out["worst_sigma_q10"] = c[3]
         last = s.verdict[0] or "no fit"
         out["last"][last] = out["last"].get(last, 0) + 1
+        board = s.app.mounting  # the app's own check (firmware/session.py)
+        out["board"][board[0] if board else "none"] = out["board"].get(
+            board[0] if board else "none", 0) + 1
+        if board is not None and board[0] == mountcheck.WRONG:
+            out["false_alarms"] += 1
+            out["alarms"].append([seed * 100003 + i, s.board.chip, "board"] + list(board))
     return out
 
 
@@ -227,7 +234,9 @@ def report(st):
             "checks %d (after each accepted fit, and at the end)  false alarms %d  last verdicts "
             "%s  worst sigma with ok %.3f" % (st["checks"], st["false_alarms"],
                               ", ".join("%s %d" % kv for kv in sorted(st["last"].items())),
-                              st["worst_sigma_q10"] / 1024.0)]
+                              st["worst_sigma_q10"] / 1024.0),
+            "the board's own check (app.mounting at the end): %s"
+            % ", ".join("%s %d" % kv for kv in sorted(st["board"].items()))]
 
 
 # ---- offline: a log with accelerometer columns (the calibrate command) ----------------------
