@@ -64,10 +64,10 @@ web: $(STAMP) wasm  ## vendor the WebAssembly port into web/ for the browser cal
 # The registries carry none, so tools/build-micropython-tiers.sh builds them from a MicroPython
 # source tree at the pinned tag, v1.28.0 (`make tiers` without one prints the three commands:
 # clone it into build/micropython, its micropython-lib submodule, MICROPYTHON_SRC=... make
-# tiers; gcc-multilib, about 2 min on 2 cores); a development machine that has prebuilt ones in
-# PREBUILT_TOOLS gets those copied. Without either, those tiers skip and say why.
+# tiers; gcc-multilib, about 2 min on 2 cores); PREBUILT_TOOLS=DIR copies prebuilt ones from DIR
+# (no default: .ci/run passes where CI keeps them). Without either, those tiers skip and say why.
 TOOLS_DIR      := build/tools
-PREBUILT_TOOLS ?= ../shared/tools
+PREBUILT_TOOLS ?=
 TIER_FILES     := micropython-x86-32 mpy-cross-x86-32 micropython-qemu-mps2-an385-armv6m.elf
 # the tag tools/build-micropython-tiers.sh pins (PIN_TAG)
 MICROPYTHON_TAG := v1.28.0
@@ -76,7 +76,7 @@ tiers:  ## the 32-bit tiers' MicroPython builds in build/tools (MICROPYTHON_SRC=
 	elif [ -n "$(MICROPYTHON_SRC)" ]; then \
 	  MICROPYTHON_SRC="$(MICROPYTHON_SRC)" tools/build-micropython-tiers.sh all \
 	    || echo "x86-32/arm tiers will skip: tools/build-micropython-tiers.sh failed (it needs MicroPython v1.28.0 with lib/micropython-lib, gcc-multilib for x86-32, gcc-arm-none-eabi for arm)"; \
-	elif [ -x $(PREBUILT_TOOLS)/micropython-x86-32 ]; then \
+	elif [ -n "$(PREBUILT_TOOLS)" ] && [ -x "$(PREBUILT_TOOLS)/micropython-x86-32" ]; then \
 	  mkdir -p $(TOOLS_DIR) && for f in $(TIER_FILES); do \
 	    [ -f $(PREBUILT_TOOLS)/$$f ] && cp -p $(PREBUILT_TOOLS)/$$f $(TOOLS_DIR)/; done; \
 	  echo "x86-32/arm tiers: prebuilt interpreters copied from $(PREBUILT_TOOLS) into $(TOOLS_DIR)"; \

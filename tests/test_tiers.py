@@ -2,7 +2,7 @@
 parity scenarios on each (same stdout as CPython, bit for bit).
 
 Tiers: "wasm" (MicroPython WebAssembly port, tests/wasm/run.mjs, no native emitter), "x86-32"
-(32-bit unix port with native/viper, ../shared/tools), "arm" (Cortex-M qemu, `make test-arm`
+(32-bit unix port with native/viper, build/tools: make tiers), "arm" (Cortex-M qemu, `make test-arm`
 only). The unix port (64-bit) is the control where a 32-bit property must NOT hold, so each
 sanity test can fail. A tier that is missing skips with its reason (mp.TIERS[name].reason).
 """
