@@ -18,6 +18,25 @@ from firmware.store import CalStore  # noqa: E402
 HEADING_LINE = {"firmware.compass", "firmware.fast", "firmware.kang_tables"}
 
 
+@pytest.fixture(autouse=True)
+def _modules_back():
+    """Calibration mode drops firmware modules from sys.modules by design; the modules and the
+    kernel switch this process had before are put back for the tests that follow."""
+    mods = {k: v for k, v in sys.modules.items() if k == "firmware" or k.startswith("firmware.")}
+    pkg = sys.modules["firmware"]
+    attrs = dict(pkg.__dict__)
+    fast = compat.FAST
+    yield
+    for k in [k for k in sys.modules if k.startswith("firmware.")]:
+        if k not in mods:
+            del sys.modules[k]
+    sys.modules.update(mods)
+    pkg.__dict__.clear()
+    pkg.__dict__.update(attrs)
+    compat.FAST = fast
+    compat._kernels = 0
+
+
 @pytest.fixture
 def no_room(monkeypatch):
     # 1 KB free, whenever asked (firmware/calmode.py is imported afresh for each use)
