@@ -96,4 +96,5 @@ def leave(app):
 
 
 # firmware/session.py MACHINERY (named here too: session may not have loaded)
-_MACHINERY = ("session", "calibrator", "samples", "accum", "solve", "acceptance", "history")
+_MACHINERY = ("session", "calibrator", "samples", "accum", "solve", "acceptance", "history",
+              "mounting")
