@@ -352,6 +352,10 @@ class CompassApp:
             except ImportError:  # package-calibrate.json not installed on this board
                 self.not_installed = "calibrate"
                 return None
+            except MemoryError:  # not even room to ask: said, and tried again later
+                self.no_memory = "calibrate"
+                self._retry_us = _CAL_RETRY_US
+                return None
             if not calmode.room():
                 calmode = None
                 self._calmode_due = True  # the next step lets go of the heading line first

@@ -86,3 +86,12 @@ def test_the_status_line_without_room_is_a_fixed_line(no_room_for):
     app = W.make_app(b, store=_calibrated_store())
     no_room_for.names = {"status"}
     assert status_line(app).startswith("status line: out of memory")
+
+
+def test_no_room_even_to_ask_for_a_session_is_said_and_tried_again(no_room_for):
+    b = W.make_sim("gy271", m=motion.figure8(), seed=3)
+    app = W.make_app(b, store=CalStore("/", fs=W.MemFs()), learn=False)
+    no_room_for.names = {"calmode"}
+    assert app.calibrate() is None and app.no_memory == "calibrate"  # no MemoryError out
+    W.run_until(app, b, 1.0)
+    assert "calibration needs ~" in status_line(app)
