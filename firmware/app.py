@@ -117,7 +117,8 @@ STATUS_INTERNAL = "internal error"    # step() caught an unexpected exception (e
 STATUS_JUMP = "heading jumped"        # it moved > 4 deg since the last sample: a magnet moving
 #                                       in, or a turn too fast for the sample rate to follow
 STATUS_NO_MEMORY = "out of memory"  # the heap cannot hold a job the board needs (.no_memory
-#                                       says which: "start", "load"); it keeps running
+#                                       says which: "start", "load", "calibrate", "heading");
+#                                       it keeps running and tries again
 STATUS_CALIBRATING = "calibrating"    # calibration mode (firmware/calmode.py): no heading
 STATUS_GYRO_HELD = "gyro held"        # use_gyro(): the field is not used (interference), the
 #                                       gyroscope holds the heading and still vouches for it
@@ -139,9 +140,10 @@ _FIELD_TOL_MAX_PCT = const(50)
 _FIT_SIGMAS = const(3)        # window >= 3 x the fit's RMS radial error
 _US_PER_S = const(1000000)
 _LOAD_NO_MEMORY = "no_memory"  # firmware.persist.LOAD_NO_MEMORY
-_LOAD_RETRY_US = const(5000000)
-_RETRY_PAUSE_US = const(5000)
-_CAL_RETRY_US = const(60000000)  # firmware.calmode.RETRY_US  # the pause of a step while the app itself does not fit  # a load that found no room is tried again after 5 s
+_LOAD_RETRY_US = const(5000000)  # a load (or the heading line) that found no room: again in 5 s
+_RETRY_PAUSE_US = const(5000)   # the pause of a step while the app itself does not fit
+_CAL_RETRY_US = const(60000000)  # a session that found no room: again in 60 s
+#                                  (firmware.calmode.RETRY_US)
 _GAP_CAP_US = const(0x10000000)  # the time since the last read stops counting at 268 s
 _ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
 _ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
@@ -371,7 +373,9 @@ class CompassApp:
                 return None
             except MemoryError:  # no room beside the heading line after all
                 self._session = self.collector = session = None
-                drop("session", "calibrator", "samples", "accum", "solve", "acceptance")
+                from firmware.calmode import MACHINERY
+                drop(*MACHINERY)
+                drop("calmode")
                 self._calmode_due = True
                 return None
             self._locate()

@@ -24,9 +24,10 @@ from firmware.compat import const, drop, free_bytes
 # reliably from about 196 KB of heap, ~128 KB free after boot; at 112 KB it sometimes ran
 # out saving (a heap of 192 KB).
 SESSION_ROOM = const(128 * 1024)
-# the smallest heap in which this mode completes a first calibration (.mpy, x86-32 build;
-# docs/benchmarks.md): what the status line says a board needs when even this mode fails
-MODE_NEED_KB = const(128)
+# the smallest heap from which a first calibration completes at every heap (.mpy, x86-32
+# build, boards/main.py with its status line; docs/benchmarks.md): what the status line says
+# a board needs when even this mode fails (firmware/status.py holds the same figure)
+MODE_NEED_KB = const(144)
 RETRY_US = const(60000000)  # a session that found no room is tried again after 60 s
 MODE_HEADING = "heading"
 MODE_CALIBRATING = "calibrating"
@@ -65,7 +66,7 @@ def enter(app):
     except MemoryError:
         app._session = app.collector = None
         session = None
-        drop(*_MACHINERY)
+        drop(*MACHINERY)
         app.no_memory = "calibrate"
         try:
             leave(app)
@@ -96,6 +97,7 @@ def leave(app):
             app._gyro_options = None  # (status line: no "gyro:" part; use_gyro() again)
 
 
-# firmware/session.py MACHINERY (named here too: session may not have loaded)
-_MACHINERY = ("session", "calibrator", "samples", "accum", "solve", "acceptance", "history",
+# firmware/session.py MACHINERY (named here too: a session that failed to start may not have
+# loaded it)
+MACHINERY = ("session", "calibrator", "samples", "accum", "solve", "acceptance", "history",
               "mounting")

@@ -76,3 +76,10 @@ def test_calibration_mode_relearns_the_same_way(no_room):
     app.step()
     assert app.mode == "calibrating" and app.collector is not None
     assert app.calibration.model == 10  # the stored fit stays in force meanwhile
+
+
+def test_calibration_mode_names_the_same_machinery_as_the_session():
+    # firmware/calmode.py keeps its own copy (a session that failed to start may not have
+    # loaded firmware/session.py): the two lists stay one
+    from firmware import calmode, session
+    assert calmode.MACHINERY == session.MACHINERY
