@@ -14,7 +14,7 @@ import sys
 import time
 
 import board
-from firmware.compat import drop
+from firmware.compat import drop, free_bytes
 
 # A calibration fitted on the desktop (python -m host_sim calibrate LOG --sensor ... --out
 # calibration.json) copied here is imported once at boot (docs/calibration.md).
@@ -35,9 +35,8 @@ def wait_s(s):
 
 
 def free_kb():
-    import gc
-    gc.collect()
-    return gc.mem_free() // 1024 if hasattr(gc, "mem_free") else -1
+    f = free_bytes()  # after a collection; None where the port does not tell
+    return f // 1024 if f is not None else -1
 
 
 _PY_SHORT_KB = 96  # free heap below which a board running from .py sources is told so
