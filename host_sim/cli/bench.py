@@ -463,15 +463,21 @@ def profiles(session, extra_path, cwd, extra=(), heap=None, gyro_session=None):
     gyroscope, write_session(mpu_bytes=14)) 'gyro': the same reboot with use_gyro().
     {'calibrate': {...}, 'heading': {...}, 'gyro': {...}}."""
     import tempfile
+    # Every name is relative to the directory it runs in, as on a board ("firmware/app.mpy",
+    # not /tmp/.../firmware/app.mpy): each module keeps its file name on the heap, so absolute
+    # names would make the figures depend on where the checkout and the temporary files are.
+    run_in = extra_path or cwd
     out = {}
-    with tempfile.TemporaryDirectory() as store:
+    with tempfile.TemporaryDirectory(dir=run_in) as store:
         for profile in ("calibrate", "heading", "gyro"):
             if profile == "gyro" and gyro_session is None:
                 continue
             s = gyro_session if profile == "gyro" else session
             out[profile] = run_script("profiles", MICROPYTHON_32,
-                                      [s, store, profile] + list(extra),
-                                      extra_path=extra_path, cwd=cwd, heap=heap)
+                                      [os.path.relpath(s, run_in), os.path.relpath(store, run_in),
+                                       profile] + list(extra),
+                                      extra_path="." if extra_path else None, cwd=run_in,
+                                      heap=heap)
     return out
 
 
@@ -504,9 +510,11 @@ def board_run(install, session, kb, store_dir):
     (benchmarks/boardrun.py): {'kb', 'exit', 'traceback', 'lines' (the status lines and
     announcements printed), 'final' (boardrun's last line), 'complete' (a 10-element
     calibration in force, the last status line a heading with it, nothing it could not do)}."""
+    # names relative to the install, as on a board: the app keeps the store's name on the heap
     exe = [MICROPYTHON_32, "-X", "heapsize=%dk" % kb,
-           os.path.join(ROOT, "host_sim", "cli", "benchmarks", "boardrun.py"), session,
-           store_dir, str(BOARD_DANCE_S), str(BOARD_END_S)]
+           os.path.join(ROOT, "host_sim", "cli", "benchmarks", "boardrun.py"),
+           os.path.relpath(session, install), os.path.relpath(store_dir, install),
+           str(BOARD_DANCE_S), str(BOARD_END_S)]
     env = dict(os.environ, MICROPYPATH=".")
     try:
         p = subprocess.run(exe, cwd=install, env=env, capture_output=True, text=True,

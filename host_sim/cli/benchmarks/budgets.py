@@ -15,18 +15,17 @@ BUDGETS = {
     "heading_live_romfs": 35 * KB,
     # a first calibration session that has ended, minus the line above (.mpy): the names the
     # calibration machinery interned stay in the qstr pool when its modules are dropped
-    "after_session_slack_mpy": 5 * KB,  # 4.1 KB measured with calibration mode's names
+    "after_session_slack_mpy": 5 * KB,  # 4.0 KB measured with calibration mode's names
     # the smallest heap in which a board boots with an empty store, calibrates (10 elements,
     # saved), rests until the session ends and shows 2000 headings (the recorded session's
     # bytes and the ROMFS image's not counted)
     "min_heap_calibrate_mpy": 140 * KB,  # 132.7 KB measured with calibration mode
     "min_heap_calibrate_romfs": 92 * KB,  # 86.7 KB measured with calibration mode
     # the gyro-aided heading (use_gyro(), .mpy): live heap after boot + 1000 headings, minus
-    # the heading line above (docs/gyro.md's goal; 6.5-7.4 KB measured when set)
-    # 8,080 B when the bias learning was built, 8,240 B once the mounting check was wired into
-    # the app (no gyro file changed; the cause is not traced); the goal is 8 KB, the budget
-    # holds 8 KB + 128 B until it is found or the filter's state is trimmed
-    "gyro_extra_mpy": 8 * KB + 128,
+    # the heading line above (docs/gyro.md's goal: 8 KB). 7,984 B measured once the profiles
+    # ran with names relative to the install, as a board's are: the 8,240 B measured before
+    # held each module's absolute file name, so it grew with the checkout's path
+    "gyro_extra_mpy": 8 * KB,
     # boards/main.py itself over the replayed figure-8 (benchmarks/boardrun.py, the status
     # line printed every 0.5 s): the smallest heap from which every larger heap of the sweep
     # completes (tests/test_heap_sweep.py, 32 KB steps; in 8 KB steps 144, 232, 104 and 120 KB
