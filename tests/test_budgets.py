@@ -5,7 +5,6 @@ in total). The board profiles boot as boards/main.py does (host_sim/cli/benchmar
 `make bench` prints the same figures beside the budgets in docs/benchmarks.md."""
 import json
 import os
-import shutil
 import subprocess
 
 import pytest
@@ -37,15 +36,8 @@ def build(tmp_path_factory):
         bench.romfs_image(os.path.join(out["mpy"], "firmware"), out["rom"])
         out["rom_bytes"] = os.path.getsize(out["rom"])
     if WASM.available:
-        pkg = os.path.join(d, "bytecode", "firmware")
-        os.makedirs(pkg)
-        for fn in sorted(os.listdir(os.path.join(mp.ROOT, "firmware"))):
-            if fn.endswith(".bin"):
-                shutil.copy(os.path.join(mp.ROOT, "firmware", fn), pkg)
-            elif fn.endswith(".py") and fn not in ("fast.py", "attitude_fast.py"):
-                subprocess.run([bench.MPY_CROSS, "-o", os.path.join(pkg, fn[:-3] + ".mpy"),
-                                os.path.join(mp.ROOT, "firmware", fn)], check=True)
-        out["bytecode"] = os.path.dirname(pkg)
+        out["bytecode"] = bench.build_mpy(os.path.join(d, "bytecode"), bench.MPY_CROSS,
+                                          "x64", skip=("fast.py", "attitude_fast.py"))
     return out
 
 
@@ -58,13 +50,13 @@ def _x86(build):
 @pytest.fixture(scope="module")
 def profiles_mpy(build):
     b = _x86(build)
-    return bench.profiles(b["session"], b["mpy"], b["dir"], gyro_session=b["session"] + ".gyro")
+    return bench.profiles(b["session"], b["mpy"], gyro_session=b["session"] + ".gyro")
 
 
 @pytest.fixture(scope="module")
 def profiles_romfs(build):
     b = _x86(build)
-    return bench.profiles(b["session"], None, b["dir"], [b["rom"], "--romfs"])
+    return bench.profiles(b["session"], None, [b["rom"], "--romfs"])
 
 
 def _ok(p):
@@ -123,13 +115,14 @@ def test_a_first_calibration_completes_within_its_smallest_heap_budget(build, ki
 def test_the_webassembly_port_allocates_within_budget_for_boot_and_headings(build):
     if not WASM.available:
         pytest.skip("wasm tier: %s" % WASM.reason)
-    store = os.path.join(build["dir"], "st-wasm")
-    os.makedirs(store)
-    env = dict(os.environ, MICROPYPATH=build["bytecode"] + ":" + mp.ROOT + ":.frozen")
+    os.makedirs(os.path.join(build["dir"], "st-wasm"))
+    # every name relative to the build folder (what a run allocates grows with its paths)
+    bench.stage_benchmark("profiles", build["dir"])
+    env = dict(os.environ, MICROPYPATH="bytecode:.:.frozen")
     out = {}
     for profile in ("calibrate", "heading"):  # the first leaves the record the second boots
         p = subprocess.run(WASM.cmd + ["-m", "host_sim.cli.benchmarks.profiles",
-                                       build["session"], store, profile],
+                                       os.path.basename(build["session"]), "st-wasm", profile],
                            cwd=build["dir"], env=env, capture_output=True, text=True,
                            timeout=600)
         assert p.returncode == 0, p.stderr[-2000:]

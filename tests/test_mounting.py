@@ -12,7 +12,6 @@ code's output): the right setting's spread must stay within STEADY (the dip's si
 """
 import json
 import os
-import shutil
 import subprocess
 from array import array
 
@@ -24,7 +23,7 @@ from firmware.axes import AxisMap
 from firmware.calibration import Calibration
 from firmware.mounting import BINS, WIDTH, Pairs, _bin
 from host_sim import motion
-from host_sim.cli import mounting as M
+from host_sim.cli import bench, mounting as M
 from tests import intcheck, mp
 
 RIGHT_MAX_Q10 = 62        # 0.06: docs/calibration.md's "right setting" figure
@@ -281,16 +280,7 @@ def test_the_session_holds_at_most_2_kb_for_the_check_on_a_32_bit_board(tmp_path
     t = mp.TIERS["x86-32"]
     if not t.available:
         pytest.skip("x86-32 tier: %s" % t.reason)
-    cross = os.path.join(mp.TOOLS, "mpy-cross-x86-32")
-    pkg = tmp_path / "firmware"
-    pkg.mkdir()
-    for fn in os.listdir(os.path.join(mp.ROOT, "firmware")):
-        src = os.path.join(mp.ROOT, "firmware", fn)
-        if fn.endswith(".py"):
-            subprocess.run([cross, "-march=x86", "-o", str(pkg / (fn[:-3] + ".mpy")), src],
-                           check=True)
-        elif fn.endswith(".bin"):
-            shutil.copy(src, str(pkg))
+    bench.build_mpy(str(tmp_path), os.path.join(mp.TOOLS, "mpy-cross-x86-32"), "x86")
     # run from the build folder: the modules' paths (their __file__, interned) as short as a
     # board's "/lib/firmware/..."
     env = dict(os.environ, MICROPYPATH=".")

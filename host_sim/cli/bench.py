@@ -70,18 +70,44 @@ def _env(micro, extra_path=None):
     return env
 
 
-def run_script(name, micro, args=(), extra_path=None, timeout=600, cwd=ROOT, heap=None):
+# what a benchmark script run on MicroPython imports of host_sim (stage_benchmark copies them)
+BENCHMARK_FILES = ("host_sim/__init__.py", "host_sim/cli/__init__.py",
+                   "host_sim/cli/benchmarks/__init__.py", "host_sim/cli/benchmarks/common.py")
+
+
+def stage_benchmark(name, run_in):
+    """Copy benchmarks/NAME.py and what it imports into run_in (a directory of the run's own),
+    so that a heap figure does not depend on where the checkout is: every module keeps its
+    file name on the heap, and names interned before a measurement starts move where the
+    collector places what comes after it (a longer checkout path moved the gyro figure by
+    1.6 KB)."""
+    import shutil
+    for rel in BENCHMARK_FILES + ("host_sim/cli/benchmarks/%s.py" % name,):
+        dest = os.path.join(run_in, rel)
+        os.makedirs(os.path.dirname(dest), exist_ok=True)
+        shutil.copy(os.path.join(ROOT, rel), dest)
+
+
+def run_script(name, micro, args=(), extra_path=None, timeout=600, cwd=ROOT, heap=None,
+               staged=False):
     """Run benchmarks.NAME on one interpreter; its JSON object, or {'error': ...}.
     `micro`: False (CPython), True (the unix port) or the path of another MicroPython.
     `extra_path` goes first on MicroPython's path; run it from a `cwd` without a firmware
     package then, since the current directory comes before MICROPYTHONPATH. `heap`: its
-    -X heapsize (MicroPython)."""
+    -X heapsize (MicroPython). `staged` (MicroPython): the script runs from a copy in `cwd`
+    (stage_benchmark), ROOT left off the path, and `extra_path` named relative to `cwd`; the
+    caller names the files in `args` relative to `cwd` too."""
     interp = sys.executable if not micro else (MICROPYTHON if micro is True else micro)
     exe = [interp] + (["-X", "heapsize=%s" % heap] if heap else [])
     exe += ["-m", "host_sim.cli.benchmarks." + name]
+    env = _env(micro, extra_path)
+    if staged and micro:
+        stage_benchmark(name, cwd)
+        env["MICROPYPATH"] = ((os.path.relpath(extra_path, cwd) + ":") if extra_path
+                              else "") + ".:.frozen"
     t0 = time.time()
     try:
-        p = subprocess.run(exe + list(args), cwd=cwd, env=_env(micro, extra_path),
+        p = subprocess.run(exe + list(args), cwd=cwd, env=env,
                            capture_output=True, text=True, timeout=timeout)
     except (OSError, subprocess.TimeoutExpired) as e:
         return {"error": "%s: %s" % (type(e).__name__, e)}
@@ -190,20 +216,30 @@ def write_session(path, smoke, mpu_bytes=6):
         f.write(bytes(mag) + bytes(acc))
 
 
-def build_mpy(out_dir, cross=None, march="x64"):
+def compile_mpy(cross, fn, dst, march=None):
+    """firmware/FN compiled to DST as `make mpy` compiles it: from the repository's root, so
+    the source name a .mpy carries (interned when it is imported) is "firmware/FN" wherever
+    the checkout is. The finished process."""
+    return subprocess.run([cross] + (["-march=" + march] if march else []) +
+                          ["-o", os.path.abspath(dst), "firmware/" + fn], cwd=ROOT,
+                          capture_output=True, text=True)
+
+
+def build_mpy(out_dir, cross=None, march="x64", skip=()):
     """firmware/*.py compiled for the unix port (x64, or `march` with another mpy-cross) as a
-    board would load them (.mpy)."""
+    board would load them (.mpy), and the firmware's data files (.bin) beside them; the
+    modules named in `skip` left out."""
+    import shutil
     cross = cross or MPY_CROSS
     pkg = os.path.join(out_dir, "firmware")
     os.makedirs(pkg, exist_ok=True)
     for fn in sorted(os.listdir(os.path.join(ROOT, "firmware"))):
-        if fn.endswith(".py"):
-            dst = os.path.join(pkg, fn[:-3] + ".mpy")
-            r = subprocess.run([cross, "-march=" + march, "-o", dst,
-                                os.path.join(ROOT, "firmware", fn)], capture_output=True,
-                               text=True)
+        if fn.endswith(".py") and fn not in skip:
+            r = compile_mpy(cross, fn, os.path.join(pkg, fn[:-3] + ".mpy"), march)
             if r.returncode != 0:
                 raise BenchError("mpy-cross %s: %s" % (fn, r.stderr))
+        elif fn.endswith(".bin"):
+            shutil.copy(os.path.join(ROOT, "firmware", fn), pkg)
     return out_dir
 
 
@@ -215,8 +251,7 @@ def mpy_sizes(arch):
         for fn in sorted(os.listdir(os.path.join(ROOT, "firmware"))):
             if fn.endswith(".py"):
                 dst = os.path.join(d, fn[:-3] + ".mpy")
-                r = subprocess.run([MPY_CROSS, "-march=" + arch, "-o", dst,
-                                    os.path.join(ROOT, "firmware", fn)], capture_output=True)
+                r = compile_mpy(MPY_CROSS, fn, dst, arch)
                 if r.returncode == 0:
                     sizes[fn[:-3]] = os.path.getsize(dst)
     return sizes
@@ -448,36 +483,42 @@ def memory32(session, build, smoke, log=print):
         gyro = session + ".gyro"
         if not os.path.exists(gyro):
             write_session(gyro, smoke, mpu_bytes=14)
-        out["profiles_" + kind] = profiles(session, path, build if path or extra else ROOT,
-                                           extra, gyro_session=gyro)
+        out["profiles_" + kind] = profiles(session, path, extra, gyro_session=gyro)
         log("  min heap   x86-32 (%s)" % kind)
         out["min_heap_" + kind] = min_heap(session, path, build if path or extra else ROOT,
                                            smoke, extra)
     return out
 
 
-def profiles(session, extra_path, cwd, extra=(), heap=None, gyro_session=None):
+def profiles(session, extra_path, extra=(), heap=None, gyro_session=None):
     """The live heap of a board booted as boards/main.py boots it (benchmarks/profiles.py):
     'calibrate' (an empty store: a first calibration, then headings) and then 'heading' (a
     reboot on the record it saved), and with gyro_session (its MPU6050 records with the
     gyroscope, write_session(mpu_bytes=14)) 'gyro': the same reboot with use_gyro().
-    {'calibrate': {...}, 'heading': {...}, 'gyro': {...}}."""
+    {'calibrate': {...}, 'heading': {...}, 'gyro': {...}}. `extra_path`: a directory holding
+    the firmware package built (.mpy), or None for the .py sources (or a ROMFS image in
+    `extra`)."""
+    import shutil
     import tempfile
-    # Every name is relative to the directory it runs in, as on a board ("firmware/app.mpy",
-    # not /tmp/.../firmware/app.mpy): each module keeps its file name on the heap, so absolute
-    # names would make the figures depend on where the checkout and the temporary files are.
-    run_in = extra_path or cwd
+    # Each run has a directory of its own holding all it reads, named relatively, as on a
+    # board ("firmware/app.mpy", "store"): every module keeps its file name on the heap, so
+    # the figures would otherwise depend on where the checkout and the temporary files are.
     out = {}
-    with tempfile.TemporaryDirectory(dir=run_in) as store:
+    with tempfile.TemporaryDirectory() as run_in:
+        if extra_path:  # the firmware as the run's own ./firmware
+            shutil.copytree(os.path.join(extra_path, "firmware"), os.path.join(run_in, "firmware"))
+        elif not extra:  # .py sources
+            shutil.copytree(os.path.join(ROOT, "firmware"), os.path.join(run_in, "firmware"),
+                            ignore=shutil.ignore_patterns("__pycache__"))
+        os.mkdir(os.path.join(run_in, "store"))
         for profile in ("calibrate", "heading", "gyro"):
             if profile == "gyro" and gyro_session is None:
                 continue
             s = gyro_session if profile == "gyro" else session
+            shutil.copy(s, os.path.join(run_in, "session.bin"))
             out[profile] = run_script("profiles", MICROPYTHON_32,
-                                      [os.path.relpath(s, run_in), os.path.relpath(store, run_in),
-                                       profile] + list(extra),
-                                      extra_path="." if extra_path else None, cwd=run_in,
-                                      heap=heap)
+                                      ["session.bin", "store", profile] + list(extra),
+                                      cwd=run_in, heap=heap, staged=True)
     return out
 
 

@@ -15,16 +15,17 @@ BUDGETS = {
     "heading_live_romfs": 35 * KB,
     # a first calibration session that has ended, minus the line above (.mpy): the names the
     # calibration machinery interned stay in the qstr pool when its modules are dropped
-    "after_session_slack_mpy": 5 * KB,  # 4.0 KB measured with calibration mode's names
+    "after_session_slack_mpy": 5 * KB,  # 3.0 KB measured with calibration mode's names
     # the smallest heap in which a board boots with an empty store, calibrates (10 elements,
     # saved), rests until the session ends and shows 2000 headings (the recorded session's
     # bytes and the ROMFS image's not counted)
     "min_heap_calibrate_mpy": 140 * KB,  # 132.7 KB measured with calibration mode
     "min_heap_calibrate_romfs": 92 * KB,  # 86.7 KB measured with calibration mode
     # the gyro-aided heading (use_gyro(), .mpy): live heap after boot + 1000 headings, minus
-    # the heading line above (docs/gyro.md's goal: 8 KB). 7,984 B measured once the profiles
-    # ran with names relative to the install, as a board's are: the 8,240 B measured before
-    # held each module's absolute file name, so it grew with the checkout's path
+    # the heading line above (docs/gyro.md's goal: 8 KB). 7,056 B measured once the figures
+    # stopped depending on where the checkout is (the .mpy files compiled as `make mpy` does,
+    # naming their source "firmware/X.py"; each run in a folder of its own, with relative
+    # names): the 8,240 B measured before held each module's absolute source name
     "gyro_extra_mpy": 8 * KB,
     # boards/main.py itself over the replayed figure-8 (benchmarks/boardrun.py, the status
     # line printed every 0.5 s): the smallest heap from which every larger heap of the sweep
