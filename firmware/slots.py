@@ -160,7 +160,16 @@ def _read(st, path):
             return None
         raise
     try:
-        return f.read(HEADER_LEN + MAX_PAYLOAD + 5)  # one byte more than any record
+        # The header's first 8 bytes say how long the record is: read that much and one byte
+        # more (a longer file is bad_length), never more than one byte past the largest
+        # record. A fixed read of the largest would ask for 4 KB in one piece, which a
+        # board's fragmented heap at boot may not have for a record of about a hundred bytes.
+        head = f.read(8)
+        if len(head) < 8 or head[:4] != MAGIC:
+            return head  # decode_record says what is wrong from these alone
+        total = head[5] + (head[6] | (head[7] << 8)) + 4
+        cap = HEADER_LEN + MAX_PAYLOAD + 5
+        return head + f.read((total + 1 if total + 1 < cap else cap) - 8)
     finally:
         f.close()
 

@@ -77,9 +77,10 @@ class _Reader:
         self.fs = fs
         self.data = data
 
-    def read(self, n=-1):
+    def read(self, n=-1):  # sequential, as a file's
         self.fs.tick("read")
-        return self.data if n < 0 else self.data[:n]
+        d, self.data = (self.data, b"") if n < 0 else (self.data[:n], self.data[n:])
+        return d
 
     def close(self):
         self.fs.tick("close")
@@ -230,8 +231,9 @@ def test_save_writes_the_slot_not_holding_the_current_record_and_reads_it_back()
     _store(ops).save(b"four")
     # scan both slots and probe the (absent) spare, write one, read it back; nothing else
     # (no rename, no remove)
-    assert [o for o in ops.ops if o != "byte"] == ["open rb", "read", "close"] * 2 + [
-        "open rb", "open wb", "close", "open rb", "read", "close"]
+    # (a record is read as its first 8 bytes, which give its length, then the rest)
+    assert [o for o in ops.ops if o != "byte"] == ["open rb", "read", "read", "close"] * 2 + [
+        "open rb", "open wb", "close", "open rb", "read", "read", "close"]
     assert decode_record(ops.files[PB], "qmc5883l", 0) == (4, b"four")
 
 
@@ -287,6 +289,8 @@ def _refusal(files, sensor="qmc5883l", range_code=0):
     (encode_record(OLD, "qmc5883l", 0, 1)[:-1], "truncated"),
     (encode_record(OLD, "qmc5883l", 0, 1)[:20], "truncated"),
     (encode_record(OLD, "qmc5883l", 0, 1) + b"\0", "bad_length"),
+    (encode_record(OLD, "qmc5883l", 0, 1) + bytes(5000), "bad_length"),
+    (b"eCAL\x01\x20\xff\xff" + bytes(70000), "truncated"),  # says 64 KB, more than any record
     (encode_record(OLD, "qmc5883l", 0, 1)[:40] + b"X" + encode_record(OLD, "qmc5883l", 0, 1)[41:],
      "bad_crc"),
     (reference_record(OLD, "qmc5883l", 0, 1, version=2), "unknown_version"),
@@ -299,6 +303,28 @@ def test_every_refusal_has_its_named_reason(content, reason):
     got, skipped = _refusal(files)
     assert got == reason
     assert skipped == [(PA, reason), (PB, "missing")]
+
+
+def test_a_record_is_read_in_pieces_no_larger_than_itself_and_one_byte():
+    """A board's heap at boot may hold no 4 KB in one piece: the read asks for the 8 bytes that
+    give the record's length, then the rest and one byte (never more than one past the
+    largest record, whatever a corrupt header says)."""
+    sizes = []
+
+    class Sized(FakeFs):
+        def open(self, path, mode):
+            f = FakeFs.open(self, path, mode)
+            if "r" in mode:
+                read = f.read
+                f.read = lambda n=-1: sizes.append(n) or read(n)
+            return f
+    rec = encode_record(OLD, "qmc5883l", 0, 1)
+    assert _store(Sized({PA: rec})).load() == OLD
+    assert sizes == [8, len(rec) - 8 + 1]
+    del sizes[:]
+    with pytest.raises(StoreError):
+        _store(Sized({PA: b"eCAL\x01\x20\xff\xff" + bytes(70000)})).load()
+    assert sizes == [8, 32 + MAX_PAYLOAD + 5 - 8]
 
 
 def test_the_most_telling_reason_is_raised_and_both_are_listed():

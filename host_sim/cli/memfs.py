@@ -27,8 +27,9 @@ class _MemFile:
         self.path = path
         self.data = data
 
-    def read(self, n=-1):
-        return self.data if n < 0 else self.data[:n]
+    def read(self, n=-1):  # sequential, as a file's
+        d, self.data = (self.data, b"") if n < 0 else (self.data[:n], self.data[n:])
+        return d
 
     def write(self, b):
         self.fs.files[self.path] += bytes(b)

@@ -131,7 +131,8 @@ class _Reader:
     def read(self, n=-1):
         if self.data is None:
             raise OSError(21, "EISDIR")
-        return self.data if n < 0 else self.data[:n]
+        d, self.data = (self.data, b"") if n < 0 else (self.data[:n], self.data[n:])
+        return d  # sequential, as a file's
 
     def write(self, data):
         raise OSError(5, "EIO")
