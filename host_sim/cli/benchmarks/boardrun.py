@@ -66,6 +66,10 @@ class _Bus:
         img = self.qmc if addr == 0x0D else self.mpu
         for k in range(len(buf)):
             img[reg + k] = buf[k]
+        if addr == 0x0D and reg == 0x0A and buf[0] & 0x80:
+            # QMC5883L SOFT_RST (control register 2, bit 7): every register back to its
+            # default (0: standby), as a boot that retries after running out of memory sees
+            img[0x09] = img[0x0A] = img[0x0B] = 0
 
     def readfrom_mem(self, addr, reg, n):
         b = bytearray(n)
