@@ -61,6 +61,17 @@ MIN_COVERAGE = const(35)      # % of sphere regions: below, a fit saw too little
 HIGH_COVERAGE = const(60)     # % of sphere regions for "high"
 _BLACKOUT = "blackout zone"   # firmware.field's statuses (field is not imported here)
 _CAUTION = "caution zone"
+# The table's conditions as the bits of one small int: the status line asks for the level at
+# every report, and MicroPython takes a call frame of more than 11 words (arguments, locals
+# and stack; py/objfun.c VM_MAX_STATE_ON_STACK) from the heap: level()'s ten arguments would.
+_F_NO_HEADING = const(1)
+_F_HELD = const(2)
+_F_INTERFERENCE = const(4)
+_F_BLACKOUT = const(8)
+_F_MISMATCH = const(16)
+_F_NO_TILT = const(32)
+_F_EXTREME = const(64)
+_F_CAUTION = const(128)
 
 
 def level(model=None, fit_error=0, coverage=0, heading=True, interference=False, tilt=True,
@@ -70,21 +81,43 @@ def level(model=None, fit_error=0, coverage=0, heading=True, interference=False,
     the last step gave one; tilt: an accelerometer is in use; extreme: pitch > 80 deg or dip
     > 75 deg; zone: the field model's status, or None; mismatch: the calibration's B is off
     the field model."""
+    f = _zone(zone)
     if not heading:
+        f |= _F_NO_HEADING
+    if held:
+        f |= _F_HELD
+    if interference:
+        f |= _F_INTERFERENCE
+    if mismatch:
+        f |= _F_MISMATCH
+    if not tilt:
+        f |= _F_NO_TILT
+    if extreme:
+        f |= _F_EXTREME
+    return _table(model, fit_error, coverage, f)
+
+
+def _zone(zone):
+    return _F_BLACKOUT if zone == _BLACKOUT else _F_CAUTION if zone == _CAUTION else 0
+
+
+def _table(model, fit_error, coverage, f):
+    # the module docstring's table, first row that applies; f: the conditions (_F_ bits)
+    if f & _F_NO_HEADING:
         return UNRELIABLE, "no_heading"
     if model is None:
         return UNRELIABLE, "uncalibrated"
-    if held:
+    if f & _F_HELD:
         return MEDIUM, "gyro_held"
-    if interference:
+    if f & _F_INTERFERENCE:
         return UNRELIABLE, "interference"
-    if zone == _BLACKOUT:
+    if f & _F_BLACKOUT:
         return UNRELIABLE, "blackout_zone"
     if model == "minmax":
         return LOW, "minmax"
     if fit_error > GOOD_FIT_ERROR and not (model == 4 and coverage == 0):
         return LOW, "fit_error_high"
-    if mismatch:
+    if f & _F_MISMATCH:
         return LOW, "field_mismatch"
     if coverage == 0 and model == 4:
         return MEDIUM, "quick"
@@ -92,11 +125,11 @@ def level(model=None, fit_error=0, coverage=0, heading=True, interference=False,
         return LOW, "low_coverage"
     if model == 4:
         return MEDIUM, "hard_iron_only"
-    if not tilt:
+    if f & _F_NO_TILT:
         return MEDIUM, "no_tilt"
-    if extreme:
+    if f & _F_EXTREME:
         return MEDIUM, "tilt_extreme"
-    if zone == _CAUTION:
+    if f & _F_CAUTION:
         return MEDIUM, "caution_zone"
     if fit_error > HIGH_FIT_ERROR:
         return MEDIUM, "fit_error_fair"
@@ -106,21 +139,36 @@ def level(model=None, fit_error=0, coverage=0, heading=True, interference=False,
 
 
 def assess(app):
-    """level() for a CompassApp's current state."""
-    cal = app.calibration
+    """level() for a CompassApp's current state; allocates nothing (the status line calls it
+    at every report)."""
     c = app.compass
     if c is None:  # calibration mode, or the app did not fit (firmware/calmode.py)
         return UNRELIABLE, "no_heading"
-    loc = app.location
     st = app.status
     if st is not None and st == app._axes_status:
         return UNRELIABLE, "mag_axes"
-    held = st == "gyro held"
-    return level(model=cal.model, fit_error=cal.fit_error, coverage=cal.coverage,
-                 heading=st == "ok" or st == "interference" or st == "heading jumped" or held,
-                 held=held,
-                 interference=c.interference or st == "interference" or st == "heading jumped",
-                 tilt=app.accel is not None,
-                 extreme=c.gimbal or c.dip_high,
-                 zone=loc.status if loc is not None and loc.usable else None,
-                 mismatch=loc is not None and loc.cal_mismatch)
+    f = _conditions(app, c, st)
+    cal = app.calibration
+    return _table(cal.model, cal.fit_error, cal.coverage, f)
+
+
+def _conditions(app, c, st):
+    # level()'s arguments for the app as _F_ bits (c: its Compass, st: its status)
+    f = 0
+    if st == "gyro held":
+        f = _F_HELD
+    elif st != "ok" and st != "interference" and st != "heading jumped":
+        f = _F_NO_HEADING
+    if c.interference or st == "interference" or st == "heading jumped":
+        f |= _F_INTERFERENCE
+    if app.accel is None:
+        f |= _F_NO_TILT
+    if c.gimbal or c.dip_high:
+        f |= _F_EXTREME
+    loc = app.location
+    if loc is not None:
+        if loc.usable:
+            f |= _zone(loc.status)
+        if loc.cal_mismatch:
+            f |= _F_MISMATCH
+    return f

@@ -951,7 +951,7 @@ def status_view(app):
     """status_line() as a memoryview of a buffer firmware/status.py holds (valid until the
     next call), allocating nothing else: what boards/main.py writes every half second."""
     try:
-        from firmware.status import view
-        return view(app)
+        import firmware.status as status  # (`from ... import` would build a tuple each call)
+        return status.view(app)
     except MemoryError:
         return _NO_MEMORY_VIEW

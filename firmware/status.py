@@ -8,8 +8,9 @@ progress(app)  the calibration's state as a dict (coverage, samples, model, fit 
                last refusal, counters, status, interference, store and history figures).
 view(app)      one readable line, written into a buffer this module holds (LINE_MAX bytes):
                a memoryview of it, valid until the next call. It allocates nothing but that
-               view (16 bytes on a 32-bit port; tests/scenarios/status_alloc.py), so a board
-               printing it every half second leaves no garbage (boards/main.py writes it).
+               view (16 bytes on a 32-bit port, in every state; tests/test_status_line.py
+               holds it at 64), so a board printing it every half second leaves no garbage
+               (boards/main.py writes it).
                The line: heading (marked when not tilt-compensated), status and flags, the
                calibration's stage in words (collecting with its coverage, solving, saved
                once, calibrated, and what to do when a fit is refused), the gyro-aided
@@ -246,7 +247,25 @@ def _calibrating(app):
         _no_memory(app)
 
 
+def _accuracy(app):
+    # `import ... as`: `from firmware.accuracy import ...` would build its tuple of names
+    import firmware.accuracy as accuracy
+    lvl, why = accuracy.assess(app)
+    name = accuracy.NAMES[lvl]
+    _put(" | accuracy ")
+    _int(lvl)
+    _put(" ")
+    _put(name)
+    if why != name:
+        _put(" (")
+        _put(why)
+        _put(")")
+
+
 def _heading_line(app):
+    # its frame (arguments, locals, stack) stays within the 11 words MicroPython keeps on the C
+    # stack (py/objfun.c VM_MAX_STATE_ON_STACK; beyond, every call takes it from the heap):
+    # parts with locals of their own are functions of their own
     h = app.heading_kang
     _put("heading ")
     if h < 0:
@@ -290,16 +309,7 @@ def _heading_line(app):
         _put("..")
         _int(ch[3])
         _put(", accept_change() or discard_change()")
-    from firmware.accuracy import NAMES, assess
-    lvl, why = assess(app)
-    _put(" | accuracy ")
-    _int(lvl)
-    _put(" ")
-    _put(NAMES[lvl])
-    if why != NAMES[lvl]:
-        _put(" (")
-        _put(why)
-        _put(")")
+    _accuracy(app)
     loc = app.location
     if loc is not None:
         if loc.usable:
