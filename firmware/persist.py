@@ -11,8 +11,11 @@ save(app, dip_only)  the calibration in force, with the dip it measures when kno
              is counted in app.save_errors, never raises, and is retried every
              _SAVE_RETRY_US by CompassApp. dip_only: the fit in force again, now with its dip
              (not counted in app.stored).
+             After the record, the mounting check's verdict kept beside it, when there is one
+             (firmware/mountnote.py: loaded only then, and dropped).
 """
 from firmware.calibration import UNCALIBRATED, Calibration
+from firmware.compat import drop
 from firmware.errors import StoreError
 
 LOAD_BAD_PAYLOAD = "bad_payload"      # .load_reason: the record is intact, its payload is not
@@ -32,7 +35,28 @@ def load(app):
     # a record that is intact but means nothing valid is skipped like a torn one
     st.validate = Calibration.from_bytes
     try:
-        return Calibration.from_bytes(st.load())
+        cal = Calibration.from_bytes(st.load())
+        # the mounting check's verdict kept beside the record (firmware/mountnote.py: NAME,
+        # and more bytes than its longest line): its code is loaded only when there is one
+        try:
+            f = st.fs.open(st.prefix + "_mounting.txt", "rb")
+            try:
+                note = f.read(80)
+            finally:
+                f.close()
+        except (AttributeError, OSError):  # none, unreadable, or a store without files
+            note = None
+        if note:
+            # imported by a string of more than 10 characters, which MicroPython keeps as a
+            # string, where the names of an import statement are interned (qstrs, never
+            # freed) when this module loads: a board without the file interns nothing for it
+            name = "firmware.mountnote"
+            try:  # (a MemoryError: the load is tried again, as the store's)
+                if __import__(name, None, None, ("load",)).load(app, note):
+                    cal = cal.with_dip(None)  # measured through another MAG_AXES
+            finally:
+                drop(name[9:])
+        return cal
     except StoreError as e:
         app.load_reason = e.reason
     except ValueError:

@@ -136,23 +136,41 @@ def end_if_done(app):
 
 def mount_check(app):
     """The mounting check (firmware/mountcheck.py: loaded for it, dropped after) of the pairs
-    kept against the calibration in force, until one gives an answer (ok or wrong; a board
-    short of heap loads its code as seldom as that): app.mounting, and app._axes_status the
-    status while it names another MAG_AXES."""
-    p = app.collector.pairs
-    m = app.mounting
-    if (p is None or app.calibration.model is None
-            or m is not None and (m[0] == "ok" or m[0] == "wrong")):
+    kept against the calibration in force, until one gives an answer (ok or wrong) that is
+    kept for the next boot (firmware/mountnote.py save): app.mounting, and app._axes_status
+    the status while it names another MAG_AXES. Then the session's pairs go: a board short of
+    heap loads the check's code as seldom as that, and the next session checks afresh.
+    mountnote's code is loaded for a wrong setting, and for a right one only when a verdict
+    file is there to remove, by a string as firmware/persist.py load loads it: no name is
+    interned for it otherwise (a function of its own would intern its name too)."""
+    c = app.collector
+    p = c.pairs
+    if p is None or app.calibration.model is None:
         return
     from firmware.mounting import MIN_BINS
     if p.count < MIN_BINS:
         return  # too few directions of gravity yet
+    name = "firmware.mountnote"
     try:
         from firmware import mountcheck
-        mountcheck.judge(app)
+        v = mountcheck.judge(app)
+        mountcheck = None
+        drop("mountcheck")
+        st = app.store
+        if v == "ok" and st is not None:
+            try:  # firmware.mountnote.NAME
+                st.fs.open(st.prefix + "_mounting.txt", "rb").close()
+            except (AttributeError, OSError):
+                st = None  # no verdict file: nothing to remove
+        if (v == "ok" or v == "wrong") and st is not None:
+            __import__(name, None, None, ("save",)).save(app)
+        if v == "ok" or v == "wrong":
+            c.pairs = None
     except MemoryError:
         pass  # no room now: the next fit, or the session's end, checks again
-    drop("mountcheck")
+    except OSError:
+        pass  # the verdict could not be kept: the same
+    drop("mountcheck", name[9:], "slots")
 
 
 def history_check(app, cal):

@@ -19,7 +19,7 @@ REPORT = ("status", "accuracy")
 MACHINERY = ("boot", "detect", "appsetup", "persist", "slots", "session", "history", "samples",
              "accum", "solve", "acceptance", "calibrator", "hmc5883l", "qmc5883p", "location",
              "field", "quickcal", "motioncal", "motioncal_mode", "calimport", "gyrosetup",
-             "attitude", "mounting", "mountcheck")
+             "attitude", "mounting", "mountcheck", "mountnote")
 
 
 def live():
