@@ -47,6 +47,15 @@ def enter(app):
     """Let go of the heading line and start the session; the collector, or None when even
     that did not fit (then the heading line is back and app.no_memory says so)."""
     from firmware import compat, i2cdevice
+    try:
+        # The status line's names interned now, before the session's: MicroPython never frees
+        # a name, and its table of names grows by doubling, in one block (~9 KB on a 32-bit
+        # port at ~1270 names). Interned first, at most a small growth happens here; interned
+        # once the session has fragmented the heap, the status line could not load again.
+        import firmware.status  # noqa: F401
+        import firmware.accuracy  # noqa: F401
+    except MemoryError:
+        pass  # (the status line says what it cannot do, and tries at each report)
     app.mode = MODE_CALIBRATING
     app._decl_kang = app.compass.declination_kang
     app.compass = app.watch = app.dip = app.attitude = None
