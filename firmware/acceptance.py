@@ -2,62 +2,61 @@
 
     from firmware import acceptance
     acceptance.check_field(field_counts, counts_per_gauss)   # raises CalibrationRejected(reason)
-
-A fit is accepted only when it passes every check below, in this order (the calibrator runs
-them as the solve reaches each quantity); each refusal raises
-CalibrationRejected(REASON_*, detail) with the numbers in the detail:
-  too_few_samples   fewer held samples than the model needs (MIN_SAMPLES).
-  planar            the samples do not determine the model (Judd's degenerate ellipsoids):
-                    singular normal equations, or a parameter whose degeneracy ratio rho
-                    (firmware/solve.py) is below its limit - e.g. a flat spin.
-  singular          the solver broke down: the quadric is not an ellipsoid, or W^-1 did not
-                    converge.
-  offset_out_of_range  V outside int16 (correct() could not represent it; ArduPilot also
-                    bounds offsets).
-  low_coverage      fewer than MIN_COVERAGE percent of 100 equal-area sphere regions, seen
-                    from the fitted centre V, hold a sample.
-  soft_iron_out_of_range  the eigenvalues of W^-1 spread more than 5:1 (ArduPilot refuses
-                    diagonal scalings outside 0.2 .. 5 for the same reason).
-  field_out_of_range  B outside 10 .. 90 uT (NXP) when counts_per_gauss is known; else B below
-                    _MIN_FIELD_COUNTS counts (too coarse to correct).
-  field_mismatch    when the location is known (CompassApp.set_location): B differs from the
-                    field model's |B| in counts by more than FIELD_MATCH_PCT (20 %) - the
-                    sensor is not at the gain or range the driver reports, or a magnet was near
-                    during the fit. ArduPilot's radius check is the same idea, looser: it bounds
-                    the scale correction expected / fitted to 1/1.5 .. 1.5.
-  fit_error_high    fit error above max_fit_error (hundredths of a percent).
-The same bar for a calibration that comes from anywhere (check_calibration: a MotionCal
-packet, a calibration file, a quick calibration, and each of the board's own fits before it
-is put in force): V in int16 (offset_out_of_range); B and the output field of the correction
-plausible (field_out_of_range: B 10 .. 90 uT at the sensor's gain; the output field at least
-1/8 of B and at most 2 B, and _MIN_FIELD_COUNTS - an InvW that scales the field to nothing
-would switch the interference check off); InvW symmetric, positive definite, eigenvalues
-within 5:1 and det(InvW) >= 2**-9 in Q15 (soft_iron_out_of_range: all zeros, minus the
-identity, a huge diagonal scaled down). docs/faults.md lists every refusal.
-  not_better        the current calibration's fit error, aged, is lower ("sour grapes", Judd);
-                    a higher-order model gets through at <= 3.5 % (NXP), and a fit covering
-                    15 points more of the sphere at up to 3/2 the aged fit error.
-  inconsistent_samples  (10-element fits) the older and the newer half of the held samples
-                    (in the order they were kept) disagree about the hard iron: with the fit's
-                    shape and |B|, each half's centre solves (sum b b^T) c = 1/2 sum
-                    (|b|^2 - B^2) b (the sphere |b - c| = B, linearised), and the two centres
-                    are more than CONSISTENCY_PCT (3 %) of B apart - a fit between them is
-                    ~1.5 % of B, ~1.7 deg of heading at 60 deg dip, off either, and what a mix
-                    leaves grows with it (8 deg and more with a magnet near the sensor for
-                    part of a first calibration, docs/faults.md) - and not by chance: the
-                    radial residuals follow from one kept sample to the next (lag-1
-                    correlation > 1/4; a board is moved continuously, noise is not), or the
-                    two centres explain the residual far beyond chance (F ratio > 10). The
-                    samples mix two hard-iron states (a magnet for part of the collection, a
-                    relay or motor switching) or a drifting one. A half whose samples lie near
-                    a plane (det of its normal matrix below 1/20 of (trace/3)^3) cannot place
-                    its centre: no verdict then. The 4- and 7-element fits leave the soft iron
-                    they cannot model in their residual, which differs from one part of the
-                    sphere to another, so they are not judged this way; states that alternate
-                    faster than half a collection put both in each half and show only as a
-                    high fit error. The collector then drops the held samples
-                    (firmware.calibrator.Collector): the next fit sees one state.
 """
+# A fit is accepted only when it passes every check below, in this order (the calibrator runs
+# them as the solve reaches each quantity); each refusal raises
+# CalibrationRejected(REASON_*, detail) with the numbers in the detail:
+#   too_few_samples   fewer held samples than the model needs (MIN_SAMPLES).
+#   planar            the samples do not determine the model (Judd's degenerate ellipsoids):
+#                     singular normal equations, or a parameter whose degeneracy ratio rho
+#                     (firmware/solve.py) is below its limit - e.g. a flat spin.
+#   singular          the solver broke down: the quadric is not an ellipsoid, or W^-1 did not
+#                     converge.
+#   offset_out_of_range  V outside int16 (correct() could not represent it; ArduPilot also
+#                     bounds offsets).
+#   low_coverage      fewer than MIN_COVERAGE percent of 100 equal-area sphere regions, seen
+#                     from the fitted centre V, hold a sample.
+#   soft_iron_out_of_range  the eigenvalues of W^-1 spread more than 5:1 (ArduPilot refuses
+#                     diagonal scalings outside 0.2 .. 5 for the same reason).
+#   field_out_of_range  B outside 10 .. 90 uT (NXP) when counts_per_gauss is known; else B below
+#                     _MIN_FIELD_COUNTS counts (too coarse to correct).
+#   field_mismatch    when the location is known (CompassApp.set_location): B differs from the
+#                     field model's |B| in counts by more than FIELD_MATCH_PCT (20 %) - the
+#                     sensor is not at the gain or range the driver reports, or a magnet was near
+#                     during the fit. ArduPilot's radius check is the same idea, looser: it bounds
+#                     the scale correction expected / fitted to 1/1.5 .. 1.5.
+#   fit_error_high    fit error above max_fit_error (hundredths of a percent).
+# The same bar for a calibration that comes from anywhere (check_calibration: a MotionCal
+# packet, a calibration file, a quick calibration, and each of the board's own fits before it
+# is put in force): V in int16 (offset_out_of_range); B and the output field of the correction
+# plausible (field_out_of_range: B 10 .. 90 uT at the sensor's gain; the output field at least
+# 1/8 of B and at most 2 B, and _MIN_FIELD_COUNTS - an InvW that scales the field to nothing
+# would switch the interference check off); InvW symmetric, positive definite, eigenvalues
+# within 5:1 and det(InvW) >= 2**-9 in Q15 (soft_iron_out_of_range: all zeros, minus the
+# identity, a huge diagonal scaled down). docs/faults.md lists every refusal.
+#   not_better        the current calibration's fit error, aged, is lower ("sour grapes", Judd);
+#                     a higher-order model gets through at <= 3.5 % (NXP), and a fit covering
+#                     15 points more of the sphere at up to 3/2 the aged fit error.
+#   inconsistent_samples  (10-element fits) the older and the newer half of the held samples
+#                     (in the order they were kept) disagree about the hard iron: with the fit's
+#                     shape and |B|, each half's centre solves (sum b b^T) c = 1/2 sum
+#                     (|b|^2 - B^2) b (the sphere |b - c| = B, linearised), and the two centres
+#                     are more than CONSISTENCY_PCT (3 %) of B apart - a fit between them is
+#                     ~1.5 % of B, ~1.7 deg of heading at 60 deg dip, off either, and what a mix
+#                     leaves grows with it (8 deg and more with a magnet near the sensor for
+#                     part of a first calibration, docs/faults.md) - and not by chance: the
+#                     radial residuals follow from one kept sample to the next (lag-1
+#                     correlation > 1/4; a board is moved continuously, noise is not), or the
+#                     two centres explain the residual far beyond chance (F ratio > 10). The
+#                     samples mix two hard-iron states (a magnet for part of the collection, a
+#                     relay or motor switching) or a drifting one. A half whose samples lie near
+#                     a plane (det of its normal matrix below 1/20 of (trace/3)^3) cannot place
+#                     its centre: no verdict then. The 4- and 7-element fits leave the soft iron
+#                     they cannot model in their residual, which differs from one part of the
+#                     sphere to another, so they are not judged this way; states that alternate
+#                     faster than half a collection put both in each half and show only as a
+#                     high fit error. The collector then drops the held samples
+#                     (firmware.calibrator.Collector): the next fit sees one state.
 from firmware.calibration import MINMAX, ORDER
 from firmware.compat import const
 from firmware.errors import CalibrationRejected
@@ -243,13 +242,13 @@ def half_is_flat(det, tr):
 
 
 def check_consistency(d2, den2, field, n, ee, ep, red, rest):
-    """inconsistent_samples when the halves' centres differ by |dc| with |dc|^2 = d2 / den2
-    (in the units of `field`, the fit's |B| in those units) by more than CONSISTENCY_PCT of
-    B, and that difference is no accident of noise: the residuals follow from one kept
-    sample to the next (ep / ee > 1/4, with ee the sum of e^2 and ep of e e' over
-    consecutive samples: a board moved continuously), or the two centres explain the
-    residual far beyond chance (red / 6 > 10 x rest / (n - 6): the squared residual they
-    remove, 6 parameters, against what is left, n - 6 degrees of freedom)."""
+    # inconsistent_samples when the halves' centres differ by |dc| with |dc|^2 = d2 / den2
+    # (in the units of `field`, the fit's |B| in those units) by more than CONSISTENCY_PCT of
+    # B, and that difference is no accident of noise: the residuals follow from one kept
+    # sample to the next (ep / ee > 1/4, with ee the sum of e^2 and ep of e e' over
+    # consecutive samples: a board moved continuously), or the two centres explain the
+    # residual far beyond chance (red / 6 > 10 x rest / (n - 6): the squared residual they
+    # remove, 6 parameters, against what is left, n - 6 degrees of freedom).
     f2 = field * field * den2
     if d2 * 10000 <= CONSISTENCY_PCT * CONSISTENCY_PCT * f2:
         return
@@ -274,7 +273,7 @@ def check_output_field(field, field_out):
 
 
 def check_calibration(cal, counts_per_gauss):
-    """The plausibility gate (the module docstring): CalibrationRejected(reason, detail) unless
+    """The plausibility gate (the module's opening comment): CalibrationRejected(reason, detail) unless
     `cal` (a Calibration with a model) could be put in force on a sensor of
     counts_per_gauss (None: not known)."""
     if cal.model is None:

@@ -1,25 +1,23 @@
-"""Exact streaming moment sums: the normal equations of every fit, without the samples.
-
-    m = Moments()
-    m.add(x, y, z)            # a sample the buffer kept
-    m.sub(*evicted)           # the sample it dropped: its terms leave exactly
-    m.s[m.index(2, 1, 0)]     # sum of dx**2 * dy over the held samples
-
-AN4246 eqs. 35-36 build X^T X and X^T Y of the 4-element fit from sums of products of the
-samples. The 7- and 10-element ellipsoid fits (firmware/solve.py) need products up to degree 4,
-so this keeps all 35 moment sums  S[i, j, k] = sum(dx**i * dy**j * dz**k),  i + j + k <= 4,
-over d = p - c, where c is a fixed integer reference centre (the first sample added after an
-empty state). Every normal matrix, right-hand side and residual sum Y^T Y is a sum of these.
-
-Why exact integers: a sum that is updated by adding and later subtracting the same terms
-must return to its batch value bit for bit, on every interpreter; floats cannot promise that.
-Why a reference centre: it conditions the data (ArduPilot's int16 overflow came from raw
-sums); d is at most a diameter of the measurement sphere, so the degree-4 sums stay a few
-bits above 4 * log2(diameter) + log2(count). On a board these are long ints, which is fine:
-add() runs only for a KEPT sample (rare once the buffer is spread over the sphere); the reject
-path of SampleBuffer.offer allocates nothing. Every fit is invariant under translation (see
-firmware/solve.py), so the choice of c changes the size of the numbers, never the result.
-"""
+"""Exact streaming moment sums: the normal equations of every fit, without the samples."""
+#     m = Moments()
+#     m.add(x, y, z)            # a sample the buffer kept
+#     m.sub(*evicted)           # the sample it dropped: its terms leave exactly
+#     m.s[m.index(2, 1, 0)]     # sum of dx**2 * dy over the held samples
+#
+# AN4246 eqs. 35-36 build X^T X and X^T Y of the 4-element fit from sums of products of the
+# samples. The 7- and 10-element ellipsoid fits (firmware/solve.py) need products up to degree 4,
+# so this keeps all 35 moment sums  S[i, j, k] = sum(dx**i * dy**j * dz**k),  i + j + k <= 4,
+# over d = p - c, where c is a fixed integer reference centre (the first sample added after an
+# empty state). Every normal matrix, right-hand side and residual sum Y^T Y is a sum of these.
+#
+# Why exact integers: a sum that is updated by adding and later subtracting the same terms
+# must return to its batch value bit for bit, on every interpreter; floats cannot promise that.
+# Why a reference centre: it conditions the data (ArduPilot's int16 overflow came from raw
+# sums); d is at most a diameter of the measurement sphere, so the degree-4 sums stay a few
+# bits above 4 * log2(diameter) + log2(count). On a board these are long ints, which is fine:
+# add() runs only for a KEPT sample (rare once the buffer is spread over the sphere); the reject
+# path of SampleBuffer.offer allocates nothing. Every fit is invariant under translation (see
+# firmware/solve.py), so the choice of c changes the size of the numbers, never the result.
 from firmware.compat import const
 
 NUM_MOMENTS = const(35)  # monomials of degree 0..4 in three variables
@@ -130,12 +128,10 @@ class Moments:
 
 
 def shifted(c, s, new_c):
-    """The sums `s` about centre `c` re-expressed about the integer centre `new_c`, exactly.
-
-    With t = new_c - c, (d - t)^a expands binomially, so each new sum is an integer
-    combination of old sums of equal or lower degree. Lets a solve re-centre at the samples'
-    mean (smaller numbers in the elimination) without touching the samples.
-    """
+    """The sums `s` about centre `c` re-expressed about the integer centre `new_c`, exactly."""
+    # With t = new_c - c, (d - t)^a expands binomially, so each new sum is an integer
+    # combination of old sums of equal or lower degree. Lets a solve re-centre at the samples'
+    # mean (smaller numbers in the elimination) without touching the samples.
     tx = new_c[0] - c[0]
     ty = new_c[1] - c[1]
     tz = new_c[2] - c[2]
@@ -166,10 +162,10 @@ _STRIDE = (25, 5, 1)  # _INDEX key step of one unit of dx, dy, dz
 def shifted_steps(c, s, new_c, out, ops=40):
     """shifted() as a generator for a time-sliced solve: out[:] = shifted(c, s, new_c),
     with at most `ops` operations on the sums between two yields.
-
-    The binomial shift factorises by axis, so it runs as three one-axis passes: each new sum
-    is at most 5 terms of (binomial x power of -t) x (old sum), 2 long-int operations a term
-    (the integers are the same as shifted()'s, summed in another order: exact)."""
+    """
+    # The binomial shift factorises by axis, so it runs as three one-axis passes: each new sum
+    # is at most 5 terms of (binomial x power of -t) x (old sum), 2 long-int operations a term
+    # (the integers are the same as shifted()'s, summed in another order: exact).
     cur = s
     for axis in range(3):
         t = new_c[axis] - c[axis]

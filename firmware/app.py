@@ -1,100 +1,99 @@
 """The compass app: detect, load the stored calibration, then read -> correct -> heading; when
 there is no good calibration yet, collect and solve one in the background.
-
-    from firmware.app import CompassApp, status_line
-    from firmware.store import CalStore
-    app = CompassApp(i2c, store=CalStore("/"), declination_cdeg=150)
-    app.run(None, report=lambda a: print(status_line(a)), every_us=500000)
-
-CompassApp(i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z", model=10,
-           declination_cdeg=0, store=None, delay_us=None, ticks_us=None, capacity=None,
-           solve_every=25, fallback=True, reinit_after=5, mag_options=None, learn=None,
-           fast=None)
-  mag      a magnetometer driver; None: firmware.detect.detect(i2c, **mag_options)
-  accel    an MPU6050 driver; None: detect.detect_accel(i2c); False: none (level board)
-  store    a firmware.store.CalStore (bound to the magnetometer's kind and range), or None
-  delay_us the drivers' delay (the simulator's bus.sleep_us); None: the port's sleep_us
-  ticks_us the clock of the app's time (aging, timers): the port's ticks_us on a board (wrapping,
-           compared with ticks_diff; firmware.compat), the simulator's clock on the host (plain
-           ints)
-  mag_options  driver options for detect(), e.g. {"range": 8}
-  fallback     try 4 elements when the model lacks samples (firmware.calibrator.Collector)
-  reinit_after failed reads in a row before the drivers are re-initialised
-  learn    None: collect unless the stored calibration is of the configured model with a fit
-           error <= 5 % (and whenever the one in force goes stale); True: always collect;
-           False: only after calibrate() or when the calibration goes stale
-  fast     None: firmware/fast.py's kernels where the port has the native emitter, False:
-           the plain functions (same bits; .fast says which is in use; the compass's kernel
-           set is module-wide, firmware.compass.use_kernels)
-step() reads one sample and does a bounded amount of other work; True when it produced a
-heading; it never raises. run(n, report, every, every_us) calls step() n times (None: forever).
-calibrate() starts collecting now (e.g. after a new mounting).
-
-Memory (docs/design.md#memory): this class is the core a calibrated board keeps. What it
-needs once in a while is imported for that and dropped after it (firmware.compat.drop): its
-construction (firmware/appsetup.py), the store's load and save (firmware/persist.py with
-firmware/slots.py), the calibration session (firmware/session.py with the calibrator, the
-sample buffer, the moment sums, the solver and the history), which ends once a good fit is
-saved and the board brings no new direction, and the status line (firmware/status.py).
-tests/test_layout.py checks which modules a board holds.
-
-One step, as named steps (AN4246 / AN4248 pipeline):
-  _clock    the app's time since the last step: aging and the timers below.
-  _read     mag.read_into(raw) (+ accel): a bus error, a data-ready timeout, an overflow
-            set .status and keep the last good heading (Hinch's fusion: "try to continue
-            returning last good data"); reinit_after failures in a row re-initialise the
-            drivers.
-  _heading  correct (Calibration.k with InvW in Q15), map to the body frame, Compass.update:
-            the heading (KANG) and its flags. Allocation-free (tests/scenarios/app_alloc.py).
-  _check    the field against the calibration's (firmware/health.py FieldWatch): |B| and
-            the dip in their windows, steady over the last samples, the heading not jumping;
-            a flag starts a spell whose status lasts until the evidence says the field is
-            clean again. Interference (a magnet, a motor, a steel table near the board)
-            keeps the sample out of the fit; flags for _STALE_US mean the board's iron
-            changed.
-  _select   offer the raw sample to the collector (its SampleBuffer keeps new information).
-  _solve    when a solve is running or due, a few slices of it: each slice is at most
-            solve.SLICE_OPS (40) long-int operations (make bench estimates 1-2 ms on an
-            RP2040), and a step runs period / 4 ms of them (at least one): 1 at 200 Hz, 5 at
-            50 Hz - a quarter to half of the sample period on an RP2040 - so a solve (~400
-            slices) takes ~2 s at any rate. Counted in slices, not time, so runs are
-            repeatable on every interpreter. .worst_stall_us is the longest such step's
-            solver work on the wall clock (never the simulated one).
-  _accept   a calibration the Calibrator accepts (sour grapes: it must beat the current one,
-            whose fit error ages) is put in force and saved to the store (.worst_save_us).
-
-Interference. The field magnitude is compared with the calibration's field_out within
-max(10 %, 3 x its fit error) - the fit's own RMS radial error is no evidence of a magnet -
-and, with an accelerometer, the dip with the calibration's dip within max(3 deg, 3 x its
-fit error as an angle): the dip saved with the record, else learned from its first 0.5 s of
-steady clean samples (.dip, firmware/health.py DipCheck; an accepted fit is saved at once,
-and once more with its dip when it is learned). A fast change of |B| or the dip (a magnet
-moving in) is interference too, and a heading that jumps by > 4 deg between two samples
-while the tilt holds still is "heading jumped". Any of these starts a spell (FieldWatch):
-the status stays until the field is back where it was before, or the board has turned ~30
-deg with clean samples for 2 s, or 10 s of clean samples (docs/faults.md). If the flags
-keep coming for _STALE_US (a spell never ended meanwhile) the calibration no longer
-describes the board (its hard iron changed): collection restarts (.relearning) and any new
-accepted fit replaces the stale one.
-
-Storage: load at start: the newest slot whose record is intact AND whose payload
-Calibration.from_bytes accepts (the store skips a torn, unreadable or meaningless slot and
-falls back to an older one); when none is usable, identity with the reason in .load_reason.
-Save on every accept; a failed save (OSError, StoreError, MemoryError) is counted in
-.save_errors, never stops the loop, and is retried every _SAVE_RETRY_US.
-
-History (firmware.history, imported at the first accept): before an accepted calibration
-replaces the one in force it is compared with the store's history of accepted calibrations.
-Inside the limits, it is put in force, saved and, once saved, recorded. Outside, it is kept as evidence
-(.pending, recorded as a pending entry) and NOT put in force: .status reads "hardware
-changed?" (in place of ok or interference: the heading still uses the old calibration) and .change names the parameter as
-(parameter, value, low, high). accept_change() puts it in force and starts a new baseline
-(a new mounting); discard_change() drops it. A pending change lives in RAM: after a reboot
-the old calibration is in force, the evidence is in the history, and the next fit that shows
-the same jump is flagged again. .date_s: None, or a function returning the date in seconds
-when the board knows it (e.g. after NTP), written with each entry. History errors are
-counted in .history_errors (the last one in .history_reason) and never stop the loop.
 """
+#     from firmware.app import CompassApp, status_line
+#     from firmware.store import CalStore
+#     app = CompassApp(i2c, store=CalStore("/"), declination_cdeg=150)
+#     app.run(None, report=lambda a: print(status_line(a)), every_us=500000)
+#
+# CompassApp(i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z", model=10,
+#            declination_cdeg=0, store=None, delay_us=None, ticks_us=None, capacity=None,
+#            solve_every=25, fallback=True, reinit_after=5, mag_options=None, learn=None,
+#            fast=None)
+#   mag      a magnetometer driver; None: firmware.detect.detect(i2c, **mag_options)
+#   accel    an MPU6050 driver; None: detect.detect_accel(i2c); False: none (level board)
+#   store    a firmware.store.CalStore (bound to the magnetometer's kind and range), or None
+#   delay_us the drivers' delay (the simulator's bus.sleep_us); None: the port's sleep_us
+#   ticks_us the clock of the app's time (aging, timers): the port's ticks_us on a board (wrapping,
+#            compared with ticks_diff; firmware.compat), the simulator's clock on the host (plain
+#            ints)
+#   mag_options  driver options for detect(), e.g. {"range": 8}
+#   fallback     try 4 elements when the model lacks samples (firmware.calibrator.Collector)
+#   reinit_after failed reads in a row before the drivers are re-initialised
+#   learn    None: collect unless the stored calibration is of the configured model with a fit
+#            error <= 5 % (and whenever the one in force goes stale); True: always collect;
+#            False: only after calibrate() or when the calibration goes stale
+#   fast     None: firmware/fast.py's kernels where the port has the native emitter, False:
+#            the plain functions (same bits; .fast says which is in use; the compass's kernel
+#            set is module-wide, firmware.compass.use_kernels)
+# step() reads one sample and does a bounded amount of other work; True when it produced a
+# heading; it never raises. run(n, report, every, every_us) calls step() n times (None: forever).
+# calibrate() starts collecting now (e.g. after a new mounting).
+#
+# Memory (docs/design.md#memory): this class is the core a calibrated board keeps. What it
+# needs once in a while is imported for that and dropped after it (firmware.compat.drop): its
+# construction (firmware/appsetup.py), the store's load and save (firmware/persist.py with
+# firmware/slots.py), the calibration session (firmware/session.py with the calibrator, the
+# sample buffer, the moment sums, the solver and the history), which ends once a good fit is
+# saved and the board brings no new direction, and the status line (firmware/status.py).
+# tests/test_layout.py checks which modules a board holds.
+#
+# One step, as named steps (AN4246 / AN4248 pipeline):
+#   _clock    the app's time since the last step: aging and the timers below.
+#   _read     mag.read_into(raw) (+ accel): a bus error, a data-ready timeout, an overflow
+#             set .status and keep the last good heading (Hinch's fusion: "try to continue
+#             returning last good data"); reinit_after failures in a row re-initialise the
+#             drivers.
+#   _heading  correct (Calibration.k with InvW in Q15), map to the body frame, Compass.update:
+#             the heading (KANG) and its flags. Allocation-free (tests/scenarios/app_alloc.py).
+#   _check    the field against the calibration's (firmware/health.py FieldWatch): |B| and
+#             the dip in their windows, steady over the last samples, the heading not jumping;
+#             a flag starts a spell whose status lasts until the evidence says the field is
+#             clean again. Interference (a magnet, a motor, a steel table near the board)
+#             keeps the sample out of the fit; flags for _STALE_US mean the board's iron
+#             changed.
+#   _select   offer the raw sample to the collector (its SampleBuffer keeps new information).
+#   _solve    when a solve is running or due, a few slices of it: each slice is at most
+#             solve.SLICE_OPS (40) long-int operations (make bench estimates 1-2 ms on an
+#             RP2040), and a step runs period / 4 ms of them (at least one): 1 at 200 Hz, 5 at
+#             50 Hz - a quarter to half of the sample period on an RP2040 - so a solve (~400
+#             slices) takes ~2 s at any rate. Counted in slices, not time, so runs are
+#             repeatable on every interpreter. .worst_stall_us is the longest such step's
+#             solver work on the wall clock (never the simulated one).
+#   _accept   a calibration the Calibrator accepts (sour grapes: it must beat the current one,
+#             whose fit error ages) is put in force and saved to the store (.worst_save_us).
+#
+# Interference. The field magnitude is compared with the calibration's field_out within
+# max(10 %, 3 x its fit error) - the fit's own RMS radial error is no evidence of a magnet -
+# and, with an accelerometer, the dip with the calibration's dip within max(3 deg, 3 x its
+# fit error as an angle): the dip saved with the record, else learned from its first 0.5 s of
+# steady clean samples (.dip, firmware/health.py DipCheck; an accepted fit is saved at once,
+# and once more with its dip when it is learned). A fast change of |B| or the dip (a magnet
+# moving in) is interference too, and a heading that jumps by > 4 deg between two samples
+# while the tilt holds still is "heading jumped". Any of these starts a spell (FieldWatch):
+# the status stays until the field is back where it was before, or the board has turned ~30
+# deg with clean samples for 2 s, or 10 s of clean samples (docs/faults.md). If the flags
+# keep coming for _STALE_US (a spell never ended meanwhile) the calibration no longer
+# describes the board (its hard iron changed): collection restarts (.relearning) and any new
+# accepted fit replaces the stale one.
+#
+# Storage: load at start: the newest slot whose record is intact AND whose payload
+# Calibration.from_bytes accepts (the store skips a torn, unreadable or meaningless slot and
+# falls back to an older one); when none is usable, identity with the reason in .load_reason.
+# Save on every accept; a failed save (OSError, StoreError, MemoryError) is counted in
+# .save_errors, never stops the loop, and is retried every _SAVE_RETRY_US.
+#
+# History (firmware.history, imported at the first accept): before an accepted calibration
+# replaces the one in force it is compared with the store's history of accepted calibrations.
+# Inside the limits, it is put in force, saved and, once saved, recorded. Outside, it is kept as evidence
+# (.pending, recorded as a pending entry) and NOT put in force: .status reads "hardware
+# changed?" (in place of ok or interference: the heading still uses the old calibration) and .change names the parameter as
+# (parameter, value, low, high). accept_change() puts it in force and starts a new baseline
+# (a new mounting); discard_change() drops it. A pending change lives in RAM: after a reboot
+# the old calibration is in force, the evidence is in the history, and the next fit that shows
+# the same jump is flagged again. .date_s: None, or a function returning the date in seconds
+# when the board knows it (e.g. after NTP), written with each entry. History errors are
+# counted in .history_errors (the last one in .history_reason) and never stop the loop.
 from firmware.compass import FLAG_NO_GRAVITY
 from firmware.compat import const, drop, ticks_diff
 from firmware.errors import SensorOverflow, DataReadyTimeout
@@ -171,12 +170,12 @@ class _StepGuard:
 
 
 class _ReadGuard:
-    """`with` block around the sensor reads: keeps the exception of a failed read (bus error,
-    data-ready timeout, overflow) and lets the step go on. A `with` frame stays within the
-    11 words MicroPython keeps on the C stack, where `except ... as e` would not. The drivers'
-    unguarded sample_into() / config_matches() run inside it (one guard for the step's reads,
-    not one more per driver call): .dev names the device being read, whose BusGuard maps a
-    port's OSError to the BusError naming address and register, as the driver's own would."""
+    # `with` block around the sensor reads: keeps the exception of a failed read (bus error,
+    # data-ready timeout, overflow) and lets the step go on. A `with` frame stays within the
+    # 11 words MicroPython keeps on the C stack, where `except ... as e` would not. The drivers'
+    # unguarded sample_into() / config_matches() run inside it (one guard for the step's reads,
+    # not one more per driver call): .dev names the device being read, whose BusGuard maps a
+    # port's OSError to the BusError naming address and register, as the driver's own would.
 
     def __init__(self):
         self.error = None
@@ -211,11 +210,11 @@ def _collector_attr(name, default):
 
 
 class CompassApp:
-    """See the module docstring. Attributes after each step(): heading_kang, compass, raw,
-    body, gravity, status, calibration, calibrator (None until collecting), collector,
-    last_reason, last_detail, accepted, refused, worst_stall_us, errors, stored,
-    save_errors, load_reason, reinits, relearning, fast, pending, change, history_errors,
-    location, quick, accuracy, watch (firmware/health.py FieldWatch), dip (its DipCheck)."""
+    # See the module's opening comment. Attributes after each step(): heading_kang, compass, raw,
+    # body, gravity, status, calibration, calibrator (None until collecting), collector,
+    # last_reason, last_detail, accepted, refused, worst_stall_us, errors, stored,
+    # save_errors, load_reason, reinits, relearning, fast, pending, change, history_errors,
+    # location, quick, accuracy, watch (firmware/health.py FieldWatch), dip (its DipCheck).
 
     location = None  # a firmware.location.Location after set_location()
     mode = "heading"  # "calibrating": calibration mode, one job in RAM (firmware/calmode.py)
@@ -344,10 +343,10 @@ class CompassApp:
             self._save()
 
     def calibrate(self):
-        """Start collecting samples for a new calibration (imports the calibration machinery,
-        firmware/session.py); the calibration in force stays until a better one is accepted.
-        Returns the collector; None when the calibrate part is not installed (then
-        .not_installed says so and the heading goes on with the calibration in force)."""
+        # Start collecting samples for a new calibration (imports the calibration machinery,
+        # firmware/session.py); the calibration in force stays until a better one is accepted.
+        # Returns the collector; None when the calibrate part is not installed (then
+        # .not_installed says so and the heading goes on with the calibration in force).
         if self.collector is None and self.mode == "heading":
             try:
                 from firmware import calmode  # the room a session needs beside the heading
@@ -402,15 +401,15 @@ class CompassApp:
 
     # --- where the board is (firmware/location.py, firmware/quickcal.py) ----------------
     def set_location(self, lat_e7, lon_e7, year_e3=None, table=None):
-        """The board's place (1e-7 deg, north and east positive) and date (decimal year *
-        1000, firmware.field.decimal_year_e3; None: unknown). With a usable field model the
-        declination becomes the model's, a new fit's B is checked against the model's |B|
-        (field_mismatch) and the interference window and dip come from the model
-        (firmware/location.py). Returns the location's status: "ok", "no date", "caution
-        zone", "blackout zone", or why the model cannot be used ("no field model: ...",
-        "outside model validity") - then the declination given to the constructor stays.
-        TypeError / ValueError name a bad argument and its unit. `table`: the table file
-        (None: wmm2025.bin next to firmware/field.py)."""
+        # The board's place (1e-7 deg, north and east positive) and date (decimal year *
+        # 1000, firmware.field.decimal_year_e3; None: unknown). With a usable field model the
+        # declination becomes the model's, a new fit's B is checked against the model's |B|
+        # (field_mismatch) and the interference window and dip come from the model
+        # (firmware/location.py). Returns the location's status: "ok", "no date", "caution
+        # zone", "blackout zone", or why the model cannot be used ("no field model: ...",
+        # "outside model validity") - then the declination given to the constructor stays.
+        # TypeError / ValueError name a bad argument and its unit. `table`: the table file
+        # (None: wmm2025.bin next to firmware/field.py).
         from firmware.location import Location
         loc = Location(lat_e7, lon_e7, year_e3, table)
         prev = self.location
@@ -436,13 +435,13 @@ class CompassApp:
 
     # --- gyro-aided heading (firmware/attitude.py) ----------------------------------------
     def use_gyro(self, **options):
-        """Let the MPU6050's gyroscope hold the heading through magnets, motors and shaking
-        (docs/gyro.md): loads firmware/attitude.py, reads the gyroscope with the accelerometer
-        (one burst) and makes the filter's heading the app's, with the status "gyro held"
-        while it holds the heading without the field. `options` are Attitude's (gain,
-        mag_gain, bias_gain, accel_reject_cdeg, mag_reject_cdeg, recovery_us,
-        max_uncertainty_cdeg). Returns the Attitude (.attitude); ValueError when there is no
-        MPU6050."""
+        # Let the MPU6050's gyroscope hold the heading through magnets, motors and shaking
+        # (docs/gyro.md): loads firmware/attitude.py, reads the gyroscope with the accelerometer
+        # (one burst) and makes the filter's heading the app's, with the status "gyro held"
+        # while it holds the heading without the field. `options` are Attitude's (gain,
+        # mag_gain, bias_gain, accel_reject_cdeg, mag_reject_cdeg, recovery_us,
+        # max_uncertainty_cdeg). Returns the Attitude (.attitude); ValueError when there is no
+        # MPU6050.
         from firmware.gyrosetup import attach
         from firmware import attitude
         attitude.use_kernels(None if self.fast else False)  # the app's kernel set

@@ -1,8 +1,7 @@
-"""What CompassApp's constructor does, imported for it and dropped once the app is made
-(firmware.compat.drop): the options checked (a bad one raises TypeError / ValueError naming
-it and its unit), the chips detected when not given, the fast path chosen, the state of the
-per-sample steps made (firmware/app.py has its story).
-"""
+# What CompassApp's constructor does, imported for it and dropped once the app is made
+# (firmware.compat.drop): the options checked (a bad one raises TypeError / ValueError naming
+# it and its unit), the chips detected when not given, the fast path chosen, the state of the
+# per-sample steps made (firmware/app.py has its story).
 from array import array
 
 from firmware import compass, i2cdevice

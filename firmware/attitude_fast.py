@@ -1,18 +1,17 @@
-"""The attitude filter's per-sample steps as viper mirrors of firmware/attitude_plain.py: the
-same names, signatures and bits. attitude.use_kernels() imports this module, inside
-try/except, where the port has the native emitter (firmware/fast.py loaded: its atan2 is
-used here); on any other port it is never imported.
-
-The state is an array('i') of values up to 2**30 in magnitude: a load is sign-extended from
-31 bits, ((v + 2**30) & (2**31 - 1)) - 2**30, with both constants made at run time (2**30 is
-no small int on a 32-bit port, so a literal would be an object); values below 2**17 use the
-18-bit form of firmware/fast.py. The gyro, gravity and field arrays are array('h') (ptr16,
-sign-extended by hand). Slot numbers are attitude.py's: 0 q, 4 bias, 7 u, 10 r, 13 q >> 14,
-17 d, 20 scaled vector, 23..27 KI KF KA KM KB, 37 last gyro, 46 ACC_LIM, 48 heading,
-51 scratch, 54 corrections. Every intermediate is below 2**30 (the plain functions' bound),
-so a 32-bit word never wraps; tests/test_attitude.py compares each function with its plain
-original on the native tiers.
-"""
+# The attitude filter's per-sample steps as viper mirrors of firmware/attitude_plain.py: the
+# same names, signatures and bits. attitude.use_kernels() imports this module, inside
+# try/except, where the port has the native emitter (firmware/fast.py loaded: its atan2 is
+# used here); on any other port it is never imported.
+#
+# The state is an array('i') of values up to 2**30 in magnitude: a load is sign-extended from
+# 31 bits, ((v + 2**30) & (2**31 - 1)) - 2**30, with both constants made at run time (2**30 is
+# no small int on a 32-bit port, so a literal would be an object); values below 2**17 use the
+# 18-bit form of firmware/fast.py. The gyro, gravity and field arrays are array('h') (ptr16,
+# sign-extended by hand). Slot numbers are attitude.py's: 0 q, 4 bias, 7 u, 10 r, 13 q >> 14,
+# 17 d, 20 scaled vector, 23..27 KI KF KA KM KB, 37 last gyro, 46 ACC_LIM, 48 heading,
+# 51 scratch, 54 corrections. Every intermediate is below 2**30 (the plain functions' bound),
+# so a 32-bit word never wraps; tests/test_attitude.py compares each function with its plain
+# original on the native tiers.
 import micropython
 
 from firmware.fast import atan2

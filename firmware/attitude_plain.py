@@ -1,12 +1,11 @@
-"""The attitude filter's per-sample steps (firmware/attitude.py), plain: loaded by
-attitude.use_kernels() on a port without the native emitter (or with fast=False); where the
-emitter exists firmware/attitude_fast.py's viper mirrors run instead (the same bits), and
-this module is not loaded. Each function works on the filter's state `st` (array('i'); the
-slot numbers below are attitude.py's) and the app's int16 arrays; each keeps its frame within
-the 11 words MicroPython holds on the C stack (see firmware/compass.py), so nothing is
-allocated. Products of a Q28 and a Q14 are written out as (a >> 14) b + ((a & 0x3FFF) b >>
-14), exact, and below 2**30 (tests/test_attitude.py drives an instrumented copy).
-"""
+# The attitude filter's per-sample steps (firmware/attitude.py), plain: loaded by
+# attitude.use_kernels() on a port without the native emitter (or with fast=False); where the
+# emitter exists firmware/attitude_fast.py's viper mirrors run instead (the same bits), and
+# this module is not loaded. Each function works on the filter's state `st` (array('i'); the
+# slot numbers below are attitude.py's) and the app's int16 arrays; each keeps its frame within
+# the 11 words MicroPython holds on the C stack (see firmware/compass.py), so nothing is
+# allocated. Products of a Q28 and a Q14 are written out as (a >> 14) b + ((a & 0x3FFF) b >>
+# 14), exact, and below 2**30 (tests/test_attitude.py drives an instrumented copy).
 from firmware.compat import const
 from firmware.trig import atan2
 

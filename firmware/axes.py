@@ -1,19 +1,17 @@
-"""Sensor axes -> AN4248 body frame (x forward, y right, z down): a signed permutation.
-
-    from firmware.axes import AxisMap
-    mag_map = AxisMap("x,-y,-z")      # body x = sensor x, body y = -sensor y, body z = -sensor z
-    mag_map.apply(corrected, b)        # allocation-free; src and dst may be the same buffer
-    apply(mag_map.m, corrected, b)     # the same, as a function (firmware.fast has its mirror)
-
-A spec names, for body x, y and z in turn, the sensor axis (and sign) that points that way:
-"x,-y,-z", "-y, x, z", or a tuple ("x", "-y", "-z"). Parsing raises ValueError naming the
-spec. A board's specs live in boards/ (boards/breakouts.py derives them for common breakouts).
-
-.det is +1 for a rotation and -1 for a mirror image. A magnetometer's map is a rotation (chip
-and body frames are both right-handed). An accelerometer's map to AN4248's sign is a mirror:
-the chip reads +1 g on an axis pointing up (specific force), AN4248 wants +1 g on z down, so
-the rotation is followed by a negation.
-"""
+"""Sensor axes -> AN4248 body frame (x forward, y right, z down): a signed permutation."""
+#     from firmware.axes import AxisMap
+#     mag_map = AxisMap("x,-y,-z")      # body x = sensor x, body y = -sensor y, body z = -sensor z
+#     mag_map.apply(corrected, b)        # allocation-free; src and dst may be the same buffer
+#     apply(mag_map.m, corrected, b)     # the same, as a function (firmware.fast has its mirror)
+#
+# A spec names, for body x, y and z in turn, the sensor axis (and sign) that points that way:
+# "x,-y,-z", "-y, x, z", or a tuple ("x", "-y", "-z"). Parsing raises ValueError naming the
+# spec. A board's specs live in boards/ (boards/breakouts.py derives them for common breakouts).
+#
+# .det is +1 for a rotation and -1 for a mirror image. A magnetometer's map is a rotation (chip
+# and body frames are both right-handed). An accelerometer's map to AN4248's sign is a mirror:
+# the chip reads +1 g on an axis pointing up (specific force), AN4248 wants +1 g on z down, so
+# the rotation is followed by a negation.
 
 from array import array
 
@@ -21,10 +19,10 @@ _AXES = "xyz"
 
 
 def apply(m, src, dst):
-    """dst (body) <- src (sensor) for the map m = AxisMap.m: the source axes of body x, y, z,
-    then 1 where that axis is negated. A negated -32768 saturates to 32767 so an int16 buffer
-    can hold it (the reading was at the rail already). src and dst may be the same buffer.
-    Allocates nothing; firmware.fast.apply is its viper mirror."""
+    # dst (body) <- src (sensor) for the map m = AxisMap.m: the source axes of body x, y, z,
+    # then 1 where that axis is negated. A negated -32768 saturates to 32767 so an int16 buffer
+    # can hold it (the reading was at the rail already). src and dst may be the same buffer.
+    # Allocates nothing; firmware.fast.apply is its viper mirror.
     x = src[m[0]]
     y = src[m[1]]
     z = src[m[2]]

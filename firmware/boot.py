@@ -3,16 +3,15 @@ boards/main.py calls it; the memory benchmarks boot through it the same way.
 
     from firmware.boot import start
     app, note = start(i2c, "/", mag_axes="x,-y,-z", declination_cdeg=150)
-
-start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_options)
-  store_dir  the directory of the calibration store (firmware/store.py); None: no store
-  cal_file   a calibration file to import once (firmware/calimport.py); None:
-             store_dir + "/calibration.json"
-  returns (CompassApp, note): note is None, or what the calibration import said
-Exceptions: the drivers' OSError (SensorNotFound, BusError): wiring or power, the caller
-retries. What only boot needs (the chip scan, the import of a file) is dropped again
-(compat.drop), so a running board holds only what it runs (docs/design.md, memory).
 """
+# start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_options)
+#   store_dir  the directory of the calibration store (firmware/store.py); None: no store
+#   cal_file   a calibration file to import once (firmware/calimport.py); None:
+#              store_dir + "/calibration.json"
+#   returns (CompassApp, note): note is None, or what the calibration import said
+# Exceptions: the drivers' OSError (SensorNotFound, BusError): wiring or power, the caller
+# retries. What only boot needs (the chip scan, the import of a file) is dropped again
+# (compat.drop), so a running board holds only what it runs (docs/design.md, memory).
 import os
 
 from firmware.compat import drop

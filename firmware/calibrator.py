@@ -1,23 +1,21 @@
-"""The calibrator: collects samples and orchestrates the solve (AN4246's pipeline).
-
-    from firmware.calibrator import Calibrator
-    cal = Calibrator(model=10, counts_per_gauss=12000)   # QMC5883L at +-2 G
-    cal.add(x, y, z)                  # every raw sample; True when the buffer kept it
-    c = cal.solve()                   # a Calibration, or raises CalibrationRejected(.reason)
-    c.correct(raw, out)               # out = InvW (raw - V) >> 15
-
-Pipeline (AN4246): SampleBuffer (firmware/samples.py, distance-separated) -> exact moment
-sums (firmware/accum.py, updated per kept/evicted sample) -> exact least squares and W^-1 =
-A^1/2 (firmware/solve.py) -> the named checks of firmware/acceptance.py -> a Calibration
-(firmware/calibration.py: offset V, InvW in Q15, field B). The min/max model (the classic
-hobbyist method) takes the running extremes of every raw sample since clear(), as users know
-it; its fit error and its geometry check use the held samples like the other models.
-
-solve_steps() is the same solve as a generator for the app's loop, bounded work per next():
-at most solve.SLICE_OPS (40) operations on long ints (a few entries of the normal equations
-or of one elimination row, a third of a 3x3 inverse, one power-iteration step...) or
-samples.COVERAGE_CHUNK samples of the coverage count (tests/test_slices.py bounds both).
-"""
+"""The calibrator: collects samples and orchestrates the solve (AN4246's pipeline)."""
+#     from firmware.calibrator import Calibrator
+#     cal = Calibrator(model=10, counts_per_gauss=12000)   # QMC5883L at +-2 G
+#     cal.add(x, y, z)                  # every raw sample; True when the buffer kept it
+#     c = cal.solve()                   # a Calibration, or raises CalibrationRejected(.reason)
+#     c.correct(raw, out)               # out = InvW (raw - V) >> 15
+#
+# Pipeline (AN4246): SampleBuffer (firmware/samples.py, distance-separated) -> exact moment
+# sums (firmware/accum.py, updated per kept/evicted sample) -> exact least squares and W^-1 =
+# A^1/2 (firmware/solve.py) -> the named checks of firmware/acceptance.py -> a Calibration
+# (firmware/calibration.py: offset V, InvW in Q15, field B). The min/max model (the classic
+# hobbyist method) takes the running extremes of every raw sample since clear(), as users know
+# it; its fit error and its geometry check use the held samples like the other models.
+#
+# solve_steps() is the same solve as a generator for the app's loop, bounded work per next():
+# at most solve.SLICE_OPS (40) operations on long ints (a few entries of the normal equations
+# or of one elimination row, a third of a 3x3 inverse, one power-iteration step...) or
+# samples.COVERAGE_CHUNK samples of the coverage count (tests/test_slices.py bounds both).
 from array import array
 
 from firmware import accum, acceptance
@@ -84,22 +82,20 @@ def _check_int(name, v, lo, unit):
 
 
 class Calibrator:
-    """Collects samples and solves for a Calibration (see the module docstring).
-
-    model: 'minmax', 4, 7, 10, or 'auto' (the highest model whose sample minimum is met).
-    capacity: samples held (DEFAULT_CAPACITY on a board; the desktop tool uses more).
-    separation: counts between held samples; None derives it from counts_per_gauss
-      (a 50 uT field) or, without it, from the running half-ranges of the raw data.
-    counts_per_gauss: the sensor's sensitivity, enabling the 10 .. 90 uT field check.
-    current: the calibration in force (e.g. loaded from storage); new fits must beat it.
-    max_fit_error: hundredths of a percent (an int: 150 = 1.5 %); TypeError otherwise.
-    .expected_field: the field model's |B| in raw counts where the board is (set by
-      firmware/location.py), or None; when set, a fit whose B is off by more than
-      acceptance.FIELD_MATCH_PCT is refused (field_mismatch).
-    overflow: a chip's overflow marker (the HMC5883L's -4096), or None. A sample with an axis
-      at it or at the int16 rails (32767, -32768: a clipping chip) never enters a fit; add()
-      refuses it and counts it in .railed.
-    """
+    """Collects samples and solves for a Calibration (see the module's opening comment)."""
+    # model: 'minmax', 4, 7, 10, or 'auto' (the highest model whose sample minimum is met).
+    # capacity: samples held (DEFAULT_CAPACITY on a board; the desktop tool uses more).
+    # separation: counts between held samples; None derives it from counts_per_gauss
+    #   (a 50 uT field) or, without it, from the running half-ranges of the raw data.
+    # counts_per_gauss: the sensor's sensitivity, enabling the 10 .. 90 uT field check.
+    # current: the calibration in force (e.g. loaded from storage); new fits must beat it.
+    # max_fit_error: hundredths of a percent (an int: 150 = 1.5 %); TypeError otherwise.
+    # .expected_field: the field model's |B| in raw counts where the board is (set by
+    #   firmware/location.py), or None; when set, a fit whose B is off by more than
+    #   acceptance.FIELD_MATCH_PCT is refused (field_mismatch).
+    # overflow: a chip's overflow marker (the HMC5883L's -4096), or None. A sample with an axis
+    #   at it or at the int16 rails (32767, -32768: a clipping chip) never enters a fit; add()
+    #   refuses it and counts it in .railed.
 
     def __init__(self, model=10, capacity=DEFAULT_CAPACITY, separation=None,
                  counts_per_gauss=None, current=None, max_fit_error=DEFAULT_MAX_FIT_ERROR,
@@ -157,13 +153,12 @@ class Calibrator:
             self.buffer.set_separation(1)
 
     def add(self, x, y, z):
-        """Offer one raw sample (int16 counts). O(1); returns True if the buffer kept it.
-
-        A rejected sample (the usual case) allocates nothing, not even a call frame: each
-        step below keeps its arguments, locals and stack within the 11 words MicroPython
-        keeps on the C stack. Raises ValueError for a value outside int16 and TypeError
-        naming x, y or z when one is not an int, before anything changes. A sample at a rail
-        (int16's, or the overflow marker) is refused and counted in .railed."""
+        """Offer one raw sample (int16 counts). O(1); returns True if the buffer kept it."""
+        # A rejected sample (the usual case) allocates nothing, not even a call frame: each
+        # step below keeps its arguments, locals and stack within the 11 words MicroPython
+        # keeps on the C stack. Raises ValueError for a value outside int16 and TypeError
+        # naming x, y or z when one is not an int, before anything changes. A sample at a rail
+        # (int16's, or the overflow marker) is refused and counted in .railed.
         o = self.overflow
         if (x == _RAIL_HI or y == _RAIL_HI or z == _RAIL_HI or x == _RAIL_LO or y == _RAIL_LO
                 or z == _RAIL_LO or x == o or y == o or z == o):
@@ -274,12 +269,12 @@ class Calibrator:
             self.overridden.append((e.reason, e.detail))
 
     def solve(self, model=None, accept=True, checks=True):
-        """Solve now; returns the new Calibration (also made .current) or raises
-        CalibrationRejected. accept=False runs the checks but leaves .current alone.
-        checks=False (the desktop tool's --force) returns the fit even where an acceptance
-        check refuses it, each refusal noted in .overridden as (reason, detail); a fit the
-        solver cannot compute (singular, too few samples to solve at all, V outside int16)
-        still raises."""
+        # Solve now; returns the new Calibration (also made .current) or raises
+        # CalibrationRejected. accept=False runs the checks but leaves .current alone.
+        # checks=False (the desktop tool's --force) returns the fit even where an acceptance
+        # check refuses it, each refusal noted in .overridden as (reason, detail); a fit the
+        # solver cannot compute (singular, too few samples to solve at all, V outside int16)
+        # still raises.
         g = self.solve_steps(model, accept, checks=checks)
         while True:
             try:
@@ -288,16 +283,16 @@ class Calibrator:
                 return e.value
 
     def solve_steps(self, model=None, accept=True, group=None, checks=True):
-        """The solve as a generator doing bounded work per next() (for the app's loop):
-            job = cal.solve_steps()
-            ... each tick:  next(job)   -> StopIteration when done (.value = Calibration),
-                                           CalibrationRejected on refusal.
-        One next() runs `group` slices (None: .slice_group), each at most solve.SLICE_OPS
-        long-int operations or samples.COVERAGE_CHUNK samples of the coverage count
-        (tests/test_slices.py); group=1 gives the finest slices, for a caller that runs as
-        many as its sample period allows. The result does not depend on the slicing.
-        The moment sums are copied at the start, so samples added meanwhile do not disturb
-        the fit (coverage is counted on the buffer as each slot is reached, at the end)."""
+        # The solve as a generator doing bounded work per next() (for the app's loop):
+        #     job = cal.solve_steps()
+        #     ... each tick:  next(job)   -> StopIteration when done (.value = Calibration),
+        #                                    CalibrationRejected on refusal.
+        # One next() runs `group` slices (None: .slice_group), each at most solve.SLICE_OPS
+        # long-int operations or samples.COVERAGE_CHUNK samples of the coverage count
+        # (tests/test_slices.py); group=1 gives the finest slices, for a caller that runs as
+        # many as its sample period allows. The result does not depend on the slicing.
+        # The moment sums are copied at the start, so samples added meanwhile do not disturb
+        # the fit (coverage is counted on the buffer as each slot is reached, at the end).
         k = self.slice_group if group is None else group
         if k < 1:
             raise ValueError("slice group %d < 1" % k)
@@ -473,11 +468,11 @@ class Calibrator:
 
 
 def _consistency_sums(buf, k, s, f, out):
-    """One pass over the held samples in the order kept, corrected with k (InvW, V:
-    calibration.correct) and shifted right by s; e = |b|^2 - f^2 (2 f x the radial residual).
-    out[0] = ([A, v] of the older half, [A, v] of the newer half, sum e^2, sum e e') with
-    A = sum b b^T (3x3) and v = sum e b (so A c = v / 2 for a half's centre c), e' the next
-    sample's e; _CONSISTENCY_CHUNK samples a slice."""
+    # One pass over the held samples in the order kept, corrected with k (InvW, V:
+    # calibration.correct) and shifted right by s; e = |b|^2 - f^2 (2 f x the radial residual).
+    # out[0] = ([A, v] of the older half, [A, v] of the newer half, sum e^2, sum e e') with
+    # A = sum b b^T (3x3) and v = sum e b (so A c = v / 2 for a half's centre c), e' the next
+    # sample's e; _CONSISTENCY_CHUNK samples a slice.
     n = buf.count
     sums = [[0, 0, 0, 0, 0, 0, 0, 0, 0], [0, 0, 0, 0, 0, 0, 0, 0, 0]]  # xx xy xz yy yz zz vx vy vz
     raw = array("h", (0, 0, 0))
@@ -530,25 +525,23 @@ REASON_NO_MEMORY = "no_memory"        # MemoryError during a solve
 
 
 class Collector:
-    """A Calibrator run in the background of a sample loop (firmware/app.py's).
-
-    feed(raw) offers a sample; tick(dt_us) advances its timers; when due() a solve starts
-    and slice() runs one bounded slice of it, returning the accepted Calibration when one
-    comes out (else None). The solve policy, as the app documents it:
-    - a solve starts when solve_every samples have been KEPT since the last one started
-      (new information, not time); or when samples were kept since then but none for
-      _QUIET_US (the user stopped moving: say now why it is not enough, e.g. "planar" after
-      half a turn); or when none ran for _SOLVE_IDLE_US and samples are held (aging can make
-      a fit on the same samples acceptable).
-    - the configured model is tried; while no calibration of 4 elements or more is in force
-      (or while relearning) a refusal for too_few_samples is followed by a 4-element attempt:
-      hard iron is the largest error and a 4-element fit needs 40 samples where 10 elements
-      need 100, so the user gets a usable heading early; the Calibrator's own rule then lets
-      the 10-element fit replace it. Once a 4-element fit is in force the fallback stops, so
-      .last_reason keeps saying what the configured model still lacks.
-    Attributes: calibrator, accepted, refused, solves, last_reason, last_detail, last_model,
-    relearning, job (the running solve or None), job_model.
-    """
+    """A Calibrator run in the background of a sample loop (firmware/app.py's)."""
+    # feed(raw) offers a sample; tick(dt_us) advances its timers; when due() a solve starts
+    # and slice() runs one bounded slice of it, returning the accepted Calibration when one
+    # comes out (else None). The solve policy, as the app documents it:
+    # - a solve starts when solve_every samples have been KEPT since the last one started
+    #   (new information, not time); or when samples were kept since then but none for
+    #   _QUIET_US (the user stopped moving: say now why it is not enough, e.g. "planar" after
+    #   half a turn); or when none ran for _SOLVE_IDLE_US and samples are held (aging can make
+    #   a fit on the same samples acceptable).
+    # - the configured model is tried; while no calibration of 4 elements or more is in force
+    #   (or while relearning) a refusal for too_few_samples is followed by a 4-element attempt:
+    #   hard iron is the largest error and a 4-element fit needs 40 samples where 10 elements
+    #   need 100, so the user gets a usable heading early; the Calibrator's own rule then lets
+    #   the 10-element fit replace it. Once a 4-element fit is in force the fallback stops, so
+    #   .last_reason keeps saying what the configured model still lacks.
+    # Attributes: calibrator, accepted, refused, solves, last_reason, last_detail, last_model,
+    # relearning, job (the running solve or None), job_model.
 
     def __init__(self, model=10, capacity=DEFAULT_CAPACITY, counts_per_gauss=None,
                  current=None, solve_every=SOLVE_EVERY, fallback=True, overflow=None):

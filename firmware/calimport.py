@@ -1,21 +1,19 @@
-"""Import a calibration file at boot: from a log fitted on the desktop to the board's store.
-
-    from firmware.calimport import import_calibration
-    result = import_calibration("/calibration.json", store, mag)   # None: no file there
-    print(result[1])                         # 'imported ...' or 'rejected ...: why'
-
-The file is what `python -m host_sim calibrate LOG.csv --sensor KIND --out FILE` writes
-(one JSON object; its keys are described in docs/calibration.md). import_calibration checks
-that it is that format and version, that it was made for this chip (`sensor` == mag.KIND) at
-this range (`range_code` == mag.range_code), and that the record means something (the
-Calibration constructor refuses a bad field with ValueError naming it) and that it meets the
-board's own bar (firmware.acceptance.check_calibration: plausible fields, InvW positive
-definite within 5:1, offsets in range; a refusal names its reason). A valid file is saved
-with the store's power-safe save() and renamed NAME.imported, so it is imported once; an
-invalid one is renamed NAME.rejected and the store is left as it was. If the save itself fails
-(a full or read-only filesystem), the file stays where it is and the next boot tries again.
-Boot-time code: it may allocate; nothing here runs per sample.
-"""
+"""Import a calibration file at boot: from a log fitted on the desktop to the board's store."""
+#     from firmware.calimport import import_calibration
+#     result = import_calibration("/calibration.json", store, mag)   # None: no file there
+#     print(result[1])                         # 'imported ...' or 'rejected ...: why'
+#
+# The file is what `python -m host_sim calibrate LOG.csv --sensor KIND --out FILE` writes
+# (one JSON object; its keys are described in docs/calibration.md). import_calibration checks
+# that it is that format and version, that it was made for this chip (`sensor` == mag.KIND) at
+# this range (`range_code` == mag.range_code), and that the record means something (the
+# Calibration constructor refuses a bad field with ValueError naming it) and that it meets the
+# board's own bar (firmware.acceptance.check_calibration: plausible fields, InvW positive
+# definite within 5:1, offsets in range; a refusal names its reason). A valid file is saved
+# with the store's power-safe save() and renamed NAME.imported, so it is imported once; an
+# invalid one is renamed NAME.rejected and the store is left as it was. If the save itself fails
+# (a full or read-only filesystem), the file stays where it is and the next boot tries again.
+# Boot-time code: it may allocate; nothing here runs per sample.
 import json
 import os
 
@@ -95,13 +93,12 @@ def _rename(path, suffix):
 
 
 def import_calibration(path, store, mag):
-    """Import the calibration file at `path` into `store` for the driver `mag`.
-
-    Returns None when there is no file, (True, message) when it was stored (the file is
-    renamed PATH.imported), (False, reason) when it was refused (renamed PATH.rejected, store
-    untouched) or could not be saved (file left in place for the next boot). Never raises:
-    whatever reading or parsing the file raises (a nesting too deep for the JSON parser,
-    memory, encoding, I/O) refuses the file, and the board boots with its stored calibration."""
+    """Import the calibration file at `path` into `store` for the driver `mag`."""
+    # Returns None when there is no file, (True, message) when it was stored (the file is
+    # renamed PATH.imported), (False, reason) when it was refused (renamed PATH.rejected, store
+    # untouched) or could not be saved (file left in place for the next boot). Never raises:
+    # whatever reading or parsing the file raises (a nesting too deep for the JSON parser,
+    # memory, encoding, I/O) refuses the file, and the board boots with its stored calibration.
     try:
         return _import(path, store, mag)
     except Exception as e:  # noqa: BLE001 - RecursionError/RuntimeError, MemoryError, ...

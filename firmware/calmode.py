@@ -1,21 +1,20 @@
-"""Calibration mode: one job in RAM at a time. Where the heap cannot hold the heading line and a
-calibration session together, CompassApp calibrates in this mode: it lets go of what showing a
-heading needs (the Compass, the field watch, the fast kernels and their tables, the status
-line's heading part) and holds only what calibrating needs (the drivers, their sample checks,
-the collector, the solver, the acceptance, the store); once a fit is saved and the session
-ends, the heading line is made again without the session's code. Imported for that and
-dropped after it (firmware.compat.drop).
-
-    app.mode          "heading", or "calibrating" while this mode runs (no heading: the
-                      status is "calibrating", the status line shows the session's progress)
-
-CompassApp enters it from calibrate() (at construction with no good stored calibration, from
-relearning when the iron changed, or when called) when compat.free_bytes() is below
-SESSION_ROOM, or when a session started beside the heading line ran out of memory. When even
-this mode finds no room, the heading line is made again, app.no_memory says what could not be
-done and what to do instead, and the app tries again after RETRY_US. docs/design.md (memory)
-has the figures; make bench measures them (docs/benchmarks.md).
-"""
+# Calibration mode: one job in RAM at a time. Where the heap cannot hold the heading line and a
+# calibration session together, CompassApp calibrates in this mode: it lets go of what showing a
+# heading needs (the Compass, the field watch, the fast kernels and their tables, the status
+# line's heading part) and holds only what calibrating needs (the drivers, their sample checks,
+# the collector, the solver, the acceptance, the store); once a fit is saved and the session
+# ends, the heading line is made again without the session's code. Imported for that and
+# dropped after it (firmware.compat.drop).
+#
+#     app.mode          "heading", or "calibrating" while this mode runs (no heading: the
+#                       status is "calibrating", the status line shows the session's progress)
+#
+# CompassApp enters it from calibrate() (at construction with no good stored calibration, from
+# relearning when the iron changed, or when called) when compat.free_bytes() is below
+# SESSION_ROOM, or when a session started beside the heading line ran out of memory. When even
+# this mode finds no room, the heading line is made again, app.no_memory says what could not be
+# done and what to do instead, and the app tries again after RETRY_US. docs/design.md (memory)
+# has the figures; make bench measures them (docs/benchmarks.md).
 from firmware.compat import const, drop, free_bytes
 
 # free heap (bytes, after a collection) a calibration session needs beside the heading line

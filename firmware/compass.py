@@ -1,49 +1,47 @@
-"""Tilt-compensated compass heading (Freescale AN4248), integer-only, angles in KANG.
-
-    from firmware.compass import Compass
-    from firmware.trig import cdeg_to_kang, kang_to_str
-    compass = Compass(field=6000, declination_kang=cdeg_to_kang(-150))   # B in b's units, -1.5 deg
-    h = compass.update(b, g)       # b: corrected field, g: accelerometer, both body frame
-    print(kang_to_str(h), compass.interference, compass.dip_high, compass.gimbal)
-
-KANG (T. Judd): 65536 per turn, so angle arithmetic wraps like an int16 (0.0055 deg resolution).
-Frame: AN4248 body frame, x forward, y right, z down; a level board's accelerometer reads +1 g
-on z (common.md). b is Calibration.correct's output mapped to the body frame (firmware.axes);
-g is the accelerometer in the same frame and sign. Both at any scale, components int16.
-
-heading(b, g=None, declination=0)
-               heading in KANG 0..65535, clockwise from magnetic north plus declination (KANG,
-               east positive); g None means a level board. ValueError for a zero b or g.
-Compass        the same heading plus pitch, roll, field magnitude and dip, and the flags below,
-               all updated in place: the per-sample path allocates nothing.
-Compass.update runs one step, measure(), on an int array of working state that also holds the
-windows and the results: orient (normalise, tilt or level, de-rotate, eq. 22), magnitude and
-dip, then the flags (judge). Where the port has the native emitter it is firmware/fast.py's
-viper mirror of the function here (same names, same signatures, same bits), which calls the
-mirrors of the steps: one call from bytecode per sample. use_kernels() picks at import,
-use_kernels(False) forces the plain ones, KERNELS says which set is in use.
-
-Flags (Compass.flags bits; the booleans mirror the first three):
-  FLAG_INTERFERENCE  .interference: |b| is outside field * (1 +- field_tol_pct %) (or the
-                     window set_window() gave), or the dip is outside the window set_dip() gave.
-                     A magnet, a motor or a steel table adds to Earth's field (the heading
-                     guide, docs/references.md); the heading is suspect. Off when no reference
-                     field is set (field=0); the dip window is off until set_dip().
-  FLAG_DIP_HIGH      .dip_high: |dip| > 75 deg. The horizontal field is < 26 % of B and the
-                     heading noise grows by 1/cos(dip) (the heading guide: use another heading source).
-  FLAG_GIMBAL        .gimbal: |pitch| > 80 deg. Roll comes from Gy, Gz ~ g cos(pitch), so its
-                     noise (and the heading's) grows by >= 1/cos(80 deg) = 5.8; at +-90 deg
-                     (gimbal lock) roll is taken as 0 and the heading stays defined.
-  FLAG_NO_FIELD      b was (0, 0, 0): no heading; update() returns -1, the last good values stay.
-  FLAG_NO_GRAVITY    g was (0, 0, 0) (free fall): likewise.
-
-Per-sample path (Compass.update and the trig steps it calls):
-every intermediate stays below 2**30
-(tests/test_heading.py drives tests/intcheck over the whole int16 input space) and nothing is
-allocated, not even a call frame: MicroPython puts the frame of a function whose arguments,
-locals and stack exceed 11 words on the heap (py/objfun.c VM_MAX_STATE_ON_STACK), so the work
-is split into small methods that keep their state on the Compass object.
-"""
+"""Tilt-compensated compass heading (Freescale AN4248), integer-only, angles in KANG."""
+#     from firmware.compass import Compass
+#     from firmware.trig import cdeg_to_kang, kang_to_str
+#     compass = Compass(field=6000, declination_kang=cdeg_to_kang(-150))   # B in b's units, -1.5 deg
+#     h = compass.update(b, g)       # b: corrected field, g: accelerometer, both body frame
+#     print(kang_to_str(h), compass.interference, compass.dip_high, compass.gimbal)
+#
+# KANG (T. Judd): 65536 per turn, so angle arithmetic wraps like an int16 (0.0055 deg resolution).
+# Frame: AN4248 body frame, x forward, y right, z down; a level board's accelerometer reads +1 g
+# on z (common.md). b is Calibration.correct's output mapped to the body frame (firmware.axes);
+# g is the accelerometer in the same frame and sign. Both at any scale, components int16.
+#
+# heading(b, g=None, declination=0)
+#                heading in KANG 0..65535, clockwise from magnetic north plus declination (KANG,
+#                east positive); g None means a level board. ValueError for a zero b or g.
+# Compass        the same heading plus pitch, roll, field magnitude and dip, and the flags below,
+#                all updated in place: the per-sample path allocates nothing.
+# Compass.update runs one step, measure(), on an int array of working state that also holds the
+# windows and the results: orient (normalise, tilt or level, de-rotate, eq. 22), magnitude and
+# dip, then the flags (judge). Where the port has the native emitter it is firmware/fast.py's
+# viper mirror of the function here (same names, same signatures, same bits), which calls the
+# mirrors of the steps: one call from bytecode per sample. use_kernels() picks at import,
+# use_kernels(False) forces the plain ones, KERNELS says which set is in use.
+#
+# Flags (Compass.flags bits; the booleans mirror the first three):
+#   FLAG_INTERFERENCE  .interference: |b| is outside field * (1 +- field_tol_pct %) (or the
+#                      window set_window() gave), or the dip is outside the window set_dip() gave.
+#                      A magnet, a motor or a steel table adds to Earth's field (the heading
+#                      guide, docs/references.md); the heading is suspect. Off when no reference
+#                      field is set (field=0); the dip window is off until set_dip().
+#   FLAG_DIP_HIGH      .dip_high: |dip| > 75 deg. The horizontal field is < 26 % of B and the
+#                      heading noise grows by 1/cos(dip) (the heading guide: use another heading source).
+#   FLAG_GIMBAL        .gimbal: |pitch| > 80 deg. Roll comes from Gy, Gz ~ g cos(pitch), so its
+#                      noise (and the heading's) grows by >= 1/cos(80 deg) = 5.8; at +-90 deg
+#                      (gimbal lock) roll is taken as 0 and the heading stays defined.
+#   FLAG_NO_FIELD      b was (0, 0, 0): no heading; update() returns -1, the last good values stay.
+#   FLAG_NO_GRAVITY    g was (0, 0, 0) (free fall): likewise.
+#
+# Per-sample path (Compass.update and the trig steps it calls):
+# every intermediate stays below 2**30
+# (tests/test_heading.py drives tests/intcheck over the whole int16 input space) and nothing is
+# allocated, not even a call frame: MicroPython puts the frame of a function whose arguments,
+# locals and stack exceed 11 words on the heap (py/objfun.c VM_MAX_STATE_ON_STACK), so the work
+# is split into small methods that keep their state on the Compass object.
 from array import array
 
 from firmware.compat import const, kernels
@@ -226,19 +224,17 @@ def _flag(bit):
 
 
 class Compass:
-    """Heading, tilt and field checks for one sample at a time, updated in place.
-
-    field            expected |b| (the calibration's B, in b's units); 0 turns the
-                     interference check off.
-    declination_kang added to the magnetic heading (east positive), e.g. cdeg_to_kang(1150).
-    field_tol_pct    interference window around field, percent (default 10).
-
-    update(b, g=None) -> heading_kang (0..65535), or -1 for a zero b or g (see flags).
-    After update: heading_kang, pitch_kang, roll_kang (int16 KANG, AN4248 theta and phi),
-    dip_kang (inclination, positive down), magnitude (|b| in b's units), flags, interference,
-    dip_high, gimbal. A failed update leaves the last good values and sets only flags.
-    With g None the board is taken as level: pitch = roll = 0, and dip assumes it too.
-    """
+    """Heading, tilt and field checks for one sample at a time, updated in place."""
+    # field            expected |b| (the calibration's B, in b's units); 0 turns the
+    #                  interference check off.
+    # declination_kang added to the magnetic heading (east positive), e.g. cdeg_to_kang(1150).
+    # field_tol_pct    interference window around field, percent (default 10).
+    #
+    # update(b, g=None) -> heading_kang (0..65535), or -1 for a zero b or g (see flags).
+    # After update: heading_kang, pitch_kang, roll_kang (int16 KANG, AN4248 theta and phi),
+    # dip_kang (inclination, positive down), magnitude (|b| in b's units), flags, interference,
+    # dip_high, gimbal. A failed update leaves the last good values and sets only flags.
+    # With g None the board is taken as level: pitch = roll = 0, and dip assumes it too.
 
     def __init__(self, field=0, declination_kang=0, field_tol_pct=_FIELD_TOL_PCT):
         self.declination_kang = declination_kang
@@ -293,9 +289,9 @@ class Compass:
 
     def set_dip(self, dip_kang=None, tol_kang=0):
         """Expected dip (inclination, KANG, down positive) and its tolerance: a measured dip
-        outside it raises the interference flag (PX4's EKF2 checks inclination the same way).
-        None turns the check off. Only meaningful with a gravity vector: the level-board path
-        assumes pitch = roll = 0."""
+        outside it raises the interference flag. None turns the check off."""
+        # PX4's EKF2 checks inclination the same way. Only meaningful with a gravity vector:
+        # the level-board path assumes pitch = roll = 0.
         if dip_kang is None:  # off: every dip is within +-90 deg
             self.st[_DIP_LO] = -_KANG_90
             self.st[_DIP_HI] = _KANG_90
@@ -323,7 +319,7 @@ _PLAIN = Compass()  # scratch for heading(): one sample at a time, like the sens
 
 
 def heading(b, g=None, declination=0):
-    """Tilt-compensated heading in KANG 0..65535 (see the module docstring)."""
+    """Tilt-compensated heading in KANG 0..65535 (see the module's opening comment)."""
     h = _orient(_PLAIN.st, b, g)
     if h < 0:
         if h == -1:

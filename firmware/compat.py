@@ -1,41 +1,40 @@
 """Portability shims, one home each: const, the microsecond clock, and the fast-path switch.
 
     from firmware.compat import const, ticks_us, ticks_diff, sleep_us, kernels
-
-const(x)          micropython.const on MicroPython (the constant costs no RAM); the identity
-                  elsewhere (CPython, or a port built without it).
-ticks_us()        time.ticks_us where the port has it, else None (CPython: the simulator
-                  passes its own clock). ticks_diff(a, b) likewise: the wrapping difference.
-                  CircuitPython (a micropython module, no time.ticks_us): time.monotonic_ns
-                  in microseconds, wrapped to 30 bits as MicroPython's ticks are, with the same
-                  wrapping ticks_diff (its monotonic_ns is a long int: each call allocates).
-sleep_us(us)      time.sleep_us where it exists; on CircuitPython a busy wait on that clock
-                  (its time.sleep takes float seconds); else a no-op (the simulator passes
-                  its own).
-wait_clock(delay_us)  (delay, measured) for a bounded wait (firmware/i2cdevice.py's data-ready
-                  wait, firmware/busio_i2c.py's lock wait): None gives sleep_us, the wait
-                  measured with ticks_us where the port has it; the simulator's delay_us gives
-                  itself, the waited time then being the sum of the delays asked for.
-wall_clock()      (now_us, diff) for measuring real time: ticks_us / ticks_diff on MicroPython,
-                  perf_counter_ns on CPython (used only for stall figures, never for logic).
-kernels()         the fast-path module firmware.fast (viper/native code with the same
-                  functions and signatures as the plain ones) when this port has the native
-                  emitter, else None. Plain modules never carry an emitter decorator: a port
-                  without the emitter (CircuitPython, the WebAssembly port) rejects the emitter's
-                  decorators at compile time, so that code lives in firmware/fast.py
-                  and is only ever imported here, inside try/except. Set FAST = False before
-                  the first call to force the plain path (tests compare the two).
-pick(kn, name, plain)  the function `name` of kernel set kn (None: kernels()), or `plain`
-                  when there is none (kn False or None): a module's use_kernels().
-free_bytes()      gc.mem_free() after a collection: the heap a job can have now; None where the
-                  port does not tell (CPython). A board holds one job at a time when this is
-                  short (firmware/calmode.py; docs/design.md, memory).
-drop(*names)      forget the firmware modules `names` ("detect", "calibrator", ...): out of
-                  sys.modules and off the firmware package, so their code and tables are
-                  freed at the next collection once nothing else refers to them (a
-                  capability that is done; docs/design.md, memory). The next import loads
-                  the module afresh.
 """
+# const(x)          micropython.const on MicroPython (the constant costs no RAM); the identity
+#                   elsewhere (CPython, or a port built without it).
+# ticks_us()        time.ticks_us where the port has it, else None (CPython: the simulator
+#                   passes its own clock). ticks_diff(a, b) likewise: the wrapping difference.
+#                   CircuitPython (a micropython module, no time.ticks_us): time.monotonic_ns
+#                   in microseconds, wrapped to 30 bits as MicroPython's ticks are, with the same
+#                   wrapping ticks_diff (its monotonic_ns is a long int: each call allocates).
+# sleep_us(us)      time.sleep_us where it exists; on CircuitPython a busy wait on that clock
+#                   (its time.sleep takes float seconds); else a no-op (the simulator passes
+#                   its own).
+# wait_clock(delay_us)  (delay, measured) for a bounded wait (firmware/i2cdevice.py's data-ready
+#                   wait, firmware/busio_i2c.py's lock wait): None gives sleep_us, the wait
+#                   measured with ticks_us where the port has it; the simulator's delay_us gives
+#                   itself, the waited time then being the sum of the delays asked for.
+# wall_clock()      (now_us, diff) for measuring real time: ticks_us / ticks_diff on MicroPython,
+#                   perf_counter_ns on CPython (used only for stall figures, never for logic).
+# kernels()         the fast-path module firmware.fast (viper/native code with the same
+#                   functions and signatures as the plain ones) when this port has the native
+#                   emitter, else None. Plain modules never carry an emitter decorator: a port
+#                   without the emitter (CircuitPython, the WebAssembly port) rejects the emitter's
+#                   decorators at compile time, so that code lives in firmware/fast.py
+#                   and is only ever imported here, inside try/except. Set FAST = False before
+#                   the first call to force the plain path (tests compare the two).
+# pick(kn, name, plain)  the function `name` of kernel set kn (None: kernels()), or `plain`
+#                   when there is none (kn False or None): a module's use_kernels().
+# free_bytes()      gc.mem_free() after a collection: the heap a job can have now; None where the
+#                   port does not tell (CPython). A board holds one job at a time when this is
+#                   short (firmware/calmode.py; docs/design.md, memory).
+# drop(*names)      forget the firmware modules `names` ("detect", "calibrator", ...): out of
+#                   sys.modules and off the firmware package, so their code and tables are
+#                   freed at the next collection once nothing else refers to them (a
+#                   capability that is done; docs/design.md, memory). The next import loads
+#                   the module afresh.
 import sys
 import time
 
@@ -82,7 +81,7 @@ sleep_us = sleep_us or _no_sleep
 
 
 def wait_clock(delay_us):
-    """(delay, measured): see the module docstring."""
+    """(delay, measured): see the module's opening comment."""
     if delay_us is None:
         return sleep_us, ticks_us is not None
     return delay_us, False
@@ -131,7 +130,7 @@ def pick(kn, name, plain):
 
 
 def drop(*names):
-    """Forget the firmware modules `names` (see the module docstring)."""
+    """Forget the firmware modules `names` (see the module's opening comment)."""
     pkg = sys.modules.get("firmware")
     for name in names:
         sys.modules.pop("firmware." + name, None)
@@ -140,7 +139,7 @@ def drop(*names):
 
 
 def free_bytes():
-    """gc.mem_free() after a collection, or None (see the module docstring)."""
+    """gc.mem_free() after a collection, or None (see the module's opening comment)."""
     import gc
     f = getattr(gc, "mem_free", None)
     if f is None:

@@ -3,20 +3,19 @@
     from machine import I2C, Pin
     from firmware.detect import detect
     mag = detect(I2C(0, scl=Pin(22), sda=Pin(21), freq=400000))  # QMC5883L, HMC5883L, QMC5883P
-
-detect(i2c, **options) scans the bus, then probes 0x0D (QMC5883L), 0x1E (HMC5883L) and 0x2C
-(QMC5883P) where something answered, checking their ID registers. When none of them answers but
-an MPU6050 does (0x68/0x69), it wakes it and opens its I2C bypass, then probes again: a
-GY-87/GY-86 board keeps its HMC5883L on the MPU6050's auxiliary bus, invisible until then.
-Only the driver module of a chip that answered is imported. It returns the configured driver;
-`options` go to the driver that accepts them (QMC5883L: range, odr, osr; HMC5883L: gain, rate,
-averaging; QMC5883P: range, odr, osr, dsr; all: delay_us, timeout_us). A value the chip found
-does not support raises ValueError. An empty bus or wrong IDs raise SensorNotFound naming every
-address tried and what the scan found.
-
-detect_accel(i2c, **options) returns an MPU6050 driver, or None when none answers (a DS3231 RTC
-also sits at 0x68: a wrong WHO_AM_I there is "no accelerometer", not an error).
 """
+# detect(i2c, **options) scans the bus, then probes 0x0D (QMC5883L), 0x1E (HMC5883L) and 0x2C
+# (QMC5883P) where something answered, checking their ID registers. When none of them answers but
+# an MPU6050 does (0x68/0x69), it wakes it and opens its I2C bypass, then probes again: a
+# GY-87/GY-86 board keeps its HMC5883L on the MPU6050's auxiliary bus, invisible until then.
+# Only the driver module of a chip that answered is imported. It returns the configured driver;
+# `options` go to the driver that accepts them (QMC5883L: range, odr, osr; HMC5883L: gain, rate,
+# averaging; QMC5883P: range, odr, osr, dsr; all: delay_us, timeout_us). A value the chip found
+# does not support raises ValueError. An empty bus or wrong IDs raise SensorNotFound naming every
+# address tried and what the scan found.
+#
+# detect_accel(i2c, **options) returns an MPU6050 driver, or None when none answers (a DS3231 RTC
+# also sits at 0x68: a wrong WHO_AM_I there is "no accelerometer", not an error).
 from firmware.compat import const
 from firmware.errors import BusError, SensorNotFound
 from firmware.i2cdevice import bus_error
@@ -74,7 +73,7 @@ def _check_options(options):
 
 
 def detect(i2c, **options):
-    """Return the driver of the magnetometer on `i2c` (see the module docstring)."""
+    """Return the driver of the magnetometer on `i2c` (see the module's opening comment)."""
     _check_options(options)
     notes = []
     found = _scan(i2c)

@@ -1,9 +1,8 @@
-"""What the chip drivers need only to start a chip and to explain a failure, imported for that
-and dropped again (firmware.compat.drop) by the app once it is running: option codes, the ID
-probe, the timing checks, a magnetometer's construction and configuration read-back, and the
-messages of BusError, DataReadyTimeout, SensorNotFound and SensorOverflow (firmware/errors.py
-says what each carries). firmware/i2cdevice.py keeps what runs every sample.
-"""
+# What the chip drivers need only to start a chip and to explain a failure, imported for that
+# and dropped again (firmware.compat.drop) by the app once it is running: option codes, the ID
+# probe, the timing checks, a magnetometer's construction and configuration read-back, and the
+# messages of BusError, DataReadyTimeout, SensorNotFound and SensorOverflow (firmware/errors.py
+# says what each carries). firmware/i2cdevice.py keeps what runs every sample.
 from firmware.compat import const, wait_clock
 from firmware.errors import BusError, DataReadyTimeout, SensorNotFound, SensorOverflow
 

@@ -1,14 +1,12 @@
-"""Integer primitives shared by the whole firmware: one home each.
-
-sat16(v)      clamp to the int16 range.
-isqrt(n)      floor square root of any non-negative int (exact; no float).
-bit_length(n) number of bits of |n| (MicroPython ints have no .bit_length()).
-rdiv(n, d)    n / d rounded to the nearest int, halves away from zero (d != 0).
-icbrt(n)      floor cube root of any int (exact; rounds toward minus infinity; for the solvers).
-
-For n < 2**30 isqrt allocates nothing and every intermediate stays a small int, so the
-per-sample path may call it; larger n (the solvers) take the Newton branch on long ints.
-"""
+"""Integer primitives shared by the whole firmware: one home each."""
+# sat16(v)      clamp to the int16 range.
+# isqrt(n)      floor square root of any non-negative int (exact; no float).
+# bit_length(n) number of bits of |n| (MicroPython ints have no .bit_length()).
+# rdiv(n, d)    n / d rounded to the nearest int, halves away from zero (d != 0).
+# icbrt(n)      floor cube root of any int (exact; rounds toward minus infinity; for the solvers).
+#
+# For n < 2**30 isqrt allocates nothing and every intermediate stays a small int, so the
+# per-sample path may call it; larger n (the solvers) take the Newton branch on long ints.
 from firmware.compat import const
 
 INT16_MIN = const(-32768)

@@ -1,17 +1,16 @@
 """The gyro-aided heading's construction (firmware/attitude.py), imported for it and dropped
 after it: the options checked, the filter's scale factors computed (long-int arithmetic, once),
 and CompassApp.use_gyro()'s attach.
-
-scales(counts_per_dps_x10, options) -> (KI, KF, KA, KM, KB, ACC_LIM, MAG_LIM, recovery_us,
-    max_uncertainty_cdeg, ((KA, KM, KB) x the options' gains 1 .. 4 times (within their
-    ranges: the start-up gains), then bias_gain 1 .. 4 times), mag_gain); ValueError names a
-    bad option and its unit.
-init(a, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g, options): the
-    Attitude a's attributes and state array (its slots: firmware/attitude.py's numbers,
-    tests/test_attitude.py checks they agree).
-attach(app, cls, options) -> the Attitude (cls) on the app's arrays, its MPU6050 reading the gyroscope in
-    the accelerometer's burst (driver .gyro_into), app.attitude set.
 """
+# scales(counts_per_dps_x10, options) -> (KI, KF, KA, KM, KB, ACC_LIM, MAG_LIM, recovery_us,
+#     max_uncertainty_cdeg, ((KA, KM, KB) x the options' gains 1 .. 4 times (within their
+#     ranges: the start-up gains), then bias_gain 1 .. 4 times), mag_gain); ValueError names a
+#     bad option and its unit.
+# init(a, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g, options): the
+#     Attitude a's attributes and state array (its slots: firmware/attitude.py's numbers,
+#     tests/test_attitude.py checks they agree).
+# attach(app, cls, options) -> the Attitude (cls) on the app's arrays, its MPU6050 reading the gyroscope in
+#     the accelerometer's burst (driver .gyro_into), app.attitude set.
 from array import array
 
 from firmware.compat import const

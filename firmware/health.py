@@ -1,80 +1,78 @@
-"""Is this sample believable? Per-sample plausibility checks of the sensors' outputs, for the app.
-
-    from firmware.health import Health
-    h = Health(counts_per_gauss=12000, overflow=-32768, counts_per_g=16384)
-    h.saturated(raw)   # True: an axis at the output limit: not a measurement
-    h.mag_stale(raw)   # True: the same sample again, more times than noise allows
-    h.tilt_ok(acc)     # False: |g| outside 0.75..1.25 g, or the same reading again
-
-What each check catches (docs/faults.md has the fault campaign's figures):
-- saturated: an axis at +32767 / -32768 (QMC5883L, QMC5883P saturate there, hardware.md) or
-  at the HMC5883L's ADC overflow code -4096. Such a value is a bound, not the field: it must
-  neither give a heading nor reach a calibration fit.
-- mag_stale: stale output registers that still look fresh (a QMC5883L whose data registers
-  stopped taking new sets while DRDY/DOR keep rising, an HMC5883L held by its data-output
-  LOCK, a chip returning zeros or any constant). A live magnetometer's noise - about 2 mG
-  RMS per axis (QMC5883L datasheet 2 mG resolution; HMC5883L noise floor 2 mG) - makes an
-  exact repeat of all three axes rare, so a run of repeats is the chip's fault, not the
-  board holding still. The run that counts as stale depends on the noise in counts,
-  sigma ~ counts_per_gauss / 500: a repeat of all three axes has a probability of about
-  (1 / (3.5 sigma))^3 for sigma >= 1, so 2 repeats at 12000 counts/G (sigma 24), 3 at
-  3000 (sigma 6), 8 at 1090 (HMC5883L default; sigma ~0.8 with 8-sample averaging, a
-  repeat of all three ~4 %), each run below 1e-10 on a still board. Below 1000 counts/G
-  the noise is under a count and a still board repeats legitimately: 32 repeats there.
-  When the chip's status already hints at old data - QMC5883L DOR (a set was skipped),
-  HMC5883L LOCK still set when RDY rises - one exact repeat is stale data.
-- tilt_ok: the accelerometer must read about 1 g (a hand-held or vehicle compass moves
-  slowly; AN4248's tilt formulas assume gravity is the only specific force). Outside
-  0.75..1.25 g - free fall, a sensor asleep since a reset (zeros), 0xFF bytes read as
-  (-1, -1, -1), a range changed behind the driver's back - no tilt is derived. An MPU6050
-  that went to sleep keeps its last sample in the output registers, which is plausible
-  but frozen: its noise, ~1.8 mg RMS = 30 counts at +-2 g and 21 Hz bandwidth (firmware/
-  mpu6050.py), makes 3 exact repeats in a row (~1e-13) a frozen sensor.
-
-- DipCheck: the dip (inclination, the angle between the field and the horizontal) is a
-  property of the place, like |B|: rotating the board changes neither. A magnet near the
-  sensor that leaves |B| inside the interference window but turns the field's direction
-  changes the dip, the one other rotation invariant of a (field, gravity) pair. The
-  reference is the dip the calibration in force measures here: the one saved with it
-  (Calibration.dip_kang), else the mean of its first steady stretch (_DIP_LEARN_US and at
-  least _DIP_MIN_SAMPLES clean samples whose dip stays within _DIP_STEADY_KANG of their
-  mean); then held: a sample more than DIP_TOL_KANG (3 deg) off it is interference.
-  Why 3 deg: an error e in the field's direction splits between dip and azimuth, and at
-  60 deg dip an azimuth error of e / 2 in the horizontal plane is a heading error of e, so
-  a direction error that moves the heading by the documented 5 deg (docs/faults.md) moves
-  the dip by ~2.5-3.5 deg; a tilt error from the accelerometer moves dip and heading the
-  same way (AN4248: heading error ~ tilt error x tan(dip)). The sample noise is far below:
-  the dip's standard deviation is 0.26 deg on the simulated GY-271 (QMC5883L 2 mG, MPU6050
-  tilt noise) and 0.15 deg on the GY-87, so 3 deg is > 10 sigma. A calibration with a
-  fit error e (its RMS radial error) bends directions by ~e radians: the tolerance is
-  max(3 deg, 3 x e) as an angle, as the app's |B| window is max(10 %, 3 x e).
-- FieldWatch: what one sample cannot show. Rotating the board changes neither |B| nor the
-  dip, so either moving away from its average over the last ~8 samples (by more than
-  max(4 %, 3 x e) or max(2 deg, 3 x e as an angle), > 10 and 7 sigma of their noise) is a field
-  change, not a turn: a magnet moving in (a "shift"). A heading that moves more than 4 deg
-  from one sample to the next while the tilt holds still (within 1 deg) and the board is
-  within 45 deg of level is a "jump": a sample may be ~1.5 periods old when used, so such
-  a heading lags the truth by ~6 deg, and a magnet moving in turns the heading without
-  touching the tilt (consecutive headings differ by 0.43 deg RMS on the GY-271, at most 3.4
-  deg in 120,000 fault-free samples). Any flag - the windows, the dip, a shift, a jump -
-  starts a spell, and the status stays until the evidence says the field is clean again:
-  a magnet carried with the board acts as a hard-iron offset (AN4246 eq. 5) and keeps |B|
-  and the dip inside their windows at some orientations while the heading is tens of
-  degrees off, showing only as the board turns. So a spell ends after _RETURN_US of clean
-  samples whose field is back where it was at the last clean sample before the spell
-  (within 4 % of B, the tilt within 2 deg: the board did not move and the magnet left), or
-  after _CLEAN_US of clean
-  samples once the body field has moved by B / 4 since the last flag (a turn of ~29 deg
-  about the vertical at 60 deg dip, ~14 deg about a horizontal axis: an offset carried
-  along would have moved |B| or the dip out of their windows), or after _HOLD_MAX_US of
-  clean samples (a board held still gives no new evidence). The turn is measured on the
-  field itself: an offset carried with the board adds the same vector to both samples and
-  cancels in their difference.
-
-Allocation-free (tests/scenarios/app_alloc.py): every method keeps its frame within the 11
-words MicroPython holds on the C stack, and all intermediates are small ints: |a| is
-computed on a >> 4, so the squared norm stays below 3 * 2**22.
-"""
+"""Is this sample believable? Per-sample plausibility checks of the sensors' outputs, for the app."""
+#     from firmware.health import Health
+#     h = Health(counts_per_gauss=12000, overflow=-32768, counts_per_g=16384)
+#     h.saturated(raw)   # True: an axis at the output limit: not a measurement
+#     h.mag_stale(raw)   # True: the same sample again, more times than noise allows
+#     h.tilt_ok(acc)     # False: |g| outside 0.75..1.25 g, or the same reading again
+#
+# What each check catches (docs/faults.md has the fault campaign's figures):
+# - saturated: an axis at +32767 / -32768 (QMC5883L, QMC5883P saturate there, hardware.md) or
+#   at the HMC5883L's ADC overflow code -4096. Such a value is a bound, not the field: it must
+#   neither give a heading nor reach a calibration fit.
+# - mag_stale: stale output registers that still look fresh (a QMC5883L whose data registers
+#   stopped taking new sets while DRDY/DOR keep rising, an HMC5883L held by its data-output
+#   LOCK, a chip returning zeros or any constant). A live magnetometer's noise - about 2 mG
+#   RMS per axis (QMC5883L datasheet 2 mG resolution; HMC5883L noise floor 2 mG) - makes an
+#   exact repeat of all three axes rare, so a run of repeats is the chip's fault, not the
+#   board holding still. The run that counts as stale depends on the noise in counts,
+#   sigma ~ counts_per_gauss / 500: a repeat of all three axes has a probability of about
+#   (1 / (3.5 sigma))^3 for sigma >= 1, so 2 repeats at 12000 counts/G (sigma 24), 3 at
+#   3000 (sigma 6), 8 at 1090 (HMC5883L default; sigma ~0.8 with 8-sample averaging, a
+#   repeat of all three ~4 %), each run below 1e-10 on a still board. Below 1000 counts/G
+#   the noise is under a count and a still board repeats legitimately: 32 repeats there.
+#   When the chip's status already hints at old data - QMC5883L DOR (a set was skipped),
+#   HMC5883L LOCK still set when RDY rises - one exact repeat is stale data.
+# - tilt_ok: the accelerometer must read about 1 g (a hand-held or vehicle compass moves
+#   slowly; AN4248's tilt formulas assume gravity is the only specific force). Outside
+#   0.75..1.25 g - free fall, a sensor asleep since a reset (zeros), 0xFF bytes read as
+#   (-1, -1, -1), a range changed behind the driver's back - no tilt is derived. An MPU6050
+#   that went to sleep keeps its last sample in the output registers, which is plausible
+#   but frozen: its noise, ~1.8 mg RMS = 30 counts at +-2 g and 21 Hz bandwidth (firmware/
+#   mpu6050.py), makes 3 exact repeats in a row (~1e-13) a frozen sensor.
+#
+# - DipCheck: the dip (inclination, the angle between the field and the horizontal) is a
+#   property of the place, like |B|: rotating the board changes neither. A magnet near the
+#   sensor that leaves |B| inside the interference window but turns the field's direction
+#   changes the dip, the one other rotation invariant of a (field, gravity) pair. The
+#   reference is the dip the calibration in force measures here: the one saved with it
+#   (Calibration.dip_kang), else the mean of its first steady stretch (_DIP_LEARN_US and at
+#   least _DIP_MIN_SAMPLES clean samples whose dip stays within _DIP_STEADY_KANG of their
+#   mean); then held: a sample more than DIP_TOL_KANG (3 deg) off it is interference.
+#   Why 3 deg: an error e in the field's direction splits between dip and azimuth, and at
+#   60 deg dip an azimuth error of e / 2 in the horizontal plane is a heading error of e, so
+#   a direction error that moves the heading by the documented 5 deg (docs/faults.md) moves
+#   the dip by ~2.5-3.5 deg; a tilt error from the accelerometer moves dip and heading the
+#   same way (AN4248: heading error ~ tilt error x tan(dip)). The sample noise is far below:
+#   the dip's standard deviation is 0.26 deg on the simulated GY-271 (QMC5883L 2 mG, MPU6050
+#   tilt noise) and 0.15 deg on the GY-87, so 3 deg is > 10 sigma. A calibration with a
+#   fit error e (its RMS radial error) bends directions by ~e radians: the tolerance is
+#   max(3 deg, 3 x e) as an angle, as the app's |B| window is max(10 %, 3 x e).
+# - FieldWatch: what one sample cannot show. Rotating the board changes neither |B| nor the
+#   dip, so either moving away from its average over the last ~8 samples (by more than
+#   max(4 %, 3 x e) or max(2 deg, 3 x e as an angle), > 10 and 7 sigma of their noise) is a field
+#   change, not a turn: a magnet moving in (a "shift"). A heading that moves more than 4 deg
+#   from one sample to the next while the tilt holds still (within 1 deg) and the board is
+#   within 45 deg of level is a "jump": a sample may be ~1.5 periods old when used, so such
+#   a heading lags the truth by ~6 deg, and a magnet moving in turns the heading without
+#   touching the tilt (consecutive headings differ by 0.43 deg RMS on the GY-271, at most 3.4
+#   deg in 120,000 fault-free samples). Any flag - the windows, the dip, a shift, a jump -
+#   starts a spell, and the status stays until the evidence says the field is clean again:
+#   a magnet carried with the board acts as a hard-iron offset (AN4246 eq. 5) and keeps |B|
+#   and the dip inside their windows at some orientations while the heading is tens of
+#   degrees off, showing only as the board turns. So a spell ends after _RETURN_US of clean
+#   samples whose field is back where it was at the last clean sample before the spell
+#   (within 4 % of B, the tilt within 2 deg: the board did not move and the magnet left), or
+#   after _CLEAN_US of clean
+#   samples once the body field has moved by B / 4 since the last flag (a turn of ~29 deg
+#   about the vertical at 60 deg dip, ~14 deg about a horizontal axis: an offset carried
+#   along would have moved |B| or the dip out of their windows), or after _HOLD_MAX_US of
+#   clean samples (a board held still gives no new evidence). The turn is measured on the
+#   field itself: an offset carried with the board adds the same vector to both samples and
+#   cancels in their difference.
+#
+# Allocation-free (tests/scenarios/app_alloc.py): every method keeps its frame within the 11
+# words MicroPython holds on the C stack, and all intermediates are small ints: |a| is
+# computed on a >> 4, so the squared norm stays below 3 * 2**22.
 from array import array
 
 from firmware.compat import const
@@ -133,7 +131,7 @@ def _run(p, v, n):
 
 
 class Health:
-    """The state of the per-sample checks (see the module docstring). overflow: the chip's
+    """The state of the per-sample checks (see the module's opening comment). overflow: the chip's
     overflow code besides the int16 limits (HMC5883L -4096; else -32768)."""
 
     def __init__(self, counts_per_gauss=None, overflow=_SAT_LO, counts_per_g=16384):
@@ -191,11 +189,11 @@ class Health:
 
 
 class DipCheck:
-    """The dip check of the module docstring. learn(dip, dt_us) on clean samples until
-    .armed (True on the sample that arms it); set(ref) arms it with a known dip; off(dip)
-    True when armed and the dip is more than .tol off .ref (KANG); reset() when another
-    calibration is put in force. Small ints only: dips are within +-16384 KANG and the sums
-    hold at most _DIP_MAX_SAMPLES of them."""
+    # The dip check of the module's opening comment. learn(dip, dt_us) on clean samples until
+    # .armed (True on the sample that arms it); set(ref) arms it with a known dip; off(dip)
+    # True when armed and the dip is more than .tol off .ref (KANG); reset() when another
+    # calibration is put in force. Small ints only: dips are within +-16384 KANG and the sums
+    # hold at most _DIP_MAX_SAMPLES of them.
 
     def __init__(self, tol=DIP_TOL_KANG):
         self.tol = tol
@@ -254,16 +252,16 @@ class DipCheck:
 
 
 class FieldWatch:
-    """The spells of the module docstring, for one Compass `c` and the body-frame field
-    array `body` its update() used. use(cal) when a calibration is put in force (the same
-    one again keeps the state), restart() after a step without a sample or a gap: the next
-    sample starts the short averages afresh. sample(tilt, dt_us) after each compass update
-    returns the flag this sample raised (0, SPELL_JUMP, SPELL_SHIFT, SPELL_FIELD) and leaves
-    .spell (0 when the status may be ok), .learned (True on the sample that armed the dip
-    reference) and .dip (the DipCheck). forget(run) ends a spell that began within the last
-    `run` samples (a run of stale repeats: not a field). A dip outside the DipCheck's
-    tolerance raises c.interference like the compass's own windows. Small ints only:
-    field differences are taken on body >> .shift (|body| <= 2**16, B >> shift < 2**11)."""
+    # The spells of the module's opening comment, for one Compass `c` and the body-frame field
+    # array `body` its update() used. use(cal) when a calibration is put in force (the same
+    # one again keeps the state), restart() after a step without a sample or a gap: the next
+    # sample starts the short averages afresh. sample(tilt, dt_us) after each compass update
+    # returns the flag this sample raised (0, SPELL_JUMP, SPELL_SHIFT, SPELL_FIELD) and leaves
+    # .spell (0 when the status may be ok), .learned (True on the sample that armed the dip
+    # reference) and .dip (the DipCheck). forget(run) ends a spell that began within the last
+    # `run` samples (a run of stale repeats: not a field). A dip outside the DipCheck's
+    # tolerance raises c.interference like the compass's own windows. Small ints only:
+    # field differences are taken on body >> .shift (|body| <= 2**16, B >> shift < 2**11).
 
     def __init__(self, c, body):
         self.c = c

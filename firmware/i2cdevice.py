@@ -1,44 +1,42 @@
-"""The bus plumbing every chip driver shares: register helpers, error mapping, bounded waits.
-
-    class MyChip(Device):
-        def read_into(self, buf):
-            with self.guard:                 # OSError from the bus -> BusError(address, register)
-                self.wait(_STATUS, _DRDY)
-                self._read_into(_DATA, self._buf)
-
-Device(i2c, address, period_us, delay_us=None, timeout_us=None)
-  i2c         machine.I2C / SoftI2C, or anything with readfrom_mem_into / writeto_mem / scan
-              (the simulator's bus, firmware.busio_i2c's adapter for CircuitPython).
-  period_us   the chip's output data period: sizes the default data-ready bound.
-  delay_us    None on a board (time.sleep_us, waits measured with time.ticks_us); the
-              simulator passes its bus.sleep_us, and the waited time is then the sum of the
-              delays asked for (simulated time moves only when delay_us is called).
-  timeout_us  the data-ready bound; default two periods + 10 ms.
-
-wait_ready(reg, mask) polls a status register until a bit of mask is set, within the bound,
-else DataReadyTimeout(address, waited_us). Public driver methods run their bus transfers
-inside `with self.guard:`, which turns a port's OSError (errno 19 ENODEV, 5 EIO, 110/116
-ETIMEDOUT) into BusError naming address, register and errno. Why a `with` block and not
-try/except: a bytecode frame with `except OSError as e` exceeds the 11 words MicroPython keeps
-on the C stack (py/objfun.c VM_MAX_STATE_ON_STACK) and would come from the heap on every
-sample; the `with` frame stays on the stack, so a read allocates nothing
-(tests/scenarios/drivers_alloc.py).
-
-Magnetometer(Device): the scaffolding the magnetometer drivers share (options, ID probe,
-configure with read-back, read with the status checked, config_ok(), read(), overflow
-reports); each chip's file keeps its datasheet's facts and gives them as class attributes
-(see the class).
-
-Callers that map bus errors themselves (the app's read guard, firmware/app.py) use the
-unguarded sample_into(buf) / config_matches() inside their own `with` block: one guard per
-step instead of one per transfer group (a `with` costs two method calls).
-
-option_code(chip, name, value, table): the register code of a keyword option.
-int16x3_into(d, buf, msb): three int16, LSB first (QMC5883L, QMC5883P data blocks) or MSB
-first (MPU6050), sign-extended by hand. The drivers call it as `decode`, which use_kernels()
-points at its mirror in firmware/fast.py where the port has the native emitter (the same
-bits; use_kernels(False): this one), as firmware.compass.use_kernels does for the heading.
-"""
+"""The bus plumbing every chip driver shares: register helpers, error mapping, bounded waits."""
+#     class MyChip(Device):
+#         def read_into(self, buf):
+#             with self.guard:                 # OSError from the bus -> BusError(address, register)
+#                 self.wait(_STATUS, _DRDY)
+#                 self._read_into(_DATA, self._buf)
+#
+# Device(i2c, address, period_us, delay_us=None, timeout_us=None)
+#   i2c         machine.I2C / SoftI2C, or anything with readfrom_mem_into / writeto_mem / scan
+#               (the simulator's bus, firmware.busio_i2c's adapter for CircuitPython).
+#   period_us   the chip's output data period: sizes the default data-ready bound.
+#   delay_us    None on a board (time.sleep_us, waits measured with time.ticks_us); the
+#               simulator passes its bus.sleep_us, and the waited time is then the sum of the
+#               delays asked for (simulated time moves only when delay_us is called).
+#   timeout_us  the data-ready bound; default two periods + 10 ms.
+#
+# wait_ready(reg, mask) polls a status register until a bit of mask is set, within the bound,
+# else DataReadyTimeout(address, waited_us). Public driver methods run their bus transfers
+# inside `with self.guard:`, which turns a port's OSError (errno 19 ENODEV, 5 EIO, 110/116
+# ETIMEDOUT) into BusError naming address, register and errno. Why a `with` block and not
+# try/except: a bytecode frame with `except OSError as e` exceeds the 11 words MicroPython keeps
+# on the C stack (py/objfun.c VM_MAX_STATE_ON_STACK) and would come from the heap on every
+# sample; the `with` frame stays on the stack, so a read allocates nothing
+# (tests/scenarios/drivers_alloc.py).
+#
+# Magnetometer(Device): the scaffolding the magnetometer drivers share (options, ID probe,
+# configure with read-back, read with the status checked, config_ok(), read(), overflow
+# reports); each chip's file keeps its datasheet's facts and gives them as class attributes
+# (see the class).
+#
+# Callers that map bus errors themselves (the app's read guard, firmware/app.py) use the
+# unguarded sample_into(buf) / config_matches() inside their own `with` block: one guard per
+# step instead of one per transfer group (a `with` costs two method calls).
+#
+# option_code(chip, name, value, table): the register code of a keyword option.
+# int16x3_into(d, buf, msb): three int16, LSB first (QMC5883L, QMC5883P data blocks) or MSB
+# first (MPU6050), sign-extended by hand. The drivers call it as `decode`, which use_kernels()
+# points at its mirror in firmware/fast.py where the port has the native emitter (the same
+# bits; use_kernels(False): this one), as firmware.compass.use_kernels does for the heading.
 from firmware.compat import pick, ticks_diff, ticks_us
 from firmware.errors import BusError, DataReadyTimeout, SensorNotFound
 
@@ -179,27 +177,26 @@ class Device:
 
 
 class Magnetometer(Device):
-    """What the magnetometer drivers share: options to register codes, the ID probe,
-    configure() with its read-back, read_into() behind the data-ready bit, config_ok(),
-    read() and the overflow report. Each chip's file (qmc5883l.py, qmc5883p.py, hmc5883l.py)
-    keeps its datasheet's facts and gives them as class attributes:
-
-      KIND, OPTIONS  the driver's name in records and its keyword options (public)
-      TABLES         per option the values offered, register code = index; the first option
-                     is the range (its code is .range_code), the second the output rate
-      PER_CODE       (output period in us per rate code, counts/G per range code)
-      FLAGS          (status bit saying the data may be old, status bits for _alarm())
-      REGISTERS      (ID register, status register, data-ready bit, first of the six data
-                     registers, first configuration register)
-      ID             the bytes the ID register and those after it read
-
-    The chip's constructor passes its option values in the order of OPTIONS; the chip gives
-    _config_of(codes) (the bytes the configuration registers hold from the first on, which
-    config_ok() reads back in one transfer), _configure() (the datasheet's sequence, inside
-    the guard; _check_config() reads the configuration back) and, where its data block is not
-    X, Y, Z int16 LSB first, its own sample_into(buf). The six data bytes are read in one
-    transaction: a partial read leaves the chip's data lock set.
-    """
+    # What the magnetometer drivers share: options to register codes, the ID probe,
+    # configure() with its read-back, read_into() behind the data-ready bit, config_ok(),
+    # read() and the overflow report. Each chip's file (qmc5883l.py, qmc5883p.py, hmc5883l.py)
+    # keeps its datasheet's facts and gives them as class attributes:
+    #
+    #   KIND, OPTIONS  the driver's name in records and its keyword options (public)
+    #   TABLES         per option the values offered, register code = index; the first option
+    #                  is the range (its code is .range_code), the second the output rate
+    #   PER_CODE       (output period in us per rate code, counts/G per range code)
+    #   FLAGS          (status bit saying the data may be old, status bits for _alarm())
+    #   REGISTERS      (ID register, status register, data-ready bit, first of the six data
+    #                  registers, first configuration register)
+    #   ID             the bytes the ID register and those after it read
+    #
+    # The chip's constructor passes its option values in the order of OPTIONS; the chip gives
+    # _config_of(codes) (the bytes the configuration registers hold from the first on, which
+    # config_ok() reads back in one transfer), _configure() (the datasheet's sequence, inside
+    # the guard; _check_config() reads the configuration back) and, where its data block is not
+    # X, Y, Z int16 LSB first, its own sample_into(buf). The six data bytes are read in one
+    # transaction: a partial read leaves the chip's data lock set.
 
     def __init__(self, i2c, address, delay_us, timeout_us, *values):
         from firmware.devinit import magnetometer

@@ -1,27 +1,25 @@
-"""PJRC MotionCal's serial protocol, board side, in integers.
-
-    from firmware import motioncal as mc
-    out.write(mc.raw_line(acc_8192, mc.GYRO_NONE, mag_01ut))        # every sample
-    for kind, value in reader.feed(chunk):  # reader = mc.PacketReader(); chunk from stdin
-        if kind == mc.PACKET: fields = mc.calibration_fields(value, cpg); echo = mc.echo(value)
-
-Board -> MotionCal: `Raw:ax,ay,az,gx,gy,gz,mx,my,mz` ended by CR (MotionCal ignores LF and
-never accepts a line without CR), accel in 1/8192 g, gyro in 1/16 deg/s, magnetometer in
-0.1 uT; any character but digits, ',' and a leading '-' makes MotionCal drop the rest of its
-256-byte read. MotionCal -> board: one 68-byte packet when the user clicks Send Cal:
-117, 84 ("uT"), 16 float32 little-endian (accel offsets x3, gyro offsets x3, hard iron V x3
-in uT, field B in uT, invW diagonal x3, invW 01 02 12), CRC-16/MODBUS of bytes 0..65, low
-byte first. No framing: any byte value can occur, 117, 84 included. Board -> MotionCal
-again: `Cal1:` (the first 10 floats) and `Cal2:` (invW, 9 numbers, row-major), each number
-with a '.', no exponent; MotionCal confirms when |echo - sent| <= 0.0001 + 0.00003 |sent|.
-On a MicroPython board a 0x03 in the packet raises KeyboardInterrupt on stdin unless
-micropython.kbd_intr(-1) is in force while listening.
-
-The facts are MotionCal's own (serialdata.c ascii_parse(); rawdata.c send_calibration(),
-crc16(), cal1_data(), cal2_data(), is_float_ok(); imuread.h for the units).
-Floats are decoded from their bits (sign, exponent, mantissa) into fixed point; nothing here
-uses a float. The per-sample path (raw_line_into, the unit conversions) allocates nothing.
-"""
+"""PJRC MotionCal's serial protocol, board side, in integers."""
+#     from firmware import motioncal as mc
+#     out.write(mc.raw_line(acc_8192, mc.GYRO_NONE, mag_01ut))        # every sample
+#     for kind, value in reader.feed(chunk):  # reader = mc.PacketReader(); chunk from stdin
+#         if kind == mc.PACKET: fields = mc.calibration_fields(value, cpg); echo = mc.echo(value)
+#
+# Board -> MotionCal: `Raw:ax,ay,az,gx,gy,gz,mx,my,mz` ended by CR (MotionCal ignores LF and
+# never accepts a line without CR), accel in 1/8192 g, gyro in 1/16 deg/s, magnetometer in
+# 0.1 uT; any character but digits, ',' and a leading '-' makes MotionCal drop the rest of its
+# 256-byte read. MotionCal -> board: one 68-byte packet when the user clicks Send Cal:
+# 117, 84 ("uT"), 16 float32 little-endian (accel offsets x3, gyro offsets x3, hard iron V x3
+# in uT, field B in uT, invW diagonal x3, invW 01 02 12), CRC-16/MODBUS of bytes 0..65, low
+# byte first. No framing: any byte value can occur, 117, 84 included. Board -> MotionCal
+# again: `Cal1:` (the first 10 floats) and `Cal2:` (invW, 9 numbers, row-major), each number
+# with a '.', no exponent; MotionCal confirms when |echo - sent| <= 0.0001 + 0.00003 |sent|.
+# On a MicroPython board a 0x03 in the packet raises KeyboardInterrupt on stdin unless
+# micropython.kbd_intr(-1) is in force while listening.
+#
+# The facts are MotionCal's own (serialdata.c ascii_parse(); rawdata.c send_calibration(),
+# crc16(), cal1_data(), cal2_data(), is_float_ok(); imuread.h for the units).
+# Floats are decoded from their bits (sign, exponent, mantissa) into fixed point; nothing here
+# uses a float. The per-sample path (raw_line_into, the unit conversions) allocates nothing.
 from firmware.compat import const
 from firmware.errors import CalibrationRejected
 from firmware.fixedpoint import bit_length, icbrt, rdiv, sat16
@@ -173,17 +171,16 @@ def packet_ok(data):
 
 
 class PacketReader:
-    """Finds MotionCal's packets in a byte stream, fed in pieces of any size, never blocking.
-
-        r = PacketReader()
-        for kind, value in r.feed(data):   # () when nothing happened (no allocation)
-            ...                            # PACKET, BAD_CRC, TRUNCATED or GARBAGE events
-        r.end()                            # the caller's timeout: a partial packet -> TRUNCATED
-
-    A candidate starts at 117, 84 and runs 68 bytes. When its CRC fails the candidate may
-    have been a false start (the signature is two ordinary bytes, also inside floats), so
-    the search resumes at the next 117, 84 inside it: a packet behind a false start is
-    still found. Totals: .packets, .bad_crc, .truncated, .skipped (bytes)."""
+    """Finds MotionCal's packets in a byte stream, fed in pieces of any size, never blocking."""
+    #     r = PacketReader()
+    #     for kind, value in r.feed(data):   # () when nothing happened (no allocation)
+    #         ...                            # PACKET, BAD_CRC, TRUNCATED or GARBAGE events
+    #     r.end()                            # the caller's timeout: a partial packet -> TRUNCATED
+    #
+    # A candidate starts at 117, 84 and runs 68 bytes. When its CRC fails the candidate may
+    # have been a false start (the signature is two ordinary bytes, also inside floats), so
+    # the search resumes at the next 117, 84 inside it: a packet behind a false start is
+    # still found. Totals: .packets, .bad_crc, .truncated, .skipped (bytes).
 
     def __init__(self):
         self.buf = bytearray(PACKET_SIZE)
@@ -351,19 +348,19 @@ def _run(steps, out):
 
 
 def calibration_fields(packet, counts_per_gauss):
-    """Our calibration from MotionCal's packet, for a sensor of `counts_per_gauss`:
-    a dict for firmware.calibration.Calibration(**fields): model 10, offset V (counts, int16), invw (9 Q15
-    ints, row-major, each row's absolute sum <= 32767), field B (counts) and field_out
-    (|InvW (raw - V)| >> 15 on the calibrated sphere, counts).
-
-    MotionCal's model is Bc = invW (raw 0.1 uT - V) with |Bc| = B (uT); in counts
-    (x uT = x cpg / 100 counts) the same invW maps raw - V to a sphere of B cpg / 100
-    counts. InvW = s invW in Q15 with s from the row sums (solve.q15_steps), so
-    field_out = s B = B cbrt(det(InvW / 2**15) / det(invW)) counts.
-
-    Raises CalibrationRejected with .reason bad_crc, not_a_number, not_positive_definite,
-    soft_iron_out_of_range, field_out_of_range or offset_out_of_range, checked in that
-    order. The accel and gyro offsets (always 0 from MotionCal) are not used."""
+    # Our calibration from MotionCal's packet, for a sensor of `counts_per_gauss`:
+    # a dict for firmware.calibration.Calibration(**fields): model 10, offset V (counts, int16), invw (9 Q15
+    # ints, row-major, each row's absolute sum <= 32767), field B (counts) and field_out
+    # (|InvW (raw - V)| >> 15 on the calibrated sphere, counts).
+    #
+    # MotionCal's model is Bc = invW (raw 0.1 uT - V) with |Bc| = B (uT); in counts
+    # (x uT = x cpg / 100 counts) the same invW maps raw - V to a sphere of B cpg / 100
+    # counts. InvW = s invW in Q15 with s from the row sums (solve.q15_steps), so
+    # field_out = s B = B cbrt(det(InvW / 2**15) / det(invW)) counts.
+    #
+    # Raises CalibrationRejected with .reason bad_crc, not_a_number, not_positive_definite,
+    # soft_iron_out_of_range, field_out_of_range or offset_out_of_range, checked in that
+    # order. The accel and gyro offsets (always 0 from MotionCal) are not used.
     from firmware import acceptance, solve  # loaded only when a packet arrives
 
     cpg = counts_per_gauss

@@ -1,50 +1,49 @@
 """The mounting check: do MAG_AXES and ACCEL_AXES describe how the two chips sit? Loaded after
 a calibration is accepted and dropped after the check (firmware.compat.drop).
-
-    from firmware.mountcheck import check, WRONG
-    v, axes, sigma, best = check(pairs, cal, "x,-y,-z", "-x,y,z")
-    if v == WRONG: print('MAG_AXES = "%s"' % axes)     # v: "ok", "wrong", "spread", "unsteady"
-
-Why it works. Gravity and the Earth's field are fixed in the world, so the angle between them
-(90 deg minus the dip) is the same in every orientation of the board. The calibrated field
-(AN4246 eq. 10, firmware/calibration.py) through MAG_AXES and the accelerometer through
-ACCEL_AXES are both in the body frame (firmware/axes.py); when the two maps disagree by a
-rotation R (a chip turned against the other, a wrong sign), the angle measured is the one
-between R b and g, and it swings by tens of degrees as the board turns. Of the 24 rotations
-among the signed permutations (a mirror map is refused when the app is made), a calibration
-dance that turns the board through many directions leaves one steady: the one that relates
-the magnetometer to the accelerometer. Which way is forward, and up from down for both chips
-together, the data cannot tell (examples/check_axes.py asks for poses); the check names the
-MAG_AXES that agrees with the ACCEL_AXES in use.
-
-check() corrects each pair's field (firmware/mounting.py Pairs) with the calibration
-(calibration.correct), maps both vectors to the body frame (axes.apply), scales them to unit
-vectors in Q14 and, for each of the 24 rotations R applied to the field, takes the cosine
-c = (R b).g / |b||g| (the sine of the dip for the right one) in Q10. Its RMS spread over the
-pairs, sigma, is near 0 for the right rotation (noise, fit residuals, a few degrees of chip
-misalignment, an accelerometer a few percent off) and large for every wrong one once the
-board has turned over (tests/test_mounting.py measures both on the simulator). The verdict:
-  SPREAD    fewer than MIN_BINS bins filled, or a second rotation is nearly as steady (sigma
-            below UNSTEADY_Q10): the data do not single one out (turn the board over, not
-            only around)
-  UNSTEADY  no rotation is steady (sigma above STEADY_Q10): a magnet, a shaking hand, a
-            calibration that does not fit; nothing is said about the axes
-  OK        the rotation in use is the steady one
-  WRONG     another rotation is: axes is the MAG_AXES that makes it so, with the ACCEL_AXES
-            in use
-A right setting could give WRONG only if its own sigma were >= UNSTEADY_Q10 while another's
-were <= STEADY_Q10, a factor of two apart.
-check() returns (verdict, axes: the steadiest mapping's MAG_AXES, sigma: the spread of the
-setting in use, best: the steadiest one's), the spreads in Q10 (1024 = 1). judge(app) runs
-it for a CompassApp's calibration session (firmware/session.py mount_check: after each fit
-put in force until a check gives an answer, and at the session's end): app.mounting,
-and the status shown in place of "ok" while the data name another MAG_AXES. norm14 comes
-from firmware.trig, imported for the check; in calibration mode (firmware/calmode.py), where
-the heading line's trig is not loaded, it and its tables are let go again after it. check() allocates one work array of
-63 ints and the axes string (and parses spec strings when given them in place of
-AxisMap.m arrays); 24 pairs x 24 rotations, once per accepted fit. Every intermediate stays
-below 2**30 (tests/test_mounting.py drives tests/intcheck).
 """
+#     from firmware.mountcheck import check, WRONG
+#     v, axes, sigma, best = check(pairs, cal, "x,-y,-z", "-x,y,z")
+#     if v == WRONG: print('MAG_AXES = "%s"' % axes)     # v: "ok", "wrong", "spread", "unsteady"
+#
+# Why it works. Gravity and the Earth's field are fixed in the world, so the angle between them
+# (90 deg minus the dip) is the same in every orientation of the board. The calibrated field
+# (AN4246 eq. 10, firmware/calibration.py) through MAG_AXES and the accelerometer through
+# ACCEL_AXES are both in the body frame (firmware/axes.py); when the two maps disagree by a
+# rotation R (a chip turned against the other, a wrong sign), the angle measured is the one
+# between R b and g, and it swings by tens of degrees as the board turns. Of the 24 rotations
+# among the signed permutations (a mirror map is refused when the app is made), a calibration
+# dance that turns the board through many directions leaves one steady: the one that relates
+# the magnetometer to the accelerometer. Which way is forward, and up from down for both chips
+# together, the data cannot tell (examples/check_axes.py asks for poses); the check names the
+# MAG_AXES that agrees with the ACCEL_AXES in use.
+#
+# check() corrects each pair's field (firmware/mounting.py Pairs) with the calibration
+# (calibration.correct), maps both vectors to the body frame (axes.apply), scales them to unit
+# vectors in Q14 and, for each of the 24 rotations R applied to the field, takes the cosine
+# c = (R b).g / |b||g| (the sine of the dip for the right one) in Q10. Its RMS spread over the
+# pairs, sigma, is near 0 for the right rotation (noise, fit residuals, a few degrees of chip
+# misalignment, an accelerometer a few percent off) and large for every wrong one once the
+# board has turned over (tests/test_mounting.py measures both on the simulator). The verdict:
+#   SPREAD    fewer than MIN_BINS bins filled, or a second rotation is nearly as steady (sigma
+#             below UNSTEADY_Q10): the data do not single one out (turn the board over, not
+#             only around)
+#   UNSTEADY  no rotation is steady (sigma above STEADY_Q10): a magnet, a shaking hand, a
+#             calibration that does not fit; nothing is said about the axes
+#   OK        the rotation in use is the steady one
+#   WRONG     another rotation is: axes is the MAG_AXES that makes it so, with the ACCEL_AXES
+#             in use
+# A right setting could give WRONG only if its own sigma were >= UNSTEADY_Q10 while another's
+# were <= STEADY_Q10, a factor of two apart.
+# check() returns (verdict, axes: the steadiest mapping's MAG_AXES, sigma: the spread of the
+# setting in use, best: the steadiest one's), the spreads in Q10 (1024 = 1). judge(app) runs
+# it for a CompassApp's calibration session (firmware/session.py mount_check: after each fit
+# put in force until a check gives an answer, and at the session's end): app.mounting,
+# and the status shown in place of "ok" while the data name another MAG_AXES. norm14 comes
+# from firmware.trig, imported for the check; in calibration mode (firmware/calmode.py), where
+# the heading line's trig is not loaded, it and its tables are let go again after it. check() allocates one work array of
+# 63 ints and the axes string (and parses spec strings when given them in place of
+# AxisMap.m arrays); 24 pairs x 24 rotations, once per accepted fit. Every intermediate stays
+# below 2**30 (tests/test_mounting.py drives tests/intcheck).
 import sys
 from array import array
 
@@ -151,11 +150,11 @@ def _map(axes):
 
 
 def check(pairs, cal, mag_axes, accel_axes):
-    """(verdict, axes, sigma, best) for the pairs held (see the module docstring): verdict
-    OK, WRONG, SPREAD or UNSTEADY, axes the MAG_AXES of the steadiest mapping, sigma and best
-    the spreads (Q10) of the mapping in use and of the steadiest.
-    cal: a firmware.calibration.Calibration, or its .k; mag_axes, accel_axes: the maps in
-    use, as spec strings ("x,-y,-z"), AxisMap objects or AxisMap.m arrays."""
+    # (verdict, axes, sigma, best) for the pairs held (see the module's opening comment): verdict
+    # OK, WRONG, SPREAD or UNSTEADY, axes the MAG_AXES of the steadiest mapping, sigma and best
+    # the spreads (Q10) of the mapping in use and of the steadiest.
+    # cal: a firmware.calibration.Calibration, or its .k; mag_axes, accel_axes: the maps in
+    # use, as spec strings ("x,-y,-z"), AxisMap objects or AxisMap.m arrays.
     k = getattr(cal, "k", cal)
     mm = _map(mag_axes)
     am = _map(accel_axes)
@@ -201,11 +200,11 @@ def check(pairs, cal, mag_axes, accel_axes):
 
 
 def judge(app):
-    """The check of a CompassApp's calibration session (firmware/session.py mount_check):
-    the pairs its collector kept, the calibration in force, the app's maps. Sets
-    app.mounting = (verdict, axes) and, when the verdict is WRONG, app._axes_status, the
-    status the app shows in place of "ok" (`check MAG_AXES: the data say "y,x,-z"`); OK
-    clears it; SPREAD and UNSTEADY leave it as it was. Returns the verdict."""
+    # The check of a CompassApp's calibration session (firmware/session.py mount_check):
+    # the pairs its collector kept, the calibration in force, the app's maps. Sets
+    # app.mounting = (verdict, axes) and, when the verdict is WRONG, app._axes_status, the
+    # status the app shows in place of "ok" (`check MAG_AXES: the data say "y,x,-z"`); OK
+    # clears it; SPREAD and UNSTEADY leave it as it was. Returns the verdict.
     v, axes, sigma, best = check(app.collector.pairs, app.calibration, app._mm, app._am)
     app.mounting = (v, axes)
     if v == WRONG:

@@ -1,19 +1,18 @@
 """A CompassApp's calibration in the store: load at boot, save after each change, retry a
 failed save. Imported for each of those and dropped again (firmware.compat.drop), with the
 store's slot code (firmware/slots.py): a running board rarely saves.
-
-load(app)    -> the stored Calibration, or UNCALIBRATED with the reason in app.load_reason:
-             the newest slot whose record is intact AND whose payload Calibration.from_bytes
-             accepts (the store skips a torn, unreadable or meaningless slot and falls back to
-             an older one).
-save(app, dip_only)  the calibration in force, with the dip it measures when known
-             (firmware/health.py DipCheck). A failed save (OSError, StoreError, MemoryError)
-             is counted in app.save_errors, never raises, and is retried every
-             _SAVE_RETRY_US by CompassApp. dip_only: the fit in force again, now with its dip
-             (not counted in app.stored).
-             After the record, the mounting check's verdict kept beside it, when there is one
-             (firmware/mountnote.py: loaded only then, and dropped).
 """
+# load(app)    -> the stored Calibration, or UNCALIBRATED with the reason in app.load_reason:
+#              the newest slot whose record is intact AND whose payload Calibration.from_bytes
+#              accepts (the store skips a torn, unreadable or meaningless slot and falls back to
+#              an older one).
+# save(app, dip_only)  the calibration in force, with the dip it measures when known
+#              (firmware/health.py DipCheck). A failed save (OSError, StoreError, MemoryError)
+#              is counted in app.save_errors, never raises, and is retried every
+#              _SAVE_RETRY_US by CompassApp. dip_only: the fit in force again, now with its dip
+#              (not counted in app.stored).
+#              After the record, the mounting check's verdict kept beside it, when there is one
+#              (firmware/mountnote.py: loaded only then, and dropped).
 from firmware.calibration import UNCALIBRATED, Calibration
 from firmware.compat import drop
 from firmware.errors import StoreError

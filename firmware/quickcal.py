@@ -1,46 +1,45 @@
 """Quick calibration: the hard iron V from one pose and a known heading, with the field model's
 field vector (PX4's `calibrate mag quick`, ArduPilot's fixed-yaw calibration), integer-only.
-
-    from firmware.quickcal import QuickCal
-    qc = QuickCal(location, counts_per_gauss, mag_map)   # a usable firmware.location.Location
-    qc.add(raw_sum, gravity_sum, n, true_heading_kang)  # n samples of one pose, summed
-    cal = qc.result()           # a 4-element-equivalent Calibration, or CalibrationRejected
-
-CompassApp.quick_calibrate(true_heading_cdeg) (quick_calibrate(app, ...) below) reads the
-samples, calls these and puts the result in force (docs/quick_calibration.md has the measured
-accuracy and when a full calibration is needed instead).
-
-How. The field model gives the geomagnetic field at the board: horizontal H and down Z, in the
-magnetometer's counts. The known true heading minus the model's declination is the magnetic
-heading psi, so the de-rotated field the compass would compute is Bf = (H cos psi,
--H sin psi, Z) (AN4248 eq. 22 read backwards). The accelerometer gives roll phi (eq. 13) and
-pitch theta (eq. 15) - or, without one, the board is taken as level - and undoing eq. 19
-gives the field the board should see, Bp:
-    Bx = Bfx cos theta - Bfz sin theta,    t = Bfx sin theta + Bfz cos theta,
-    By = Bfy cos phi + t sin phi,          Bz = t cos phi - Bfy sin phi.
-The magnetometer's axis map takes Bp back to the chip's axes, and AN4246 eq. 8 with W = I
-(B_raw = B + V) leaves the hard iron: V = B_raw - Bp, in counts. More poses (add() again,
-e.g. at opposite headings) average their V: soft iron's error flips sign with the field, so
-opposite poses cancel most of it.
-
-The result is a Calibration of model 4 (hard iron only): offset V, InvW identity, field = the
-model's |B| in counts, coverage 0 (firmware/accuracy.py tells a quick calibration by that),
-fit_error QUICK_FIT_ERROR (10 %, no residual exists for one pose): any full 4-, 7- or
-10-element fit the app's collector accepts later replaces it.
-
-Refusals (CalibrationRejected, .reason):
-  no_location          no usable field model (set_location first, or its status says why).
-  blackout_zone        H < 2000 nT (WMM's blackout zone): a heading cannot be known.
-  no_samples           the magnetometer gave no sample (the app's read failed every time).
-  offset_out_of_range  |V| on an axis above _MAX_OFFSET_MG (ArduPilot's default offset limit,
-                       1800 mG) in counts, or outside int16: a wrong heading, a magnet, or a
-                       board too strongly magnetised for a correction.
-  field_mismatch       with two poses or more, one pose's V is more than POSE_SPREAD_PCT (10 %)
-                       of |B| from their mean: a mistyped heading, strong soft iron, or a
-                       sensor gain that is not what the driver reports. A full calibration is
-                       needed.
-Bad arguments (a float heading, a zero sample count) raise TypeError / ValueError naming them.
 """
+#     from firmware.quickcal import QuickCal
+#     qc = QuickCal(location, counts_per_gauss, mag_map)   # a usable firmware.location.Location
+#     qc.add(raw_sum, gravity_sum, n, true_heading_kang)  # n samples of one pose, summed
+#     cal = qc.result()           # a 4-element-equivalent Calibration, or CalibrationRejected
+#
+# CompassApp.quick_calibrate(true_heading_cdeg) (quick_calibrate(app, ...) below) reads the
+# samples, calls these and puts the result in force (docs/quick_calibration.md has the measured
+# accuracy and when a full calibration is needed instead).
+#
+# How. The field model gives the geomagnetic field at the board: horizontal H and down Z, in the
+# magnetometer's counts. The known true heading minus the model's declination is the magnetic
+# heading psi, so the de-rotated field the compass would compute is Bf = (H cos psi,
+# -H sin psi, Z) (AN4248 eq. 22 read backwards). The accelerometer gives roll phi (eq. 13) and
+# pitch theta (eq. 15) - or, without one, the board is taken as level - and undoing eq. 19
+# gives the field the board should see, Bp:
+#     Bx = Bfx cos theta - Bfz sin theta,    t = Bfx sin theta + Bfz cos theta,
+#     By = Bfy cos phi + t sin phi,          Bz = t cos phi - Bfy sin phi.
+# The magnetometer's axis map takes Bp back to the chip's axes, and AN4246 eq. 8 with W = I
+# (B_raw = B + V) leaves the hard iron: V = B_raw - Bp, in counts. More poses (add() again,
+# e.g. at opposite headings) average their V: soft iron's error flips sign with the field, so
+# opposite poses cancel most of it.
+#
+# The result is a Calibration of model 4 (hard iron only): offset V, InvW identity, field = the
+# model's |B| in counts, coverage 0 (firmware/accuracy.py tells a quick calibration by that),
+# fit_error QUICK_FIT_ERROR (10 %, no residual exists for one pose): any full 4-, 7- or
+# 10-element fit the app's collector accepts later replaces it.
+#
+# Refusals (CalibrationRejected, .reason):
+#   no_location          no usable field model (set_location first, or its status says why).
+#   blackout_zone        H < 2000 nT (WMM's blackout zone): a heading cannot be known.
+#   no_samples           the magnetometer gave no sample (the app's read failed every time).
+#   offset_out_of_range  |V| on an axis above _MAX_OFFSET_MG (ArduPilot's default offset limit,
+#                        1800 mG) in counts, or outside int16: a wrong heading, a magnet, or a
+#                        board too strongly magnetised for a correction.
+#   field_mismatch       with two poses or more, one pose's V is more than POSE_SPREAD_PCT (10 %)
+#                        of |B| from their mean: a mistyped heading, strong soft iron, or a
+#                        sensor gain that is not what the driver reports. A full calibration is
+#                        needed.
+# Bad arguments (a float heading, a zero sample count) raise TypeError / ValueError naming them.
 from firmware import acceptance
 from firmware.acceptance import REASON_FIELD_MISMATCH, REASON_OFFSET_OUT_OF_RANGE, reject
 from firmware.calibration import Calibration
@@ -63,7 +62,7 @@ _BLACKOUT = "blackout zone"  # firmware.field.STATUS_BLACKOUT (not imported: fie
 
 
 class QuickCal:
-    """Hard iron from poses of known heading; see the module docstring.
+    """Hard iron from poses of known heading; see the module's opening comment.
 
     location: a firmware.location.Location; counts_per_gauss: the magnetometer's; mag_map: the
     app's firmware.axes.AxisMap (chip -> body). .poses: the per-pose V estimates, counts."""
@@ -130,7 +129,7 @@ class QuickCal:
         return tuple(rdiv(sum(p[i] for p in self.poses), k) for i in range(3))
 
     def result(self):
-        """The Calibration (see the module docstring), or CalibrationRejected."""
+        """The Calibration (see the module's opening comment), or CalibrationRejected."""
         if not self.poses:
             reject(REASON_NO_SAMPLES, "no pose added")
         v = self.offset()
@@ -180,15 +179,15 @@ def _attitude(g):
 
 
 def quick_calibrate(app, true_heading_cdeg, refine=False, samples=32):
-    """CompassApp.quick_calibrate: hard iron from this pose and its known true heading
-    (centidegrees, 0..35999, clockwise from true north) with the field model's field: reads
-    `samples` samples (the board held still; tilt from the accelerometer, or level without
-    one), puts the result in force and saves it. refine=True adds this pose to those of the
-    previous calls and averages them (poses at opposite headings cancel most soft-iron
-    error). Returns the Calibration; raises CalibrationRejected (.reason: no_location,
-    blackout_zone, no_samples, offset_out_of_range, field_mismatch) and keeps the
-    calibration in force; TypeError / ValueError for bad arguments. Needs
-    app.set_location() first."""
+    # CompassApp.quick_calibrate: hard iron from this pose and its known true heading
+    # (centidegrees, 0..35999, clockwise from true north) with the field model's field: reads
+    # `samples` samples (the board held still; tilt from the accelerometer, or level without
+    # one), puts the result in force and saves it. refine=True adds this pose to those of the
+    # previous calls and averages them (poses at opposite headings cancel most soft-iron
+    # error). Returns the Calibration; raises CalibrationRejected (.reason: no_location,
+    # blackout_zone, no_samples, offset_out_of_range, field_mismatch) and keeps the
+    # calibration in force; TypeError / ValueError for bad arguments. Needs
+    # app.set_location() first.
     if type(true_heading_cdeg) is not int:
         raise TypeError("true_heading_cdeg=%r: expected an int in hundredths of a degree "
                         "(e.g. 9000 for east)" % (true_heading_cdeg,))

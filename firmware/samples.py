@@ -1,35 +1,33 @@
-"""Sample selection for calibration: a bounded buffer of raw int16 samples, kept apart by distance.
-
-    buf = SampleBuffer(capacity=300, separation=separation_for(6000, 300))
-    if buf.offer(x, y, z) == REPLACED: ...  # buf.evicted holds the sample that left
-    pct = buf.coverage(vx, vy, vz)          # % of 100 equal-area sphere regions seen from V
-
-Why distance (Judd): a threshold on the distance between raw samples is origin-independent, so
-it spreads samples evenly whatever the hard iron; an angle threshold measured from a wrong
-centre bunches samples on one side and excludes the other. NXP's orientation bins need the
-calibrated field to pick a bin; a distance rule needs nothing but the raw counts.
-
-The rule, in raw counts with s = separation:
-- space is cut into cubic cells of side s, and a cell holds at most one sample;
-- a sample is kept only if its own cell is empty and no held sample is closer than s
-  (squared distances, no sqrt). Any sample closer than s lies in one of the 27 cells around
-  the new one, so at most 27 hash look-ups decide, whatever the fill (neighbour cells whose
-  nearest point is s or more away are skipped: 19.6 of the 26 remain on average): every
-  pair of held samples is at least s apart, and no scan of the buffer is ever needed.
-- when the buffer is full a kept sample overwrites the oldest one (FIFO), so a background
-  calibration follows a change of hard iron; the evicted sample is copied to `.evicted` so a
-  caller keeping exact sums can subtract its terms.
-
-Slot order: held samples always occupy slots 0 .. count-1 (`data[3*i:3*i+3]` is slot i), so
-sums over `data[:3*count]` need no ordering. Age order, oldest first, is
-`slot_by_age(0) .. slot_by_age(count - 1)`; `next_slot` is where the next kept sample goes
-(the oldest slot once the buffer is full).
-
-Cells map to slots through an open-addressing hash table (linear probing, load <= 1/3,
-backward-shift deletion, no tombstones) in preallocated arrays. offer() allocates nothing
-on MicroPython and every intermediate stays below 2**30 for int16 input and separation
-<= MAX_SEPARATION (tests/test_samples.py, tests/scenarios/samples_alloc.py).
-"""
+"""Sample selection for calibration: a bounded buffer of raw int16 samples, kept apart by distance."""
+#     buf = SampleBuffer(capacity=300, separation=separation_for(6000, 300))
+#     if buf.offer(x, y, z) == REPLACED: ...  # buf.evicted holds the sample that left
+#     pct = buf.coverage(vx, vy, vz)          # % of 100 equal-area sphere regions seen from V
+#
+# Why distance (Judd): a threshold on the distance between raw samples is origin-independent, so
+# it spreads samples evenly whatever the hard iron; an angle threshold measured from a wrong
+# centre bunches samples on one side and excludes the other. NXP's orientation bins need the
+# calibrated field to pick a bin; a distance rule needs nothing but the raw counts.
+#
+# The rule, in raw counts with s = separation:
+# - space is cut into cubic cells of side s, and a cell holds at most one sample;
+# - a sample is kept only if its own cell is empty and no held sample is closer than s
+#   (squared distances, no sqrt). Any sample closer than s lies in one of the 27 cells around
+#   the new one, so at most 27 hash look-ups decide, whatever the fill (neighbour cells whose
+#   nearest point is s or more away are skipped: 19.6 of the 26 remain on average): every
+#   pair of held samples is at least s apart, and no scan of the buffer is ever needed.
+# - when the buffer is full a kept sample overwrites the oldest one (FIFO), so a background
+#   calibration follows a change of hard iron; the evicted sample is copied to `.evicted` so a
+#   caller keeping exact sums can subtract its terms.
+#
+# Slot order: held samples always occupy slots 0 .. count-1 (`data[3*i:3*i+3]` is slot i), so
+# sums over `data[:3*count]` need no ordering. Age order, oldest first, is
+# `slot_by_age(0) .. slot_by_age(count - 1)`; `next_slot` is where the next kept sample goes
+# (the oldest slot once the buffer is full).
+#
+# Cells map to slots through an open-addressing hash table (linear probing, load <= 1/3,
+# backward-shift deletion, no tombstones) in preallocated arrays. offer() allocates nothing
+# on MicroPython and every intermediate stays below 2**30 for int16 input and separation
+# <= MAX_SEPARATION (tests/test_samples.py, tests/scenarios/samples_alloc.py).
 from array import array
 
 from firmware.fixedpoint import isqrt
@@ -104,12 +102,11 @@ def _hash(c, j):
 def separation_for(radius_counts, samples):
     """Separation (counts) at which a whole sphere of `radius_counts` saturates at about
     `samples` held samples.
-
-    radius_counts is the geomagnetic field in counts (50 uT = 6000 counts on a QMC5883L at
-    +-2 G, 545 on an HMC5883L at 1090 counts/G). Ask for fewer samples than the capacity
-    (about 3/4): if a whole sphere needs more than the capacity, the FIFO evicts the start of
-    a slow rotation before its end arrives and coverage never completes.
     """
+    # radius_counts is the geomagnetic field in counts (50 uT = 6000 counts on a QMC5883L at
+    # +-2 G, 545 on an HMC5883L at 1090 counts/G). Ask for fewer samples than the capacity
+    # (about 3/4): if a whole sphere needs more than the capacity, the FIFO evicts the start of
+    # a slow rotation before its end arrives and coverage never completes.
     if radius_counts <= 0 or samples <= 0:
         raise ValueError("separation_for(%d, %d): both must be > 0" % (radius_counts, samples))
     s = isqrt(radius_counts * radius_counts * _FILL_Q8 // (256 * samples))
@@ -119,12 +116,10 @@ def separation_for(radius_counts, samples):
 
 
 def region(dx, dy, dz):
-    """Equal-area sphere region 0 .. N_REGIONS-1 of the direction (dx, dy, dz), or -1 for zero.
-
-    Regions 0 .. 49 have dz >= 0: 0 is the cap around +z, then bands of 6, 11, 15 and 17
-    longitude sectors down to the equator (sector 0 starts at +x and runs towards +y);
-    50 .. 99 mirror them for dz < 0.
-    """
+    """Equal-area sphere region 0 .. N_REGIONS-1 of the direction (dx, dy, dz), or -1 for zero."""
+    # Regions 0 .. 49 have dz >= 0: 0 is the cap around +z, then bands of 6, 11, 15 and 17
+    # longitude sectors down to the equator (sector 0 starts at +x and runs towards +y);
+    # 50 .. 99 mirror them for dz < 0.
     ax = -dx if dx < 0 else dx
     ay = -dy if dy < 0 else dy
     az = -dz if dz < 0 else dz
@@ -207,13 +202,11 @@ def use_kernels(kn=None):
 
 
 class SampleBuffer:
-    """Bounded, distance-separated buffer of raw int16 magnetometer samples (see module doc).
-
-    Attributes: data (array 'h', 3*capacity; slots 0..count-1 hold samples), count, capacity,
-    separation (counts), evicted (array 'h', 3: the sample the last REPLACED pushed out),
-    next_slot, last_cells / last_probes (hash cells looked up / table entries read by the
-    last offer), region_counts (bytearray, per region, filled by coverage()), gaps_x100.
-    """
+    """Bounded, distance-separated buffer of raw int16 magnetometer samples (see module doc)."""
+    # Attributes: data (array 'h', 3*capacity; slots 0..count-1 hold samples), count, capacity,
+    # separation (counts), evicted (array 'h', 3: the sample the last REPLACED pushed out),
+    # next_slot, last_cells / last_probes (hash cells looked up / table entries read by the
+    # last offer), region_counts (bytearray, per region, filled by coverage()), gaps_x100.
 
     def __init__(self, capacity=300, separation=50):
         if not 1 <= capacity <= MAX_CAPACITY:
@@ -280,9 +273,9 @@ class SampleBuffer:
         """Offer one raw sample (int16 counts); returns REJECTED, KEPT or REPLACED, or NOT_INT
         (nothing changed) when x, y or z is not an int within 32 bits. ValueError for an int
         outside int16.
-
-        As named steps, each small enough that its frame stays on the C stack (11 words,
-        MicroPython's py/objfun.c): nothing is allocated for a rejected sample."""
+        """
+        # As named steps, each small enough that its frame stays on the C stack (11 words,
+        # MicroPython's py/objfun.c): nothing is allocated for a rejected sample.
         try:  # the int array refuses a float or a str (CPython: also an int beyond 32 bits)
             self._q[0] = x
             self._q[1] = y
@@ -453,12 +446,10 @@ class SampleBuffer:
                 i = j
 
     def set_separation(self, d):
-        """Change the separation and rebuild the hash from the held samples (rare; allocates).
-
-        Samples that break the new rule are dropped, the newer of a conflicting pair kept;
-        the survivors stay in age order. Returns how many were dropped. The caller must
-        recompute any sums over the held samples afterwards.
-        """
+        """Change the separation and rebuild the hash from the held samples (rare; allocates)."""
+        # Samples that break the new rule are dropped, the newer of a conflicting pair kept;
+        # the survivors stay in age order. Returns how many were dropped. The caller must
+        # recompute any sums over the held samples afterwards.
         self._check_separation(d)
         old = [self.data[3 * s:3 * s + 3] for s in
                [self.slot_by_age(k) for k in range(self.count)]]
@@ -477,10 +468,9 @@ class SampleBuffer:
     def coverage(self, cx, cy, cz):
         """Percent (0..100) of the N_REGIONS equal-area regions holding a sample, seen from
         the centre (cx, cy, cz) in counts (the current hard-iron estimate V).
-
-        Also fills region_counts (saturating at 255) and gaps_x100, MotionCal's gaps figure
-        times 100 (0 .. 10000; MotionCal calls gaps < 15, i.e. gaps_x100 < 1500, good).
         """
+        # Also fills region_counts (saturating at 255) and gaps_x100, MotionCal's gaps figure
+        # times 100 (0 .. 10000; MotionCal calls gaps < 15, i.e. gaps_x100 < 1500, good).
         counts = self.region_counts
         for i in range(N_REGIONS):
             counts[i] = 0
@@ -514,12 +504,12 @@ class SampleBuffer:
         return occupied
 
     def coverage_steps(self, cx, cy, cz, out, chunk=COVERAGE_CHUNK):
-        """coverage() as a generator for a time-sliced solve: each next() clears or tallies
-        at most 4 * chunk regions or classifies at most `chunk` held samples (region() is
-        the cost: ~40 bytecode lines a sample). Sets out[0] to the percent coverage() would
-        return, with region_counts and gaps_x100 filled the same way. Samples offered
-        meanwhile may land in the slots not yet visited: the count covers the buffer as each
-        slot is reached (as coverage() would at that moment)."""
+        # coverage() as a generator for a time-sliced solve: each next() clears or tallies
+        # at most 4 * chunk regions or classifies at most `chunk` held samples (region() is
+        # the cost: ~40 bytecode lines a sample). Sets out[0] to the percent coverage() would
+        # return, with region_counts and gaps_x100 filled the same way. Samples offered
+        # meanwhile may land in the slots not yet visited: the count covers the buffer as each
+        # slot is reached (as coverage() would at that moment).
         if chunk < 1:
             raise ValueError("coverage chunk %d < 1" % chunk)
         counts = self.region_counts

@@ -1,27 +1,26 @@
 """The calibration session of a CompassApp: collect, solve in slices, accept, judge against the
 history, save; then leave. Imported by CompassApp.calibrate(), dropped when the session ends.
-
-    app.calibrate()            # starts one (imports this module and the calibration machinery)
-    app.collector              # firmware.calibrator.Collector while it runs, None after
-
-A session ends once a calibration good enough to boot without collecting
-(CompassApp._good_enough: the configured model, fit error within 5 %) is in force and saved,
-nothing is pending, the app does not relearn, and the samples have stopped bringing new
-directions: a solve has run on every sample kept and none came for _DONE_QUIET_US (the
-user has stopped turning the board, or the buffer holds what the motion offers). Until
-then every solve may replace the fit with a better one. app.learn=True keeps it running. At the end
-the collector, the history and the modules of the calibration machinery are dropped
-(firmware.compat.drop), so the board's heap returns to what showing a heading needs
-(docs/design.md, memory; docs/benchmarks.md measures it).
-
-The steps (CompassApp._step calls solve() when a solve is running or due):
-  solve    a few slices of the running solve (firmware.calibrator.Collector.slice): each at
-           most solve.SLICE_OPS long-int operations; a step runs period / 4 ms of them.
-  accept   a calibration the Calibrator accepted (sour grapes: it beat the current one) is
-           judged against the history of accepted calibrations (firmware/history.py): inside
-           its limits it is put in force and saved; outside it is kept as .pending ("hardware
-           changed?") and not put in force until accept_change().
 """
+#     app.calibrate()            # starts one (imports this module and the calibration machinery)
+#     app.collector              # firmware.calibrator.Collector while it runs, None after
+#
+# A session ends once a calibration good enough to boot without collecting
+# (CompassApp._good_enough: the configured model, fit error within 5 %) is in force and saved,
+# nothing is pending, the app does not relearn, and the samples have stopped bringing new
+# directions: a solve has run on every sample kept and none came for _DONE_QUIET_US (the
+# user has stopped turning the board, or the buffer holds what the motion offers). Until
+# then every solve may replace the fit with a better one. app.learn=True keeps it running. At the end
+# the collector, the history and the modules of the calibration machinery are dropped
+# (firmware.compat.drop), so the board's heap returns to what showing a heading needs
+# (docs/design.md, memory; docs/benchmarks.md measures it).
+#
+# The steps (CompassApp._step calls solve() when a solve is running or due):
+#   solve    a few slices of the running solve (firmware.calibrator.Collector.slice): each at
+#            most solve.SLICE_OPS long-int operations; a step runs period / 4 ms of them.
+#   accept   a calibration the Calibrator accepted (sour grapes: it beat the current one) is
+#            judged against the history of accepted calibrations (firmware/history.py): inside
+#            its limits it is put in force and saved; outside it is kept as .pending ("hardware
+#            changed?") and not put in force until accept_change().
 from firmware.compat import const, drop, kernels
 
 _DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
@@ -114,7 +113,7 @@ def accept(app, cal):
 
 
 def end_if_done(app):
-    """End the session when its job is done (see the module docstring): the collector, the
+    """End the session when its job is done (see the module's opening comment): the collector, the
     history and the calibration machinery leave. True when it ended."""
     c = app.collector
     # calibration mode ends with its fit in force even when the save failed: the heading line
@@ -135,14 +134,14 @@ def end_if_done(app):
 
 
 def mount_check(app):
-    """The mounting check (firmware/mountcheck.py: loaded for it, dropped after) of the pairs
-    kept against the calibration in force, until one gives an answer (ok or wrong) that is
-    kept for the next boot (firmware/mountnote.py save): app.mounting, and app._axes_status
-    the status while it names another MAG_AXES. Then the session's pairs go: a board short of
-    heap loads the check's code as seldom as that, and the next session checks afresh.
-    mountnote's code is loaded for a wrong setting, and for a right one only when a verdict
-    file is there to remove, by a string as firmware/persist.py load loads it: no name is
-    interned for it otherwise (a function of its own would intern its name too)."""
+    # The mounting check (firmware/mountcheck.py: loaded for it, dropped after) of the pairs
+    # kept against the calibration in force, until one gives an answer (ok or wrong) that is
+    # kept for the next boot (firmware/mountnote.py save): app.mounting, and app._axes_status
+    # the status while it names another MAG_AXES. Then the session's pairs go: a board short of
+    # heap loads the check's code as seldom as that, and the next session checks afresh.
+    # mountnote's code is loaded for a wrong setting, and for a right one only when a verdict
+    # file is there to remove, by a string as firmware/persist.py load loads it: no name is
+    # interned for it otherwise (a function of its own would intern its name too).
     c = app.collector
     p = c.pairs
     if p is None or app.calibration.model is None:
