@@ -29,12 +29,12 @@ BUDGETS = {
     "gyro_extra_mpy": 8 * KB,
     # boards/main.py itself over the replayed figure-8 (benchmarks/boardrun.py, the status
     # line printed every 0.5 s): the smallest heap from which every larger heap of the sweep
-    # completes (tests/test_heap_sweep.py, 32 KB steps; in 8 KB steps 144, 232, 104 and 120 KB
-    # when set), for a first calibration and for a
-    # board booting on a stored one, from .mpy files and from .py sources
+    # completes (tests/test_heap_sweep.py, 32 KB steps), for a first calibration and for a
+    # board booting on a stored one, from .mpy files and from .py sources. In 4 KB steps when
+    # set: 144, 200, 92 and 104 KB (make bench writes the figures of its run to the README)
     "board_calibrate_mpy": 160 * KB,
-    "board_calibrate_py": 256 * KB,
-    "board_heading_mpy": 128 * KB,
+    "board_calibrate_py": 224 * KB,
+    "board_heading_mpy": 96 * KB,
     "board_heading_py": 128 * KB,
     # bytes allocated per sample once the board shows headings
     "bytes_per_sample": 0,
