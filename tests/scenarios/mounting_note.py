@@ -10,43 +10,7 @@ from firmware.calibration import Calibration
 from firmware.axes import AxisMap
 from firmware.slots import crc32
 from firmware.store import CalStore
-
-
-class Fs:
-    def __init__(self):
-        self.files = {}
-
-    def open(self, path, mode):
-        if "w" in mode:
-            self.files[path] = b""
-            return File(self, path)
-        if path not in self.files:
-            raise OSError(2, "ENOENT")
-        return File(None, path, self.files[path])
-
-    def remove(self, path):
-        if path not in self.files:
-            raise OSError(2, "ENOENT")
-        del self.files[path]
-
-
-class File:
-    def __init__(self, fs, path, data=b""):
-        self.fs = fs
-        self.path = path
-        self.data = data
-
-    def read(self, n=-1):
-        d = self.data if n < 0 else self.data[:n]
-        self.data = self.data[len(d):]
-        return d
-
-    def write(self, b):
-        self.fs.files[self.path] += bytes(b)
-        return len(b)
-
-    def close(self):
-        pass
+from host_sim.cli.memfs import MemFs
 
 
 class Mag:
@@ -72,7 +36,7 @@ def recall(fs, mag_axes, accel_axes="-x,y,z"):
     return [a.mounting and list(a.mounting), a._axes_status]
 
 
-fs = Fs()
+fs = MemFs()
 path = "/ecompass_mounting.txt"
 a = App(CalStore("/", fs=fs), "x,-y,-z")
 a.mounting = ("wrong", "y,x,-z")
