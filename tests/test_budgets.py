@@ -105,10 +105,8 @@ def test_a_first_calibration_completes_within_its_smallest_heap_budget(build, ki
     net = BUDGETS["min_heap_calibrate_" + kind]
     heap = net + b["session_bytes"] + (b["rom_bytes"] if kind == "romfs" else 0)
     extra = [b["rom"], "--romfs"] if kind == "romfs" else []
-    r = bench.run_script("profiles", bench.MICROPYTHON_32,
-                         [b["session"], os.path.join(b["dir"], "st-" + kind), "calibrate"] +
-                         extra + ["--min"], extra_path=b["mpy"] if kind == "mpy" else None,
-                         cwd=b["dir"], heap="%dk" % (heap // KB))
+    with bench.ProfileRun(b["mpy"] if kind == "mpy" else None, extra) as pr:
+        r = pr.run(b["session"], "calibrate", heap="%dk" % (heap // KB), flags=["--min"])
     assert r.get("complete") is True, r
 
 

@@ -485,9 +485,51 @@ def memory32(session, build, smoke, log=print):
             write_session(gyro, smoke, mpu_bytes=14)
         out["profiles_" + kind] = profiles(session, path, extra, gyro_session=gyro)
         log("  min heap   x86-32 (%s)" % kind)
-        out["min_heap_" + kind] = min_heap(session, path, build if path or extra else ROOT,
-                                           smoke, extra)
+        out["min_heap_" + kind] = min_heap(session, path, smoke, extra)
     return out
+
+
+class ProfileRun:
+    """A directory of its own for benchmarks/profiles.py runs, holding all they read, named
+    relatively as on a board ("firmware/app.mpy", "store", "session.bin"): every module keeps
+    its file name on the heap, so with absolute names the figures would depend on where the
+    checkout and the temporary files are. `extra_path`: a directory holding the firmware
+    package built (.mpy), or None for the .py sources (or a ROMFS image in `extra`).
+
+        with ProfileRun(extra_path, extra) as pr:
+            pr.run(session, "calibrate", heap="140k", flags=["--min"])"""
+
+    def __init__(self, extra_path, extra=()):
+        self.extra_path = extra_path
+        self.extra = list(extra)
+
+    def __enter__(self):
+        import shutil
+        import tempfile
+        self._tmp = tempfile.TemporaryDirectory()
+        self.dir = d = self._tmp.name
+        if self.extra_path:  # the firmware as the run's own ./firmware
+            shutil.copytree(os.path.join(self.extra_path, "firmware"), os.path.join(d, "firmware"))
+        elif not self.extra:  # .py sources
+            shutil.copytree(os.path.join(ROOT, "firmware"), os.path.join(d, "firmware"),
+                            ignore=shutil.ignore_patterns("__pycache__"))
+        return self
+
+    def __exit__(self, *exc):
+        self._tmp.cleanup()
+
+    def run(self, session, profile, heap=None, flags=(), fresh_store=False, timeout=600):
+        """profiles.py PROFILE over a copy of `session`; the store ("store") is kept between
+        runs (a reboot finds what the last one saved) unless `fresh_store`."""
+        import shutil
+        store = os.path.join(self.dir, "store")
+        if fresh_store:
+            shutil.rmtree(store, ignore_errors=True)
+        os.makedirs(store, exist_ok=True)
+        shutil.copy(session, os.path.join(self.dir, "session.bin"))
+        return run_script("profiles", MICROPYTHON_32,
+                          ["session.bin", "store", profile] + self.extra + list(flags),
+                          cwd=self.dir, heap=heap, staged=True, timeout=timeout)
 
 
 def profiles(session, extra_path, extra=(), heap=None, gyro_session=None):
@@ -495,30 +537,14 @@ def profiles(session, extra_path, extra=(), heap=None, gyro_session=None):
     'calibrate' (an empty store: a first calibration, then headings) and then 'heading' (a
     reboot on the record it saved), and with gyro_session (its MPU6050 records with the
     gyroscope, write_session(mpu_bytes=14)) 'gyro': the same reboot with use_gyro().
-    {'calibrate': {...}, 'heading': {...}, 'gyro': {...}}. `extra_path`: a directory holding
-    the firmware package built (.mpy), or None for the .py sources (or a ROMFS image in
-    `extra`)."""
-    import shutil
-    import tempfile
-    # Each run has a directory of its own holding all it reads, named relatively, as on a
-    # board ("firmware/app.mpy", "store"): every module keeps its file name on the heap, so
-    # the figures would otherwise depend on where the checkout and the temporary files are.
+    {'calibrate': {...}, 'heading': {...}, 'gyro': {...}} (ProfileRun says where it runs)."""
     out = {}
-    with tempfile.TemporaryDirectory() as run_in:
-        if extra_path:  # the firmware as the run's own ./firmware
-            shutil.copytree(os.path.join(extra_path, "firmware"), os.path.join(run_in, "firmware"))
-        elif not extra:  # .py sources
-            shutil.copytree(os.path.join(ROOT, "firmware"), os.path.join(run_in, "firmware"),
-                            ignore=shutil.ignore_patterns("__pycache__"))
-        os.mkdir(os.path.join(run_in, "store"))
+    with ProfileRun(extra_path, extra) as pr:
         for profile in ("calibrate", "heading", "gyro"):
             if profile == "gyro" and gyro_session is None:
                 continue
-            s = gyro_session if profile == "gyro" else session
-            shutil.copy(s, os.path.join(run_in, "session.bin"))
-            out[profile] = run_script("profiles", MICROPYTHON_32,
-                                      ["session.bin", "store", profile] + list(extra),
-                                      cwd=run_in, heap=heap, staged=True)
+            out[profile] = pr.run(gyro_session if profile == "gyro" else session, profile,
+                                  heap=heap)
     return out
 
 
@@ -614,31 +640,29 @@ def romfs_image(mpy_pkg, out):
             raise BenchError("mpremote romfs build: %s" % (r.stderr or r.stdout)[-300:])
 
 
-def min_heap(session, extra_path, cwd, smoke, extra=(), lo_kb=16, hi_kb=1024):
+def min_heap(session, extra_path, smoke, extra=(), lo_kb=16, hi_kb=1024):
     """The smallest -X heapsize (KB, 1 KB steps) in which profiles.py calibrate --min
     completes: a board boots as boards/main.py does (an empty store), calibrates (10
     elements accepted and saved) and shows 2000 headings. Bisection; the recorded session's
     bytes are in that heap too (a board reads a sensor, not a recording: subtract
     out["session_bytes"])."""
-    import tempfile
+    with ProfileRun(extra_path, extra) as pr:
 
-    def fits(kb):
-        with tempfile.TemporaryDirectory() as store:  # an empty store: a first calibration
-            r = run_script("profiles", MICROPYTHON_32, [session, store, "calibrate"] +
-                           list(extra) + ["--min"], extra_path=extra_path, cwd=cwd,
-                           heap="%dk" % kb, timeout=300)
-        return "error" not in r and r.get("complete") is True
-    if not fits(hi_kb):
-        return {"error": "does not complete in %d KB" % hi_kb}
-    if smoke:
-        return {"kb": None, "fits_%d_kb" % hi_kb: True}
-    while hi_kb - lo_kb > 1:
-        mid = (lo_kb + hi_kb) // 2
-        if fits(mid):
-            hi_kb = mid
-        else:
-            lo_kb = mid
-    return {"kb": hi_kb}
+        def fits(kb):  # an empty store: a first calibration
+            r = pr.run(session, "calibrate", heap="%dk" % kb, flags=["--min"],
+                       fresh_store=True, timeout=300)
+            return "error" not in r and r.get("complete") is True
+        if not fits(hi_kb):
+            return {"error": "does not complete in %d KB" % hi_kb}
+        if smoke:
+            return {"kb": None, "fits_%d_kb" % hi_kb: True}
+        while hi_kb - lo_kb > 1:
+            mid = (lo_kb + hi_kb) // 2
+            if fits(mid):
+                hi_kb = mid
+            else:
+                lo_kb = mid
+        return {"kb": hi_kb}
 
 
 # ---- derived figures ------------------------------------------------------------------------
