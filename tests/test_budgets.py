@@ -129,3 +129,21 @@ def test_the_webassembly_port_allocates_within_budget_for_boot_and_headings(buil
     assert out["calibrate"]["complete"] and h["complete"]
     assert h["after"] <= WASM_HEADING_ALLOCATED, h["after"]
     assert h["after"] - h["boot"] <= 64  # 2000 headings: nothing (a collection is not run)
+
+
+# importing the app from its sources (a mip install compiles on the board): the parser holds a
+# module's docstrings until it is compiled (docs/design.md, memory). 100 KB with the docstrings
+# firmware/app.py had; 75 KB once they were comments.
+APP_FROM_SOURCE_KB = 80
+
+
+def test_the_app_compiles_from_its_sources_in_a_small_heap(tmp_path):
+    _x86({})
+    import shutil
+    shutil.copytree(os.path.join(mp.ROOT, "firmware"), str(tmp_path / "firmware"),
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    p = subprocess.run([mp.X86_32, "-X", "heapsize=%dk" % APP_FROM_SOURCE_KB, "-c",
+                        "import firmware.app; print('ok')"], cwd=str(tmp_path),
+                       env=dict(os.environ, MICROPYPATH="."), capture_output=True, text=True,
+                       timeout=120)
+    assert p.stdout.strip() == "ok", p.stderr[-400:]
