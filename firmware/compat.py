@@ -67,8 +67,10 @@ def _no_sleep(us):
 
 
 def _busy_sleep(us):
+    # the clock counts whole microseconds: wait until more than `us` have ticked, so the
+    # time slept is at least `us` wherever within its first tick the wait began
     t0 = ticks_us()
-    while ticks_diff(ticks_us(), t0) < us:
+    while ticks_diff(ticks_us(), t0) <= us:
         pass
 
 
