@@ -96,6 +96,9 @@ def accept(app, cal):
         c.last_reason = e.reason
         c.last_detail = e.detail
         return
+    finally:
+        if app.mode != "heading":
+            _phase_done(app)  # the gate loaded the solver's code: the history and save do not hold it
     jump = history_check(app, cal)
     if jump is None:
         app._use(cal)

@@ -19,7 +19,6 @@ half second (boards/main.py), imported at the first report.
 #                docs/calibration.md explains every field.
 # line(app)      the same line as a str.
 from firmware.compat import const, free_bytes
-from firmware.trig import kang_decideg
 
 _QUIET_HINT_US = const(3000000)  # no new direction for 3 s before "planar"
 _STATUS_INTERFERENCE = "interference"  # firmware.app.STATUS_INTERFERENCE
@@ -109,7 +108,9 @@ def _fixed(v, div):
 
 
 def _deg(angle_kang, signed=False):
-    _fixed(kang_decideg(angle_kang, signed), 10)
+    # the heading part's: calibration mode's line never loads trig and its tables
+    import firmware.trig as trig
+    _fixed(trig.kang_decideg(angle_kang, signed), 10)
 
 
 def _pct(x100):
