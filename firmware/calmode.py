@@ -26,7 +26,7 @@ SESSION_ROOM = const(128 * 1024)
 # the smallest heap from which a first calibration completes at every heap (.mpy, x86-32
 # build, boards/main.py with its status line; docs/benchmarks.md): what the status line says
 # a board needs when even this mode fails (firmware/status.py holds the same figure)
-MODE_NEED_KB = const(144)
+MODE_NEED_KB = const(140)
 RETRY_US = const(60000000)  # a session that found no room is tried again after 60 s
 MODE_HEADING = "heading"
 MODE_CALIBRATING = "calibrating"

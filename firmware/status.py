@@ -23,7 +23,7 @@ from firmware.compat import const, free_bytes
 _QUIET_HINT_US = const(3000000)  # no new direction for 3 s before "planar"
 _STATUS_INTERFERENCE = "interference"  # firmware.app.STATUS_INTERFERENCE
 LINE_MAX = const(400)  # bytes: the longest line (a jump, the location, a hint) fits
-_MODE_NEED_KB = const(144)  # firmware.calmode.MODE_NEED_KB (not imported: it is dropped)
+_MODE_NEED_KB = const(140)  # firmware.calmode.MODE_NEED_KB (not imported: it is dropped)
 _buf = bytearray(LINE_MAX)
 _mv = memoryview(_buf)
 _n = 0

@@ -83,3 +83,10 @@ def test_calibration_mode_names_the_same_machinery_as_the_session():
     # loaded firmware/session.py): the two lists stay one
     from firmware import calmode, session
     assert calmode.MACHINERY == session.MACHINERY
+
+
+def test_the_heap_a_first_calibration_needs_is_one_figure():
+    # the status line says what calibration mode measured (firmware/status.py keeps its own
+    # copy: calibration mode's module is dropped when it is not running)
+    from firmware import calmode, status
+    assert calmode.MODE_NEED_KB == status._MODE_NEED_KB
