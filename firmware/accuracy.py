@@ -26,7 +26,7 @@ so an app can ask the user to "move the board in a figure-8" at level <= 1.
 #                            change of |b| or dip, a heading jump, until the field is clean)
 #   0      blackout_zone     the field model says H < 2000 nT here (WMM's blackout zone)
 #   1      minmax            the min/max calibration (hard iron from the extremes, no fit)
-#   1      fit_error_high    fit error above GOOD_FIT_ERROR (5 %, MotionCal's "good" limit);
+#   1      fit_error_high    fit error above _GOOD_FIT_ERROR (5 %, MotionCal's "good" limit);
 #                            not for a quick calibration, whose fit error is a placeholder
 #   1      field_mismatch    the calibration's B is off the field model's |B| here by more than
 #                            firmware.acceptance.FIELD_MATCH_PCT (made elsewhere, wrong range)
@@ -38,12 +38,12 @@ so an app can ask the user to "move the board in a figure-8" at level <= 1.
 #   2      no_tilt           no accelerometer: the heading is right only while the board is level
 #   2      tilt_extreme      pitch beyond 80 deg or dip beyond 75 deg (firmware.compass's flags)
 #   2      caution_zone      the field model says H < 6000 nT here (WMM's caution zone)
-#   2      fit_error_fair    a 7/10 fit with fit error above HIGH_FIT_ERROR (3.5 %)
-#   2      coverage_fair     a 7/10 fit over less than HIGH_COVERAGE (60 %) of the sphere
+#   2      fit_error_fair    a 7/10 fit with fit error above _HIGH_FIT_ERROR (3.5 %)
+#   2      coverage_fair     a 7/10 fit over less than _HIGH_COVERAGE (60 %) of the sphere
 #   3      high              a 7- or 10-element fit within 3.5 % over >= 60 % of the sphere,
 #                            tilt known, no flag up
-# Thresholds: GOOD_FIT_ERROR is MotionCal's 5 %; HIGH_FIT_ERROR NXP's 3.5 % (the fit error at
-# which a higher-order model is trusted over a lower one, firmware.acceptance); HIGH_COVERAGE
+# Thresholds: _GOOD_FIT_ERROR is MotionCal's 5 %; _HIGH_FIT_ERROR NXP's 3.5 % (the fit error at
+# which a higher-order model is trusted over a lower one, firmware.acceptance); _HIGH_COVERAGE
 # 60 % of the 100 sphere regions (a fit over more than half the sphere; full figure-8s reach
 # 80-95 % in the simulator).
 from firmware.compat import const
@@ -54,10 +54,10 @@ MEDIUM = const(2)
 HIGH = const(3)
 NAMES = ("unreliable", "low", "medium", "high")
 
-GOOD_FIT_ERROR = const(500)   # hundredths of a percent: MotionCal's "good" fit error
-HIGH_FIT_ERROR = const(350)   # NXP: a higher-order fit is trusted at <= 3.5 %
+_GOOD_FIT_ERROR = const(500)  # hundredths of a percent: MotionCal's "good" fit error
+_HIGH_FIT_ERROR = const(350)  # NXP: a higher-order fit is trusted at <= 3.5 %
 MIN_COVERAGE = const(35)      # % of sphere regions: below, a fit saw too little of the sphere
-HIGH_COVERAGE = const(60)     # % of sphere regions for "high"
+_HIGH_COVERAGE = const(60)   # % of sphere regions for "high"
 _BLACKOUT = "blackout zone"   # firmware.field's statuses (field is not imported here)
 _CAUTION = "caution zone"
 # The table's conditions as the bits of one small int: the status line asks for the level at
@@ -114,7 +114,7 @@ def _table(model, fit_error, coverage, f):
         return UNRELIABLE, "blackout_zone"
     if model == "minmax":
         return LOW, "minmax"
-    if fit_error > GOOD_FIT_ERROR and not (model == 4 and coverage == 0):
+    if fit_error > _GOOD_FIT_ERROR and not (model == 4 and coverage == 0):
         return LOW, "fit_error_high"
     if f & _F_MISMATCH:
         return LOW, "field_mismatch"
@@ -130,9 +130,9 @@ def _table(model, fit_error, coverage, f):
         return MEDIUM, "tilt_extreme"
     if f & _F_CAUTION:
         return MEDIUM, "caution_zone"
-    if fit_error > HIGH_FIT_ERROR:
+    if fit_error > _HIGH_FIT_ERROR:
         return MEDIUM, "fit_error_fair"
-    if coverage < HIGH_COVERAGE:
+    if coverage < _HIGH_COVERAGE:
         return MEDIUM, "coverage_fair"
     return HIGH, "high"
 

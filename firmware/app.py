@@ -125,8 +125,8 @@ STATUS_GYRO_HELD = "gyro held"        # use_gyro(): the field is not used (inter
 
 
 SOLVE_EVERY = const(25)       # kept samples between solves: ~1/9 of a full sphere (225 held)
-REINIT_AFTER = const(5)       # failed reads in a row before the drivers are re-initialised
-_REINIT_MAX_SHIFT = const(4)  # failed re-inits back off to every 2**4 x REINIT_AFTER reads
+_REINIT_AFTER = const(5)     # failed reads in a row before the drivers are re-initialised
+_REINIT_MAX_SHIFT = const(4)  # failed re-inits back off to every 2**4 x _REINIT_AFTER reads
 _STALE_US = const(30000000)   # 30 s of interference: the calibration no longer fits the board
 _STALE_AGE_S = const(1200000)  # age that makes any fit error "worse" (> 16 doublings)
 _GOOD_FIT_ERROR = const(500)  # 5 %: a stored fit this good needs no collecting, and a
@@ -146,7 +146,7 @@ _CAL_RETRY_US = const(60000000)  # a session that found no room: again in 60 s
 _GAP_CAP_US = const(0x10000000)  # the time since the last read stops counting at 268 s
 _ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
 _ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
-REPORT_EVERY = const(25)      # run(): steps between reports (0.5 s at 50 Hz)
+_REPORT_EVERY = const(25)    # run(): steps between reports (0.5 s at 50 Hz)
 
 
 _READ_ERRORS = (OSError, SensorOverflow)  # a module constant: a literal tuple is built per call
@@ -235,7 +235,7 @@ class CompassApp:
     def __init__(self, i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z",
                  model=10, declination_cdeg=0, store=None, delay_us=None, ticks_us=None,
                  capacity=None, solve_every=SOLVE_EVERY, fallback=True,
-                 reinit_after=REINIT_AFTER, mag_options=None, learn=None, fast=None):
+                 reinit_after=_REINIT_AFTER, mag_options=None, learn=None, fast=None):
         self._guard = _ReadGuard()
         self._step_guard = _StepGuard()
         self.heading_kang = -1
@@ -906,7 +906,7 @@ class CompassApp:
         from firmware.status import progress
         return progress(self)
 
-    def run(self, n=None, report=None, every=REPORT_EVERY, every_us=None):
+    def run(self, n=None, report=None, every=_REPORT_EVERY, every_us=None):
         """step() n times (None: forever); report(app) every `every` steps, or every
         `every_us` microseconds of the app's clock. Returns the steps with a heading."""
         good = 0

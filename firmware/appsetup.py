@@ -12,7 +12,7 @@ from firmware.health import FieldWatch, Health
 from firmware.trig import cdeg_to_kang
 
 DEFAULT_CAPACITY = const(300)  # samples held while collecting (firmware.calibrator's default)
-CONFIG_EVERY = const(1)       # samples between configuration read-backs (docs/faults.md)
+_CONFIG_EVERY = const(1)     # samples between configuration read-backs (docs/faults.md)
 _EVIDENCE_PERIODS = const(4)  # a step counts as at most 4 sample periods of evidence
 _HMC_OVERFLOW = const(-4096)
 _DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
@@ -59,7 +59,7 @@ def setup(app, i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, s
     app._tilt_bad = 0
     app._since_cfg = 0
     app._cfg_due = True        # the first good sample reads the configuration back
-    app.verify_every = CONFIG_EVERY
+    app.verify_every = _CONFIG_EVERY
     app._accel_wait_us = 0
     app.accel_retries = 0
     app._ok = False

@@ -50,10 +50,11 @@ def enter(app):
         # The status line's names interned now, before the session's: MicroPython never frees
         # a name, and its table of names grows by doubling, in one block (~9 KB on a 32-bit
         # port past 1260 names). Interned first, at most a small growth happens here; interned
-        # once the session has fragmented the heap, the status line could not load again.
-        # Its accuracy part (not shown in this mode) is interned by leave(), once the
-        # session's code is gone: a first calibration's session then stays within 1260.
+        # once the session has fragmented the heap, the status line could not load again
+        # (its accuracy part too, though this mode does not show it: left for leave(), its
+        # names made the growth come after the session, and the block then found no room).
         import firmware.status  # noqa: F401
+        import firmware.accuracy  # noqa: F401
     except MemoryError:
         pass  # (the status line says what it cannot do, and tries at each report)
     app.mode = MODE_CALIBRATING
@@ -88,10 +89,6 @@ def enter(app):
 def leave(app):
     """The session is over (its machinery dropped): the heading line again."""
     free_bytes()
-    try:  # the accuracy part's names, while the session's heap is free (see enter())
-        import firmware.accuracy  # noqa: F401
-    except MemoryError:
-        pass  # (the status line tries again at each report)
     from firmware import appsetup, compat
     compat.FAST = app._fast_was
     app.mode = MODE_HEADING

@@ -9,9 +9,9 @@
 # per-sample path may call it; larger n (the solvers) take the Newton branch on long ints.
 from firmware.compat import const
 
-INT16_MIN = const(-32768)
-INT16_MAX = const(32767)
-SMALL_INT_LIMIT = const(0x40000000)  # 2**30: MicroPython's small-int bound on 32-bit ports
+_INT16_MIN = const(-32768)
+_INT16_MAX = const(32767)
+_SMALL_INT_LIMIT = const(0x40000000)  # 2**30: MicroPython's small-int bound on 32-bit ports
 
 
 def sat16(v):

@@ -34,7 +34,7 @@
 #   field            B, counts                          the same
 #   soft_iron_xx/yy/zz  InvW's diagonal, Q15            7 or 10 elements vs the same model
 #   fit_error        0.01 %, too high only               the same model
-# With MIN_STATS reference values or more, the limits are mean +- max(K_SIGMA sigma, floor);
+# With MIN_STATS reference values or more, the limits are mean +- max(_K_SIGMA sigma, floor);
 # with fewer, mean +- a fixed wide half-width. Floors and widths of V and B are fractions of
 # the reference field B, so they hold at every range setting. Across models (a 4-element fit
 # against 10-element entries) V and B are widened by the larger fit error of the two, as a
@@ -50,8 +50,8 @@ from firmware.fixedpoint import isqrt
 from firmware.slots import decode_record, encode_record
 
 ENTRIES = const(8)          # entries in the ring
-MIN_STATS = const(4)        # reference values before mean +- K_SIGMA sigma replaces the wide limits
-K_SIGMA = const(4)          # sigmas of half-width: 4 sigma of a normal spread is 1 in 16000
+MIN_STATS = const(4)        # reference values before mean +- _K_SIGMA sigma replaces the wide limits
+_K_SIGMA = const(4)        # sigmas of half-width: 4 sigma of a normal spread is 1 in 16000
 
 FLAG_ACCEPTED = const(1)    # made current
 FLAG_PENDING = const(2)     # a jump kept as evidence, not made current
@@ -70,7 +70,7 @@ _SOFT_FIRST = const(4)
 _FIT_ERROR = const(7)
 
 _TAIL = "<IBBH"             # date, flags, reserved, reserved
-ENTRY_SIZE = const(54)      # PAYLOAD_SIZE + 8
+_ENTRY_SIZE = const(54)    # PAYLOAD_SIZE + 8
 _READ_MAX = const(32 + 54 + 4 + 1)  # one byte more than an entry's record
 
 
@@ -110,7 +110,7 @@ def limits(i, values, field):
         q = 0
         for v in values:
             q += (v - mean) * (v - mean)
-        half = K_SIGMA * isqrt(q // n)
+        half = _K_SIGMA * isqrt(q // n)
         if half < floor:
             half = floor
     return mean - half, mean + half
@@ -182,7 +182,7 @@ class History:
             count, p = decode_record(data, st.sensor, st.range_code)
         except StoreError:
             return None
-        if len(p) != ENTRY_SIZE or count % self.n != k:
+        if len(p) != _ENTRY_SIZE or count % self.n != k:
             return None
         date, flags, r1, r2 = struct.unpack(_TAIL, p[PAYLOAD_SIZE:])
         if r1 or r2 or not flags or flags & ~(FLAG_ACCEPTED | FLAG_PENDING | FLAG_BASELINE):

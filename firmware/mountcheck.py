@@ -25,15 +25,15 @@ a calibration is accepted and dropped after the check (firmware.compat.drop).
 # misalignment, an accelerometer a few percent off) and large for every wrong one once the
 # board has turned over (tests/test_mounting.py measures both on the simulator). The verdict:
 #   SPREAD    fewer than MIN_BINS bins filled, or a second rotation is nearly as steady (sigma
-#             below UNSTEADY_Q10): the data do not single one out (turn the board over, not
+#             below _UNSTEADY_Q10): the data do not single one out (turn the board over, not
 #             only around)
-#   UNSTEADY  no rotation is steady (sigma above STEADY_Q10): a magnet, a shaking hand, a
+#   UNSTEADY  no rotation is steady (sigma above _STEADY_Q10): a magnet, a shaking hand, a
 #             calibration that does not fit; nothing is said about the axes
 #   OK        the rotation in use is the steady one
 #   WRONG     another rotation is: axes is the MAG_AXES that makes it so, with the ACCEL_AXES
 #             in use
-# A right setting could give WRONG only if its own sigma were >= UNSTEADY_Q10 while another's
-# were <= STEADY_Q10, a factor of two apart.
+# A right setting could give WRONG only if its own sigma were >= _UNSTEADY_Q10 while another's
+# were <= _STEADY_Q10, a factor of two apart.
 # check() returns (verdict, axes: the steadiest mapping's MAG_AXES, sigma: the spread of the
 # setting in use, best: the steadiest one's), the spreads in Q10 (1024 = 1). judge(app) runs
 # it for a CompassApp's calibration session (firmware/session.py mount_check: after each fit
@@ -58,8 +58,8 @@ WRONG = "wrong"
 SPREAD = "spread"
 UNSTEADY = "unsteady"
 
-STEADY_Q10 = const(102)    # sigma <= 0.10 (1024 = 1): 6 deg RMS of dip at 0 deg, 11 at 60
-UNSTEADY_Q10 = const(205)  # sigma >= 0.20: twice that; no right mapping is this unsteady
+_STEADY_Q10 = const(102)  # sigma <= 0.10 (1024 = 1): 6 deg RMS of dip at 0 deg, 11 at 60
+_UNSTEADY_Q10 = const(205)  # sigma >= 0.20: twice that; no right mapping is this unsteady
 _SHIFT_Q10 = const(4)      # Q14 cosine -> Q10: |c| <= 1025, so _sigma stays below 2**30
 _ACC = const(15)           # the work array: unit b 0..2, unit g 3..5, products 6..14, then
 #                            each rotation's sum and sum of squares
@@ -188,9 +188,9 @@ def check(pairs, cal, mag_axes, accel_axes):
             second = s
     if n < MIN_BINS:
         v = SPREAD
-    elif best > STEADY_Q10:
+    elif best > _STEADY_Q10:
         v = UNSTEADY
-    elif second < UNSTEADY_Q10:
+    elif second < _UNSTEADY_Q10:
         v = SPREAD
     elif kb == 0:
         v = OK

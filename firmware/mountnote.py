@@ -45,7 +45,7 @@ from firmware.compat import const
 NAME = "_mounting.txt"    # after the store's prefix (persist.py and session.py hold it too)
 _WRONG = "wrong"          # firmware.mountcheck.WRONG: the only verdict written
 _OK = "ok"                # firmware.mountcheck.OK
-_LINE_MAX = const(80)     # bytes read (persist.py too): a line has at most 59 (a 16-byte
+_LINE_MAX = const(80)   # bytes read (persist.py too): a line has at most 59 (a 16-byte
 #                           KIND, MAG_AXES "-x,-y,-z"); as long or longer is no line
 _STATUS = 'check MAG_AXES: the data say "%s"'  # as firmware.mountcheck.judge says it
 

@@ -32,8 +32,8 @@ REASON_BAD_PAYLOAD = "bad_payload"          # intact, but validate() refused the
 REASON_NO_SLOT = "no_slot"                  # save(): no slot but the current one took it
 
 MAGIC = b"eCAL"
-VERSION = const(1)
-HEADER_LEN = const(32)
+_VERSION = const(1)
+_HEADER_LEN = const(32)
 MAX_PAYLOAD = const(4096)      # bytes; a calibration is about a hundred
 _HEADER = "<4sBBH16sBBHI"      # magic, version, header len, payload len, sensor, range, 0, 0, seq
 _SENSOR_LEN = const(16)
@@ -99,7 +99,7 @@ def encode_record(payload, sensor, range_code, seq):
         raise ValueError("payload of %d bytes exceeds %d" % (len(payload), MAX_PAYLOAD))
     if not 0 <= range_code <= 255:
         raise ValueError("range code %d not in 0..255" % range_code)
-    head = struct.pack(_HEADER, MAGIC, VERSION, HEADER_LEN, len(payload), _sensor_field(sensor),
+    head = struct.pack(_HEADER, MAGIC, _VERSION, _HEADER_LEN, len(payload), _sensor_field(sensor),
                        range_code, 0, 0, seq & 0xFFFFFFFF)
     body = head + bytes(payload)
     return body + struct.pack("<I", crc32(body))
@@ -127,10 +127,10 @@ def decode_record(data, sensor, range_code):
     got = crc32(bytes(data[:total - 4]))
     if got != want:
         raise StoreError(REASON_BAD_CRC, "crc 0x%08x, stored 0x%08x" % (got, want))
-    if data[4] != VERSION or hlen != HEADER_LEN:
+    if data[4] != _VERSION or hlen != _HEADER_LEN:
         raise StoreError(REASON_UNKNOWN_VERSION, "format %d (header %d bytes), this code reads %d"
-                         % (data[4], hlen, VERSION))
-    _, _, _, _, kind, rng, r1, r2, seq = struct.unpack(_HEADER, bytes(data[:HEADER_LEN]))
+                         % (data[4], hlen, _VERSION))
+    _, _, _, _, kind, rng, r1, r2, seq = struct.unpack(_HEADER, bytes(data[:_HEADER_LEN]))
     if r1 or r2:
         raise StoreError(REASON_UNKNOWN_VERSION, "reserved bytes set: %d %d" % (r1, r2))
     if kind != _sensor_field(sensor):
@@ -139,7 +139,7 @@ def decode_record(data, sensor, range_code):
     if rng != range_code:
         raise StoreError(REASON_OTHER_RANGE, "made at range code %d, sensor at %d"
                          % (rng, range_code))
-    return seq, bytes(data[HEADER_LEN:HEADER_LEN + plen])
+    return seq, bytes(data[_HEADER_LEN:_HEADER_LEN + plen])
 
 
 def _newer(a, b):
@@ -167,7 +167,7 @@ def _read(st, path):
         if len(head) < 8 or head[:4] != MAGIC:
             return head  # decode_record says what is wrong from these alone
         total = head[5] + (head[6] | (head[7] << 8)) + 4
-        cap = HEADER_LEN + MAX_PAYLOAD + 5
+        cap = _HEADER_LEN + MAX_PAYLOAD + 5
         return head + f.read((total + 1 if total + 1 < cap else cap) - 8)
     finally:
         f.close()
@@ -185,7 +185,7 @@ def _inspect(st, path):
     except StoreError as e:
         intact = None
         if (e.reason in (REASON_OTHER_SENSOR, REASON_OTHER_RANGE, REASON_UNKNOWN_VERSION)
-                and data[5] >= HEADER_LEN):
+                and data[5] >= _HEADER_LEN):
             intact = struct.unpack("<I", bytes(data[28:32]))[0]
         return None, None, e.reason, intact
     if st.validate is not None:

@@ -726,14 +726,14 @@ def minmax_steps(lo, hi, c, s, out):
     out[0] = (v2, h2, b_q16, fe, wq, one)
 
 
-POWER_ITER = const(24)  # power-iteration steps of cond_steps (see its opening comment)
+_POWER_ITER = const(24)  # power-iteration steps of cond_steps (see its opening comment)
 
 
 def cond_steps(q, out):
     # Generator: out[0] = the eigenvalue ratio of InvW (9 Q15 ints, symmetric positive
     # definite), in hundredths; None if it is not positive definite. Power iteration on InvW
     # and on its adjugate (whose largest eigenvalue is det / the smallest of InvW); each
-    # Rayleigh quotient is a lower bound whose error shrinks as (l2 / l1)**(2 * POWER_ITER)
+    # Rayleigh quotient is a lower bound whose error shrinks as (l2 / l1)**(2 * _POWER_ITER)
     # of the eigenvalue gap. One power step (~25 operations, long ints on a 32-bit board)
     # per next().
     out[0] = None
@@ -755,7 +755,7 @@ def cond_steps(q, out):
 
 
 def power_steps(m, out):
-    # out[0] = Rayleigh quotient (Q16) after POWER_ITER power steps; vectors rescaled by
+    # out[0] = Rayleigh quotient (Q16) after _POWER_ITER power steps; vectors rescaled by
     # shifts; one power step per next()
     out[0] = 0
     # the start: the column of the largest diagonal entry (a fixed vector can be nearly
@@ -769,7 +769,7 @@ def power_steps(m, out):
     sh = bit_length(max(abs(v[0]), abs(v[1]), abs(v[2]))) - 15
     if sh > 0:
         v = [v[0] >> sh, v[1] >> sh, v[2] >> sh]
-    for _ in range(POWER_ITER):
+    for _ in range(_POWER_ITER):
         yield
         u = mat_vec3(m, v)
         a = max(abs(u[0]), abs(u[1]), abs(u[2]))

@@ -6,7 +6,7 @@ half second (boards/main.py), imported at the first report.
 """
 # progress(app)  the calibration's state as a dict (coverage, samples, model, fit error, the
 #                last refusal, counters, status, interference, store and history figures).
-# view(app)      one readable line, written into a buffer this module holds (LINE_MAX bytes):
+# view(app)      one readable line, written into a buffer this module holds (_LINE_MAX bytes):
 #                a memoryview of it, valid until the next call. It allocates nothing but that
 #                view (16 bytes on a 32-bit port, in every state; tests/test_status_line.py
 #                holds it at 64), so a board printing it every half second leaves no garbage
@@ -22,9 +22,9 @@ from firmware.compat import const, free_bytes
 
 _QUIET_HINT_US = const(3000000)  # no new direction for 3 s before "planar"
 _STATUS_INTERFERENCE = "interference"  # firmware.app.STATUS_INTERFERENCE
-LINE_MAX = const(400)  # bytes: the longest line (a jump, the location, a hint) fits
+_LINE_MAX = const(400)  # bytes: the longest line (a jump, the location, a hint) fits
 _MODE_NEED_KB = const(140)  # firmware.calmode.MODE_NEED_KB (not imported: it is dropped)
-_buf = bytearray(LINE_MAX)
+_buf = bytearray(_LINE_MAX)
 _mv = memoryview(_buf)
 _n = 0
 
@@ -54,7 +54,7 @@ def _put(s):
     global _n
     n = _n
     for i in range(len(s)):
-        if n >= LINE_MAX:
+        if n >= _LINE_MAX:
             break
         _buf[n] = ord(s[i])
         n += 1
@@ -71,7 +71,7 @@ def _int(v):
         d *= 10
     n = _n
     while d:
-        if n < LINE_MAX:
+        if n < _LINE_MAX:
             _buf[n] = 48 + v // d
             n += 1
         v %= d

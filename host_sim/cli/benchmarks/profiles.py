@@ -10,7 +10,8 @@ gc.collect(), minus the heap before the first firmware import (the interpreter, 
 and the session bytes). PROFILE:
   calibrate  a board with an empty store: it collects, solves, accepts and saves a 10-element
              calibration ("saved": the live heap then, the session still running; "peak_solving":
-             the largest live heap after a step that ran solver slices); then the
+             the largest live heap after a step that ran solver slices, "peak_mode" and
+             "peak_modules": app.mode and the firmware modules loaded then); then the
              board is put down (it jitters about directions the buffer holds) until the
              session ends ("ended"), then 1000 headings ("after"), and the firmware modules
              still loaded; leaves the record in STOREDIR.
@@ -91,16 +92,20 @@ def main():
         res["gyro_attached"] = live() - base
     if profile == "calibrate":
         peak = 0
+        peak_at = (None, None)
         track = "--min" not in sys.argv
         for _ in range(3 * n):
             clock.now += PERIOD_US
             app.step()
             if track and app.solving:  # the live heap while a solve runs (slow: collects)
                 a = live() - base
-                peak = a if a > peak else peak
+                if a > peak:  # and what the board held then (calibration mode or not)
+                    peak = a
+                    peak_at = (app.mode, firmware_modules())
             if app.calibration.model == 10 and app.stored and not app.solving:
                 break
         res["peak_solving"] = peak
+        res["peak_mode"], res["peak_modules"] = peak_at
         res["saved"] = live() - base
         res["model"] = app.calibration.model
         # the board put down: it jitters about the directions of the first 50 samples, which
