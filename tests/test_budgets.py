@@ -99,6 +99,22 @@ def test_the_calibration_machinery_leaves_when_the_session_ends(profiles_mpy):
     assert c["bytes_per_sample"] == BUDGETS["bytes_per_sample"]
 
 
+def test_calibration_mode_holds_only_the_calibrating_part_at_its_solving_peak(build):
+    # a board with little room (bench.MODE_PROFILE_KB) calibrates in calibration mode: at the
+    # solving peak it holds neither the heading line (compass, fast, trig, the status line's
+    # accuracy part) nor what only boot, a save or the history need, and the peak stays within
+    # its budget (make bench: docs/benchmarks.md, calibration mode)
+    b = _x86(build)
+    r = bench.mode_profile(b["session"], b["mpy"])
+    assert "error" not in r and r["complete"], r
+    assert r["peak_mode"] == "calibrating", r["peak_mode"]
+    held = set(r["peak_modules"])
+    assert not held & {"compass", "fast", "trig", "kang_tables", "accuracy", "detect",
+                       "appsetup", "devinit", "boot", "persist", "slots", "history"}, held
+    assert {"calibrator", "solve", "samples", "accum"} <= held, held
+    assert r["peak_solving"] <= BUDGETS["mode_peak_mpy"], r["peak_solving"]
+
+
 @pytest.mark.parametrize("kind", ["mpy", "romfs"])
 def test_a_first_calibration_completes_within_its_smallest_heap_budget(build, kind):
     b = _x86(build)

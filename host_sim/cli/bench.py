@@ -484,6 +484,10 @@ def memory32(session, build, smoke, log=print):
         if not os.path.exists(gyro):
             write_session(gyro, smoke, mpu_bytes=14)
         out["profiles_" + kind] = profiles(session, path, extra, gyro_session=gyro)
+        if kind != "py":
+            log("  calibration mode x86-32 (%s, %d KB)" % (kind, MODE_PROFILE_KB))
+            out["mode_" + kind] = mode_profile(
+                session, path, extra, out.get("romfs_bytes", 0) if kind == "romfs" else 0)
         log("  min heap   x86-32 (%s)" % kind)
         out["min_heap_" + kind] = min_heap(session, path, smoke, extra)
     return out
@@ -530,6 +534,22 @@ class ProfileRun:
         return run_script("profiles", MICROPYTHON_32,
                           ["session.bin", "store", profile] + self.extra + list(flags),
                           cwd=self.dir, heap=heap, staged=True, timeout=timeout)
+
+
+# the heap (KB, besides the recording and a ROMFS image) of the calibration-mode profile: a
+# board with less than calmode.SESSION_ROOM free after boot, as a stock ESP32 would be
+MODE_PROFILE_KB = 150
+
+
+def mode_profile(session, extra_path, extra=(), image_bytes=0):
+    """profiles.py calibrate in a heap of MODE_PROFILE_KB (plus the recording's bytes and
+    `image_bytes`, a ROMFS image the script reads): the board calibrates in calibration mode;
+    its solving peak and what it held then ('peak_mode', 'peak_modules')."""
+    kb = MODE_PROFILE_KB + (os.path.getsize(session) + image_bytes + 1023) // 1024
+    with ProfileRun(extra_path, extra) as pr:
+        r = pr.run(session, "calibrate", heap="%dk" % kb, fresh_store=True)
+    r["heap_kb"] = MODE_PROFILE_KB
+    return r
 
 
 def profiles(session, extra_path, extra=(), heap=None, gyro_session=None):
@@ -1002,6 +1022,7 @@ def rows_profiles(m):
             R.append(("4 budget: smallest heap, boot + first calibration + headings (.%s)"
                       % kind, "", _kbf(net), "budget <= %s" % _kbf(b),
                       "within" if net <= b else "OVER"))
+    R.extend(rows_mode(m))
     for kind in ("mpy", "romfs", "py"):
         p = m.get("profiles_" + kind) or {}
         h = p.get("heading") or {}
@@ -1034,6 +1055,32 @@ def rows_profiles(m):
         R.append(("4 bytes per steady-state sample, booted board (.%s)" % kind, "", str(b),
                   "goal 0", verdict(b == 0)))
     return R
+
+
+def rows_mode(m):
+    """What holds the solving peak of a first calibration in calibration mode: the same run
+    from .mpy files and from ROMFS (bytecode in flash), the difference being the bytecode of
+    the modules held then; the rest is their objects, the names interned so far (never freed),
+    the session's data (samples, sums, the solver's long ints) and the app."""
+    a = m.get("mode_mpy") or {}
+    b = m.get("mode_romfs") or {}
+    if not a.get("peak_solving") or not b.get("peak_solving"):
+        err = a.get("error") or b.get("error") or "not run"
+        return [("4 calibration mode, solving peak", "", str(err)[:60], "", "ERROR")]
+    q = a.get("qstr_pool") or {}
+    mods = a.get("peak_modules") or []
+    return [
+        ("4 calibration mode (%d KB heap), solving peak: .mpy / ROMFS (bytecode in flash)"
+         % a["heap_kb"], "", "%s / %s" % (_kbf(a["peak_solving"]), _kbf(b["peak_solving"])),
+         "goal: a first calibration in <= 96 KB of heap (.mpy)", ""),
+        ("4 of which bytecode of the modules held (.mpy - ROMFS); the rest: objects, names, "
+         "data", "", "%s; %s" % (_kbf(a["peak_solving"] - b["peak_solving"]),
+                                 _kbf(b["peak_solving"])),
+         "names at the end of the run: %d / %s" % (q.get("n_qstr", 0),
+                                                  _kbf(q.get("n_total_bytes", 0))), ""),
+        ("4 modules held at that peak (mode %s)" % a.get("peak_mode"), "",
+         "%d: %s" % (len(mods), " ".join(mods)), "", ""),
+    ]
 
 
 def rows(res, derived):
