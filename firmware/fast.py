@@ -32,15 +32,15 @@
 # sign-extended by hand. tests/test_fast.py compares every function with its original on the
 # interpreters that have the emitter, over the real logs and the int16 extremes.
 #
-# Tables: firmware/kang_tables.py's atan and sine tables copied into array('i') for ptr32 loads (every entry is
-# non-negative, so the unsigned load of the unix port changes nothing).
+# Tables: firmware/kang_tables.py's atan and sine tables, the array('i') trig.py indexes too,
+# loaded with ptr32 (every entry is non-negative, so the unix port's unsigned load changes
+# nothing).
 import micropython
-from array import array
 
 from firmware.kang_tables import ATAN_T, SIN_T
 
-_AT = array("i", ATAN_T)
-_ST = array("i", SIN_T)
+_AT = ATAN_T
+_ST = SIN_T
 _NONE = None  # viper compares an object with a global, not with the None literal
 
 

@@ -1,11 +1,17 @@
 """The tables behind firmware/trig.py's atan2 and sin (and their viper mirrors in
 firmware/fast.py): one octant of atan and a quarter wave of sin, in KANG and Q19.
 Generated with math.atan / math.sin and checked entry by entry in tests/test_compass.py."""
+# One copy of each, as array('i'): firmware/trig.py indexes them and firmware/fast.py loads
+# them with ptr32 (every entry is non-negative: the unix port's unsigned load changes
+# nothing). Written as lists, not tuples: a tuple of constants becomes a constant of the
+# module, which the module keeps as long as it is loaded (a second copy); a list is built by
+# the module's code at import and let go with it.
+from array import array
 
 # atan(i / 256) for i = 0..256 in KANG * 2**8 (one octant, 0..45 deg); linear interpolation
 # between entries is within 0.013 KANG of atan (h**2/8 * max|atan''| = 0.65/8/65536 rad).
-# Generated with math.atan and checked entry by entry in tests/test_heading.py.
-ATAN_T = (
+# Generated with math.atan and checked entry by entry in tests/test_compass.py.
+ATAN_T = array("i", [
     0, 10430, 20860, 31290, 41718, 52145, 62571, 72994, 83416, 93835,
     104251, 114664, 125073, 135479, 145880, 156277, 166669, 177056, 187438, 197815,
     208185, 218549, 228906, 239256, 249600, 259935, 270263, 280583, 290894, 301197,
@@ -32,12 +38,12 @@ ATAN_T = (
     1954439, 1960199, 1965938, 1971653, 1977347, 1983018, 1988668, 1994295, 1999901, 2005485,
     2011047, 2016588, 2022107, 2027604, 2033080, 2038535, 2043968, 2049381, 2054772, 2060142,
     2065491, 2070820, 2076127, 2081414, 2086681, 2091927, 2097152,
-)
+])
 
 # sin(i * 90 deg / 256) for i = 0..256 in Q19 (Q15 * 16), then entry 255 again (sin is even
 # about 90 deg) so that interpolating at exactly 90 deg needs no branch; linear
 # interpolation is within 0.16 Q15 counts (h**2/8 * 32768, h = pi/512).
-SIN_T = (  # 8 entries a row
+SIN_T = array("i", [  # 8 entries a row
     0, 3217, 6434, 9650, 12867, 16082, 19298, 22512,
     25726, 28938, 32150, 35360, 38569, 41777, 44983, 48187,
     51389, 54590, 57788, 60984, 64178, 67370, 70559, 73745,
@@ -71,4 +77,4 @@ SIN_T = (  # 8 entries a row
     521763, 522069, 522355, 522621, 522867, 523094, 523301, 523489,
     523656, 523804, 523933, 524041, 524130, 524199, 524249, 524278,
     524288, 524278,
-)
+])
