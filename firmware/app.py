@@ -928,7 +928,7 @@ class CompassApp:
         return good
 
 
-_NO_MEMORY_LINE = ("status line: out of memory (a .mpy or frozen install needs less: "
+_NO_MEMORY_LINE = ("status line: out of memory (a frozen or ROMFS build needs the least heap: "
                    "docs/design.md, memory)")
 
 
@@ -942,7 +942,7 @@ def status_line(app):
         return _NO_MEMORY_LINE
 
 
-_NO_MEMORY_VIEW = (b"status line: out of memory (a .mpy or frozen install needs less: "
+_NO_MEMORY_VIEW = (b"status line: out of memory (a frozen or ROMFS build needs the least heap: "
                    b"docs/design.md, memory)")
 
 

@@ -224,7 +224,7 @@ def _no_memory(app):
         _put(" KB, this board has ")
         _free_kb()
         _put(" KB free: calibrate in the browser page (docs/web.md) or MotionCal mode, or "
-             "use a .mpy / frozen install")
+             "use a frozen or ROMFS build")
     else:
         _put("out of memory (")
         _any(what)
@@ -330,7 +330,8 @@ def view(app):
     if app._args is not None:  # the app itself did not fit (CompassApp tries again)
         _put("out of memory: the app did not fit in ")
         _free_kb()
-        _put(" KB free: use a .mpy or frozen install (docs/design.md, memory); retrying")
+        _put(" KB free: a frozen or ROMFS build needs the least heap (docs/design.md, "
+             "memory); retrying")
     elif app.mode != "heading":
         _calibrating(app)
     else:
