@@ -118,12 +118,16 @@ def test_calibration_mode_holds_only_the_calibrating_part_at_its_solving_peak(bu
 @pytest.mark.parametrize("kind", ["mpy", "romfs"])
 def test_a_first_calibration_completes_within_its_smallest_heap_budget(build, kind):
     b = _x86(build)
+    # at the budget and at every KB of the 7 above: the smallest heap is not monotone, so
+    # one heap that completes says little of its neighbours (budgets.py)
     net = BUDGETS["min_heap_calibrate_" + kind]
     heap = net + b["session_bytes"] + (b["rom_bytes"] if kind == "romfs" else 0)
     extra = [b["rom"], "--romfs"] if kind == "romfs" else []
     with bench.ProfileRun(b["mpy"] if kind == "mpy" else None, extra) as pr:
-        r = pr.run(b["session"], "calibrate", heap="%dk" % (heap // KB), flags=["--min"])
-    assert r.get("complete") is True, r
+        for kb in range((heap + KB - 1) // KB, (heap + KB - 1) // KB + 8):
+            r = pr.run(b["session"], "calibrate", heap="%dk" % kb, flags=["--min"],
+                       fresh_store=True)
+            assert r.get("complete") is True, (kb, r)
 
 
 def test_the_webassembly_port_allocates_within_budget_for_boot_and_headings(build):
