@@ -2,6 +2,7 @@
 session together, the board calibrates holding only what calibrating needs, then shows
 headings again without the session's code. Forced here by saying there is no room (CPython
 cannot measure its heap); tests/test_heap_sweep.py runs it where the heap is really short."""
+import os
 import sys
 
 import pytest
@@ -90,3 +91,31 @@ def test_the_heap_a_first_calibration_needs_is_one_figure():
     # copy: calibration mode's module is dropped when it is not running)
     from firmware import calmode, status
     assert calmode.MODE_NEED_KB == status._MODE_NEED_KB
+
+
+@pytest.mark.parametrize("tier", ["cpython", "unix", "x86-32-mpy"])
+def test_between_solves_the_solver_stays_only_where_the_board_compiled_it(tier, tmp_path):
+    # from .py sources a board compiles the solver again for every solve (~10x its import from
+    # .mpy: about a second on a board, the sample loop stalled meanwhile), so it stays; from
+    # .mpy files, frozen or ROMFS code it goes between solves (firmware/calibrator.py)
+    import json
+    import subprocess
+    from host_sim.cli import bench
+    from tests import mp
+    script = os.path.join(mp.ROOT, "tests", "scenarios", "compiled_here.py")
+    if tier == "x86-32-mpy":
+        t = mp.TIERS["x86-32"]
+        if not t.available:
+            pytest.skip("x86-32 tier: %s" % t.reason)
+        d = bench.build_mpy(str(tmp_path / "mpy"), bench.MPY_CROSS_32, "x86")
+        out = subprocess.run(t.cmd + [script, d], capture_output=True, text=True, timeout=120,
+                             env=dict(os.environ, MICROPYPATH=".frozen"), cwd=str(tmp_path))
+        assert out.returncode == 0, out.stderr
+        r = json.loads(out.stdout.strip().splitlines()[-1])
+        assert r == {"solve": False, "frozen": False, "kept": False}, r
+        return
+    r = mp.json_lines(mp.run([script, mp.ROOT], micro=tier != "cpython"))[-1]
+    if tier == "cpython":
+        assert r["solve"] is False and r["kept"] is False, r
+    else:
+        assert r == {"solve": True, "frozen": False, "kept": True}, r
