@@ -11,7 +11,7 @@ PARTS = ("core", "calibrate", "motioncal", "field", "import")
 # part -> the firmware modules in it (the same files as package-PART.json;
 # tests/test_packaging.py checks both against host_sim/cli/packaging.py)
 _FILES = {
-    'core': ('__init__.py', 'compat.py', 'errors.py', 'fixedpoint.py', 'i2cdevice.py', 'devinit.py', 'detect.py', 'qmc5883l.py', 'qmc5883p.py', 'hmc5883l.py', 'mpu6050.py', 'axes.py', 'calibration.py', 'kang_tables.py', 'trig.py', 'compass.py', 'health.py', 'store.py', 'slots.py', 'persist.py', 'appsetup.py', 'app.py', 'status.py', 'accuracy.py', 'boot.py', 'fast.py', 'mountnote.py'),
+    'core': ('__init__.py', 'compat.py', 'errors.py', 'fixedpoint.py', 'i2cdevice.py', 'devinit.py', 'detect.py', 'qmc5883l.py', 'qmc5883p.py', 'hmc5883l.py', 'mpu6050.py', 'axes.py', 'calibration.py', 'kang_tables.py', 'trig.py', 'compass.py', 'health.py', 'fieldwatch.py', 'store.py', 'slots.py', 'persist.py', 'appsetup.py', 'app.py', 'status.py', 'accuracy.py', 'boot.py', 'fast.py', 'mountnote.py'),
     'calibrate': ('session.py', 'calibrator.py', 'samples.py', 'accum.py', 'solve.py', 'acceptance.py', 'history.py', 'calmode.py', 'mounting.py', 'mountcheck.py'),
     'motioncal': ('motioncal.py', 'motioncal_mode.py'),
     'field': ('field.py', 'location.py', 'quickcal.py'),

@@ -8,7 +8,8 @@ from firmware import compass, i2cdevice
 from firmware.axes import AxisMap
 from firmware.compass import Compass
 from firmware.compat import const, drop, kernels, sleep_us, ticks_us, wall_clock
-from firmware.health import FieldWatch, Health
+from firmware.fieldwatch import FieldWatch
+from firmware.health import Health
 from firmware.trig import cdeg_to_kang
 
 DEFAULT_CAPACITY = const(300)  # samples held while collecting (firmware.calibrator's default)
@@ -124,7 +125,7 @@ def heading_line(app, declination_kang):
     compass.use_kernels(kn or False)
     i2cdevice.use_kernels(kn or False)  # the drivers' decode
     app.compass = Compass(declination_kang=declination_kang)
-    app.watch = FieldWatch(app.compass, app.body)  # firmware/health.py
+    app.watch = FieldWatch(app.compass, app.body)  # firmware/fieldwatch.py
     app.dip = app.watch.dip   # the calibration's dip (DipCheck)
 
 

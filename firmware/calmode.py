@@ -31,8 +31,8 @@ RETRY_US = const(60000000)  # a session that found no room is tried again after 
 MODE_HEADING = "heading"
 MODE_CALIBRATING = "calibrating"
 # the heading line's modules: dropped while this mode runs (their objects let go first)
-HEADING_LINE = ("compass", "fast", "kang_tables", "trig", "accuracy", "status", "location",
-                "field", "attitude", "attitude_fast", "attitude_plain")
+HEADING_LINE = ("compass", "fieldwatch", "fast", "kang_tables", "trig", "accuracy", "status",
+                "location", "field", "attitude", "attitude_fast", "attitude_plain")
 
 
 def room():

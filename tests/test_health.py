@@ -1,4 +1,4 @@
-"""firmware/health.py's field checks on their own: the dip reference (DipCheck) and the spells
+"""firmware/fieldwatch.py's field checks on their own: the dip reference (DipCheck) and the spells
 of FieldWatch (shift, jump, hold, and the evidence that ends one), driven with hand-made
 compass states so each rule is seen alone. The app-level scenarios are in
 tests/test_faults.py and the campaign in tests/test_soak.py."""
@@ -7,8 +7,8 @@ from array import array
 from firmware import compass
 from firmware.calibration import Calibration
 from firmware.compass import Compass
-from firmware.health import (DIP_TOL_KANG, SPELL_FIELD, SPELL_JUMP, SPELL_SHIFT, DipCheck,
-                             FieldWatch)
+from firmware.fieldwatch import DipCheck, FieldWatch
+from firmware.health import DIP_TOL_KANG, SPELL_FIELD, SPELL_JUMP, SPELL_SHIFT
 
 DEG = 65536 / 360.0
 DIP60 = 10923

@@ -14,7 +14,7 @@ FW = os.path.join(ROOT, "firmware")
 PIPELINE = ["compat", "errors", "fixedpoint", "i2cdevice", "detect", "qmc5883l", "hmc5883l",
             "qmc5883p", "mpu6050", "axes", "samples", "accum", "solve", "calibration",
             "acceptance", "calibrator", "kang_tables", "trig", "compass", "store", "slots",
-            "history", "health", "app", "fast",
+            "history", "health", "fieldwatch", "app", "fast",
             # the app's capabilities, each loaded for its job and dropped after it (boot,
             # construction, the drivers' start-up and error texts, the store's load and save,
             # the calibration session, calibration mode where the heap holds one job at a
@@ -25,7 +25,7 @@ CALIBRATION_MACHINERY = {"firmware.calibrator", "firmware.solve", "firmware.accu
                          "firmware.history"}
 # what a board booted from a stored calibration holds while it shows headings (docs/design.md)
 CORE = {"firmware." + m for m in ("app", "axes", "calibration", "compass", "compat", "errors",
-                                  "fixedpoint", "health", "i2cdevice", "kang_tables",
+                                  "fieldwatch", "fixedpoint", "health", "i2cdevice", "kang_tables",
                                   "mpu6050", "qmc5883l", "store", "trig")}
 
 

@@ -35,7 +35,7 @@ PARTS = {
     "core": ("__init__.py", "compat.py", "errors.py", "fixedpoint.py", "i2cdevice.py",
              "devinit.py", "detect.py", "qmc5883l.py", "qmc5883p.py", "hmc5883l.py",
              "mpu6050.py", "axes.py", "calibration.py", "kang_tables.py", "trig.py",
-             "compass.py", "health.py", "store.py", "slots.py", "persist.py", "appsetup.py",
+             "compass.py", "health.py", "fieldwatch.py", "store.py", "slots.py", "persist.py", "appsetup.py",
              "app.py", "status.py", "accuracy.py", "boot.py", "fast.py", "mountnote.py"),
     # collecting, solving (4, 7, 10 elements), accepting and the history of fits
     "calibrate": ("session.py", "calibrator.py", "samples.py", "accum.py", "solve.py",

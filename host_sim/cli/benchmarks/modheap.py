@@ -14,7 +14,7 @@ from host_sim.cli.benchmarks import common
 # what a calibrated board holds while it shows headings (tests/test_layout.py CORE), then the
 # status line it prints, then what it loads for a job and drops after it
 HEADING = ("compat", "errors", "fixedpoint", "i2cdevice", "trig", "kang_tables", "axes",
-           "calibration", "compass", "health", "store", "mpu6050", "qmc5883l", "app")
+           "calibration", "compass", "health", "fieldwatch", "store", "mpu6050", "qmc5883l", "app")
 REPORT = ("status", "accuracy")
 MACHINERY = ("boot", "detect", "appsetup", "persist", "slots", "session", "history", "samples",
              "accum", "solve", "acceptance", "calibrator", "hmc5883l", "qmc5883p", "location",

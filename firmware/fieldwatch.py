@@ -1,0 +1,341 @@
+"""The heading line's field checks: the dip against the calibration's (DipCheck) and the spells
+of a field that moved (FieldWatch). Loaded with the heading line, let go in calibration mode."""
+#     from firmware.fieldwatch import FieldWatch
+#     w = FieldWatch(compass, body)   # app.watch (firmware/appsetup.py); w.dip: its DipCheck
+#
+# - DipCheck: the dip (inclination, the angle between the field and the horizontal) is a
+#   property of the place, like |B|: rotating the board changes neither. A magnet near the
+#   sensor that leaves |B| inside the interference window but turns the field's direction
+#   changes the dip, the one other rotation invariant of a (field, gravity) pair. The
+#   reference is the dip the calibration in force measures here: the one saved with it
+#   (Calibration.dip_kang), else the mean of its first steady stretch (_DIP_LEARN_US and at
+#   least _DIP_MIN_SAMPLES clean samples whose dip stays within _DIP_STEADY_KANG of their
+#   mean); then held: a sample more than DIP_TOL_KANG (3 deg) off it is interference.
+#   Why 3 deg: an error e in the field's direction splits between dip and azimuth, and at
+#   60 deg dip an azimuth error of e / 2 in the horizontal plane is a heading error of e, so
+#   a direction error that moves the heading by the documented 5 deg (docs/faults.md) moves
+#   the dip by ~2.5-3.5 deg; a tilt error from the accelerometer moves dip and heading the
+#   same way (AN4248: heading error ~ tilt error x tan(dip)). The sample noise is far below:
+#   the dip's standard deviation is 0.26 deg on the simulated GY-271 (QMC5883L 2 mG, MPU6050
+#   tilt noise) and 0.15 deg on the GY-87, so 3 deg is > 10 sigma. A calibration with a
+#   fit error e (its RMS radial error) bends directions by ~e radians: the tolerance is
+#   max(3 deg, 3 x e) as an angle, as the app's |B| window is max(10 %, 3 x e).
+# - FieldWatch: what one sample cannot show. Rotating the board changes neither |B| nor the
+#   dip, so either moving away from its average over the last ~8 samples (by more than
+#   max(4 %, 3 x e) or max(2 deg, 3 x e as an angle), > 10 and 7 sigma of their noise) is a field
+#   change, not a turn: a magnet moving in (a "shift"). A heading that moves more than 4 deg
+#   from one sample to the next while the tilt holds still (within 1 deg) and the board is
+#   within 45 deg of level is a "jump": a sample may be ~1.5 periods old when used, so such
+#   a heading lags the truth by ~6 deg, and a magnet moving in turns the heading without
+#   touching the tilt (consecutive headings differ by 0.43 deg RMS on the GY-271, at most 3.4
+#   deg in 120,000 fault-free samples). Any flag - the windows, the dip, a shift, a jump -
+#   starts a spell, and the status stays until the evidence says the field is clean again:
+#   a magnet carried with the board acts as a hard-iron offset (AN4246 eq. 5) and keeps |B|
+#   and the dip inside their windows at some orientations while the heading is tens of
+#   degrees off, showing only as the board turns. So a spell ends after _RETURN_US of clean
+#   samples whose field is back where it was at the last clean sample before the spell
+#   (within 4 % of B, the tilt within 2 deg: the board did not move and the magnet left), or
+#   after _CLEAN_US of clean
+#   samples once the body field has moved by B / 4 since the last flag (a turn of ~29 deg
+#   about the vertical at 60 deg dip, ~14 deg about a horizontal axis: an offset carried
+#   along would have moved |B| or the dip out of their windows), or after _HOLD_MAX_US of
+#   clean samples (a board held still gives no new evidence). The turn is measured on the
+#   field itself: an offset carried with the board adds the same vector to both samples and
+#   cancels in their difference.
+#
+# Allocation-free (tests/scenarios/app_alloc.py): every method keeps its frame within the 11
+# words MicroPython holds on the C stack, and all intermediates are small ints.
+from array import array
+
+from firmware.compat import const
+from firmware.health import DIP_TOL_KANG, SPELL_FIELD, SPELL_JUMP, SPELL_SHIFT
+
+_DIP_STEADY_KANG = const(273)   # 1.5 deg: a learning stretch restarts beyond this
+_DIP_LEARN_US = const(500000)   # 0.5 s of steady, clean samples make the reference...
+_DIP_MIN_SAMPLES = const(8)     # ...and at least 8 of them (the mean's noise < 0.1 deg)
+_DIP_MAX_SAMPLES = const(2048)  # sums stay below 2**26
+_KANG_PER_RAD = const(10430)    # 65536 / (2 pi): a fit error (1e-4 rad of direction) -> KANG
+_JUMP_KANG = const(728)         # 4 deg from one sample to the next (see FieldWatch above)
+_TILT_STILL_KANG = const(182)   # 1 deg of pitch and of roll from one sample to the next
+_LEVEL_KANG = const(8192)       # 45 deg: jumps are judged within this of level
+_STEADY_SHIFT = const(3)        # short averages over ~2**3 samples
+_STEADY_FIELD_PCT = const(4)
+_STEADY_DIP_KANG = const(364)   # 2 deg
+_RETURN_PCT = const(4)          # "back where it was": within 4 % of B...
+_RETURN_TILT_KANG = const(364)  # ...and 2 deg of pitch and of roll
+_RETURN_US = const(100000)      # ...for 0.1 s of clean samples
+_CLEAN_US = const(2000000)      # 2 s of clean samples over a turn of B / 4...
+_HOLD_MAX_US = const(10000000)  # ...or 10 s of clean samples end a spell
+_LEARN_FIELD_PCT = const(3)     # the dip is learned from samples with |B| this close
+
+
+class DipCheck:
+    # The dip check of the module's opening comment. learn(dip, dt_us) on clean samples until
+    # .armed (True on the sample that arms it); set(ref) arms it with a known dip; off(dip)
+    # True when armed and the dip is more than .tol off .ref (KANG); reset() when another
+    # calibration is put in force. Small ints only: dips are within +-16384 KANG and the sums
+    # hold at most _DIP_MAX_SAMPLES of them.
+
+    def __init__(self, tol=DIP_TOL_KANG):
+        self.tol = tol
+        self.ref = 0
+        self.armed = False
+        self._sum = 0
+        self._n = 0
+        self._us = 0
+
+    def reset(self):
+        self.armed = False
+        self._n = 0
+        self._sum = 0
+        self._us = 0
+
+    def set(self, ref):
+        self.ref = ref
+        self.armed = True
+
+    def off(self, d):
+        if not self.armed:
+            return False
+        d -= self.ref
+        return d > self.tol or d < -self.tol
+
+    def learn(self, d, dt):
+        if self.armed:
+            return False
+        n = self._n
+        if n >= _DIP_MAX_SAMPLES or not self._steady(d, n):
+            self._restart(d)
+            return False
+        self._sum += d
+        self._n = n + 1
+        self._us += dt
+        if self._us >= _DIP_LEARN_US and n >= _DIP_MIN_SAMPLES:
+            self._arm()
+            return True
+        return False
+
+    def _steady(self, d, n):
+        # |d - mean| <= _DIP_STEADY_KANG, without a division
+        d = d * n - self._sum
+        n *= _DIP_STEADY_KANG
+        return n > 0 and -n <= d <= n
+
+    def _restart(self, d):
+        self._sum = d
+        self._n = 1
+        self._us = 0
+
+    def _arm(self):
+        n = self._n
+        self.ref = (2 * self._sum + n) // (2 * n)  # the mean, rounded
+        self.armed = True
+
+
+class FieldWatch:
+    # The spells of the module's opening comment, for one Compass `c` and the body-frame field
+    # array `body` its update() used. use(cal) when a calibration is put in force (the same
+    # one again keeps the state), restart() after a step without a sample or a gap: the next
+    # sample starts the short averages afresh. sample(tilt, dt_us) after each compass update
+    # returns the flag this sample raised (0, SPELL_JUMP, SPELL_SHIFT, SPELL_FIELD) and leaves
+    # .spell (0 when the status may be ok), .learned (True on the sample that armed the dip
+    # reference) and .dip (the DipCheck). forget(run) ends a spell that began within the last
+    # `run` samples (a run of stale repeats: not a field). A dip outside the DipCheck's
+    # tolerance raises c.interference like the compass's own windows. Small ints only:
+    # field differences are taken on body >> .shift (|body| <= 2**16, B >> shift < 2**11).
+
+    def __init__(self, c, body):
+        self.c = c
+        self.body = body
+        self.dip = DipCheck()
+        self.spell = 0
+        self.learned = False
+        self.n = 0                        # samples seen (wraps at 2**14)
+        self.spell_at = 0
+        self.clean_us = 0
+        self.m0 = array("h", (0, 0, 0))   # body at the spell's last flag
+        self.p0 = array("h", (0, 0, 0))   # body at the last clean sample before the spell,
+        self.p0_pitch = 0                 # and the tilt then
+        self.p0_roll = 0
+        self.p0_ok = False
+        self.g0 = array("h", (0, 0, 0))   # the last clean sample: body, tilt
+        self.g0_pitch = 0
+        self.g0_roll = 0
+        self.g0_ok = False
+        # the previous sample: heading (-1: none), tilt; the short averages of |b| and dip (x 8)
+        self.prev_h, self.prev_tilt, self.prev_pitch, self.prev_roll = -1, False, 0, 0
+        self.mag8, self.dip8 = 0, 0
+        self.shift = 2
+        self.turn2 = 0
+        self.back2 = 0
+        self.field_pct = _STEADY_FIELD_PCT
+        self.dip_kang = _STEADY_DIP_KANG
+        self.lo = 0
+        self.hi = 0
+        self.on = False
+        self.cal = None
+
+    def use(self, cal):
+        if cal is self.cal:
+            return
+        self.cal = cal
+        self.spell = 0
+        self.prev_h = -1
+        self.g0_ok = False
+        self.on = cal.model is not None
+        self.dip.reset()
+        fe = cal.fit_error
+        self.dip.tol = _angle(3 * fe, DIP_TOL_KANG)
+        if self.on and cal.dip_kang is not None:
+            self.dip.set(cal.dip_kang)
+        self.dip_kang = _angle(3 * fe, _STEADY_DIP_KANG)
+        t = 3 * fe // 100
+        self.field_pct = t if t > _STEADY_FIELD_PCT else _STEADY_FIELD_PCT
+        f = cal.field_out
+        t = fe // 100
+        t = t if t > _LEARN_FIELD_PCT else _LEARN_FIELD_PCT
+        self.lo = f - f * t // 100
+        self.hi = f + f * t // 100
+        s = 2
+        while f >> s >= 1 << 11:
+            s += 1
+        self.shift = s
+        f >>= s
+        t = f // 4
+        self.turn2 = t * t
+        t = f * _RETURN_PCT // 100
+        self.back2 = t * t
+
+    def restart(self):
+        self.prev_h = -1
+
+    def forget(self, run):
+        if self.spell and (self.n - self.spell_at) & 0x3FFF < run:
+            self.spell = 0
+
+    # --- one sample ------------------------------------------------------------------------
+    def sample(self, tilt, dt):
+        self.learned = False
+        self.n = (self.n + 1) & 0x3FFF
+        if not self.on:
+            return 0
+        k = self._flags(tilt)
+        if k:
+            self._mark(k)
+        elif self.spell:
+            self._hold(dt)
+        else:
+            self._clean(tilt, dt)
+        self._remember(tilt)
+        return k
+
+    def _clean(self, tilt, dt):
+        c = self.c
+        _copy(self.body, self.g0)
+        self.g0_pitch = c.pitch_kang
+        self.g0_roll = c.roll_kang
+        self.g0_ok = True
+        if tilt and self.lo <= c.magnitude <= self.hi:
+            self.learned = self.dip.learn(c.dip_kang, dt)
+
+    def _flags(self, tilt):
+        c = self.c
+        k = 0
+        if tilt and self.dip.off(c.dip_kang):
+            c.mark_interference()
+        if self.prev_h < 0 or tilt != self.prev_tilt:
+            self.mag8 = c.magnitude << _STEADY_SHIFT  # after a gap, another calibration
+            self.dip8 = c.dip_kang << _STEADY_SHIFT   # or tilt mode: start afresh
+        elif self._field_moved() | self._dip_moved(tilt):  # both: each updates its average
+            k = SPELL_SHIFT
+        elif self._jumped(tilt):
+            k = SPELL_JUMP
+        return SPELL_FIELD if c.interference else k
+
+    def _field_moved(self):
+        a = self.mag8
+        d = (self.c.magnitude << _STEADY_SHIFT) - a
+        self.mag8 = a + (d >> _STEADY_SHIFT)
+        a *= self.field_pct
+        d *= 100
+        return d > a or d < -a
+
+    def _dip_moved(self, tilt):
+        a = self.dip8
+        d = (self.c.dip_kang << _STEADY_SHIFT) - a
+        self.dip8 = a + (d >> _STEADY_SHIFT)
+        a = self.dip_kang << _STEADY_SHIFT
+        return tilt and (d > a or d < -a)
+
+    def _jumped(self, tilt):
+        c = self.c
+        if tilt and (_off(c.pitch_kang - self.prev_pitch, _TILT_STILL_KANG)
+                     or _off(c.roll_kang - self.prev_roll, _TILT_STILL_KANG)
+                     or _off(c.pitch_kang, _LEVEL_KANG) or _off(c.roll_kang, _LEVEL_KANG)):
+            return False
+        return _off(c.heading_kang - self.prev_h, _JUMP_KANG)
+
+    def _mark(self, k):
+        # a flag (re)starts the spell; the turn is measured from this sample's field
+        self.clean_us = 0
+        if not self.spell:
+            self.spell_at = self.n
+            self._before()
+        if k > self.spell:
+            self.spell = k
+        _copy(self.body, self.m0)
+
+    def _before(self):
+        # where the field was before the spell: the last clean sample, if there was one
+        self.p0_ok = self.g0_ok
+        _copy(self.g0, self.p0)
+        self.p0_pitch = self.g0_pitch
+        self.p0_roll = self.g0_roll
+
+    def _hold(self, dt):
+        u = self.clean_us + dt
+        self.clean_us = u if u < _HOLD_MAX_US else _HOLD_MAX_US
+        if u >= _HOLD_MAX_US or (u >= _CLEAN_US and self._d2(self.m0) >= self.turn2) \
+                or (u >= _RETURN_US and self._back()):
+            self.spell = 0
+
+    def _back(self):
+        c = self.c
+        return (self.p0_ok and not _off(c.pitch_kang - self.p0_pitch, _RETURN_TILT_KANG)
+                and not _off(c.roll_kang - self.p0_roll, _RETURN_TILT_KANG)
+                and self._d2(self.p0) <= self.back2)
+
+    def _d2(self, a):
+        return self._sq(a, 0) + self._sq(a, 1) + self._sq(a, 2)
+
+    def _sq(self, a, i):
+        d = (self.body[i] - a[i]) >> self.shift
+        return d * d
+
+    def _remember(self, tilt):
+        c = self.c
+        self.prev_h = c.heading_kang
+        self.prev_tilt = tilt
+        self.prev_pitch = c.pitch_kang
+        self.prev_roll = c.roll_kang
+
+
+def _off(d, lim):
+    # |d| > lim for an angle difference in KANG (wrapped to -32768..32767)
+    d = ((d + 32768) & 0xFFFF) - 32768
+    return d > lim or d < -lim
+
+
+def _copy(a, b):
+    b[0] = a[0]
+    b[1] = a[1]
+    b[2] = a[2]
+
+
+def _angle(fe, floor):
+    # a fit error (hundredths of a percent: 1e-4 rad of direction) as KANG, at least floor,
+    # at most 90 deg
+    if fe >= 15000:
+        return 16384
+    k = fe * _KANG_PER_RAD // 10000
+    return k if k > floor else floor
