@@ -18,8 +18,9 @@ BUDGETS = {
     # calibration machinery interned stay in the qstr pool when its modules are dropped
     "after_session_slack_mpy": 5 * KB,  # 3.0 KB measured with calibration mode's names
     # the live heap at the solving peak of a first calibration in calibration mode (.mpy,
-    # bench.MODE_PROFILE_KB of heap): 118.0 KB measured
-    "mode_peak_mpy": 124 * KB,
+    # bench.MODE_PROFILE_KB of heap): 115.8 KB measured (118.1 before the field checks were
+    # let go with the heading line)
+    "mode_peak_mpy": 120 * KB,
     # a heap from which a board boots with an empty store, calibrates (10 elements, saved),
     # rests until the session ends and shows 2000 headings, in it and in each of the 7 KB
     # above (the recorded session's bytes and the ROMFS image's not counted). Not monotone:
