@@ -79,6 +79,8 @@ def _compiled_here(m):
         return True
     except OSError:
         return False
+
+
 _CONSISTENCY_CHUNK = const(2)  # samples per slice of the consistency sums (~14 long-int ops
 #                                each once the sums pass 2**30)
 

@@ -97,8 +97,8 @@ def accept(app, cal):
         c.last_detail = e.detail
         return
     finally:
-        if app.mode != "heading":
-            _phase_done(app)  # the gate loaded the solver's code: the history and save do not hold it
+        if app.mode != "heading":  # the gate loaded the solver's code: what follows (the
+            _phase_done(app)       # history, the mounting check, the save) does not hold it
     jump = history_check(app, cal)
     if jump is None:
         app._use(cal)
