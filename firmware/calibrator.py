@@ -65,9 +65,9 @@ def release_solver():
 
 def _compiled_here(m):
     # True when MicroPython compiled module m from its .py source on this board: loading it
-    # again would compile it again (solve.py: ~10x its import from .mpy, about a second on
-    # a board, each solve, the sample loop stalled meanwhile; and the compiler's peak is
-    # above the module's own size). A frozen module's __file__ names the source it was made
+    # again would compile it again (solve.py: 17x its import from .mpy on the x86-32 build,
+    # docs/benchmarks.md; each solve, the sample loop stalled meanwhile; and the compiler's
+    # peak is above the module's own size). A frozen module's __file__ names the source it was made
     # from, which is not on the board's filesystem; CPython: False (nothing is held back).
     import os
     import sys

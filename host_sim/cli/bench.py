@@ -463,6 +463,9 @@ def memory32(session, build, smoke, log=print):
     out["session_bytes"] = os.path.getsize(session)
     log("  modheap    x86-32 (.mpy)")
     out["modules_mpy"] = run_script("modheap", MICROPYTHON_32, extra_path=mpy, cwd=build)
+    log("  importtime x86-32 (.py, .mpy)")
+    out["import_py"] = run_script("importtime", MICROPYTHON_32)
+    out["import_mpy"] = run_script("importtime", MICROPYTHON_32, extra_path=mpy, cwd=build)
     rom = os.path.join(build, "firmware.romfs")
     try:
         romfs_image(os.path.join(mpy, "firmware"), rom)
@@ -1040,6 +1043,13 @@ def rows_profiles(m):
                       % kind, "", _kbf(net), "budget <= %s" % _kbf(b),
                       "within" if net <= b else "OVER"))
     R.extend(rows_mode(m))
+    a = _get(m, "import_py", "modules", "solve") or {}
+    b = _get(m, "import_mpy", "modules", "solve") or {}
+    if a.get("us") and b.get("us"):
+        R.append(("4 importing the solver (firmware/solve.py) again, x86-32: from .py source "
+                  "(compiled) / from .mpy [ms]", "", "%.2f / %.2f" % (a["us"] / 1000,
+                                                                     b["us"] / 1000),
+                  "from .py calibration mode keeps it between solves", ""))
     for kind in ("mpy", "romfs", "py"):
         p = m.get("profiles_" + kind) or {}
         h = p.get("heading") or {}
