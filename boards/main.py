@@ -14,7 +14,7 @@ import sys
 import time
 
 import board
-from firmware.compat import drop, free_bytes
+from firmware.compat import compiled_here, drop, free_bytes
 
 # A calibration fitted on the desktop (python -m host_sim calibrate LOG --sensor ... --out
 # calibration.json) copied here is imported once at boot (docs/calibration.md).
@@ -80,8 +80,7 @@ def announce():
             app.mag.KIND, "yes" if app.accel else "no", app.load_reason or "loaded",
             "" if app.mode == "heading" and not app._calmode_due
             else ", calibration mode (one job at a time)"))
-    src = getattr(__import__("sys").modules.get("firmware.app"), "__file__", "")
-    if src.endswith(".py") and free_kb() < _PY_SHORT_KB:  # compiled on the board
+    if compiled_here(sys.modules.get("firmware.app")) and free_kb() < _PY_SHORT_KB:
         print("eCompass: running from .py sources, %d KB free: .mpy files (make deploy) or "
               "a frozen build need much less heap (docs/design.md, memory)" % free_kb())
     if getattr(board, "GYRO", False) and not MOTIONCAL:

@@ -22,7 +22,7 @@ from firmware import accum, acceptance
 from firmware.acceptance import (DEFAULT_MAX_FIT_ERROR, MIN_SAMPLES, MIN_SAMPLES_GEOMETRY,
                                  REASON_PLANAR, REASON_SINGULAR, reject)
 from firmware.calibration import MINMAX, MODELS, UNCALIBRATED, Calibration, correct
-from firmware.compat import const, drop
+from firmware.compat import compiled_here, const, drop
 from firmware.errors import CalibrationRejected
 from firmware.fixedpoint import rdiv
 from firmware.samples import (NOT_INT, REJECTED, REPLACED, SampleBuffer, bad_sample,
@@ -55,30 +55,13 @@ def _load_solver():
 def release_solver():
     """Let the solver's code go until the next solve loads it again: calibration mode does so
     between solves, so saving a fit never holds the solver too (firmware/calmode.py). Not
-    where the board compiled it from its .py source (see _compiled_here)."""
+    where the board compiled it from source: it would compile again (compat.compiled_here)."""
     global solve
-    if solve is None or _compiled_here(solve):
+    if solve is None or compiled_here(solve):
         return
     solve = None
     drop("solve")
 
-
-def _compiled_here(m):
-    # True when MicroPython compiled module m from its .py source on this board: loading it
-    # again would compile it again (solve.py: 17x its import from .mpy on the x86-32 build,
-    # docs/benchmarks.md; each solve, the sample loop stalled meanwhile; and the compiler's
-    # peak is above the module's own size). A frozen module's __file__ names the source it was made
-    # from, which is not on the board's filesystem; CPython: False (nothing is held back).
-    import os
-    import sys
-    f = getattr(m, "__file__", None) or ""
-    if sys.implementation.name != "micropython" or not f.endswith(".py"):
-        return False
-    try:
-        os.stat(f)
-        return True
-    except OSError:
-        return False
 
 
 _CONSISTENCY_CHUNK = const(2)  # samples per slice of the consistency sums (~14 long-int ops

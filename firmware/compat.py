@@ -27,6 +27,10 @@
 #                   the first call to force the plain path (tests compare the two).
 # pick(kn, name, plain)  the function `name` of kernel set kn (None: kernels()), or `plain`
 #                   when there is none (kn False or None): a module's use_kernels().
+# compiled_here(m)  True when MicroPython compiled module m from its .py source on this board
+#                   (not a .mpy file, nor frozen or ROMFS code): loading it again costs a
+#                   compile (firmware/calibrator.py keeps the solver then; boards/main.py
+#                   says a board runs from sources).
 # free_bytes()      gc.mem_free() after a collection: the heap a job can have now; None where the
 #                   port does not tell (CPython). A board holds one job at a time when this is
 #                   short (firmware/calmode.py; docs/design.md, memory).
@@ -138,6 +142,23 @@ def drop(*names):
         sys.modules.pop("firmware." + name, None)
         if pkg is not None and name in pkg.__dict__:
             delattr(pkg, name)
+
+
+def compiled_here(m):
+    """True when MicroPython compiled module m from its .py source on this board."""
+    # Loading it again would compile it again (solve.py: 17x its import from .mpy on the
+    # x86-32 build, docs/benchmarks.md; the sample loop stalls meanwhile, and the compiler's
+    # peak is above the module's own size). A frozen module's __file__ names the source it
+    # was made from, which is not on the board's filesystem; CPython: False.
+    f = getattr(m, "__file__", None) or ""
+    if not _MICRO or not f.endswith(".py"):
+        return False
+    try:
+        import os
+        os.stat(f)
+        return True
+    except OSError:
+        return False
 
 
 def free_bytes():

@@ -1,12 +1,12 @@
 """Which modules this interpreter compiled from their .py source (firmware.calibrator's
-_compiled_here), and whether calibration mode's release_solver() then keeps the solver: the
+compat.compiled_here), and whether calibration mode's release_solver() then keeps the solver: the
 solver from the folder given (the repository's sources, or .mpy files), and a module frozen
 into the port (asyncio on the unix ports), whose __file__ names a source not on the disk."""
 import json
 import sys
 
 sys.path.insert(0, sys.argv[1])
-from firmware import calibrator  # noqa: E402
+from firmware import calibrator, compat  # noqa: E402
 
 try:
     import asyncio
@@ -15,6 +15,6 @@ except ImportError:
 calibrator._load_solver()
 solve = calibrator.solve
 calibrator.release_solver()
-print(json.dumps({"solve": calibrator._compiled_here(solve),
-                  "frozen": calibrator._compiled_here(asyncio) if asyncio else None,
+print(json.dumps({"solve": compat.compiled_here(solve),
+                  "frozen": compat.compiled_here(asyncio) if asyncio else None,
                   "kept": "firmware.solve" in sys.modules}))

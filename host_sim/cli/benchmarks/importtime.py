@@ -1,6 +1,6 @@
 """MicroPython only: how long importing a firmware module takes, from wherever the path finds
 it (.py sources: compiled here; .mpy files: loaded). Calibration mode lets the solver go
-between solves where loading it again is cheap (firmware/calibrator.py `_compiled_here`).
+between solves where loading it again is cheap (firmware.compat.compiled_here).
 
     micropython -m host_sim.cli.benchmarks.importtime [MODULE ...]   (default: solve)
 
