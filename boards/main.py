@@ -14,7 +14,7 @@ import sys
 import time
 
 import board
-from firmware.compat import compiled_here, drop, free_bytes
+from firmware.compat import compiled_here, drop, drop_part, free_bytes
 
 # A calibration fitted on the desktop (python -m host_sim calibrate LOG --sensor ... --out
 # calibration.json) copied here is imported once at boot (docs/calibration.md).
@@ -110,8 +110,8 @@ except MemoryError:  # the board runs on; its status line says the rest
 
 
 def motioncal(rate_hz=50):
-    """MotionCal mode on this app until Ctrl-C (firmware/motioncal_mode.py)."""
-    from firmware.motioncal_mode import MotionCalMode
+    """MotionCal mode on this app until Ctrl-C (firmware/motioncal/mode.py)."""
+    from firmware.motioncal.mode import MotionCalMode
     try:
         from micropython import kbd_intr  # 0x03 in MotionCal's packet is data
     except ImportError:
@@ -121,9 +121,10 @@ def motioncal(rate_hz=50):
                       ticks_us=getattr(board, "ticks_us", None)).run()
     finally:  # MotionCal mode is done: its code leaves (docs/design.md, memory)
         if app.collector is None:
-            drop("motioncal_mode", "motioncal", "acceptance", "solve")
+            drop_part("motioncal")
+            drop("calibrate.acceptance", "calibrate.solve")
         else:
-            drop("motioncal_mode", "motioncal")
+            drop_part("motioncal")
 
 
 if MOTIONCAL:

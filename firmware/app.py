@@ -18,7 +18,7 @@ there is no good calibration yet, collect and solve one in the background.
 #            compared with ticks_diff; firmware.compat), the simulator's clock on the host (plain
 #            ints)
 #   mag_options  driver options for detect(), e.g. {"range": 8}
-#   fallback     try 4 elements when the model lacks samples (firmware.calibrator.Collector)
+#   fallback     try 4 elements when the model lacks samples (firmware.calibrate.calibrator.Collector)
 #   reinit_after failed reads in a row before the drivers are re-initialised
 #   learn    None: collect unless the stored calibration is of the configured model with a fit
 #            error <= 5 % (and whenever the one in force goes stale); True: always collect;
@@ -33,7 +33,7 @@ there is no good calibration yet, collect and solve one in the background.
 # Memory (docs/design.md#memory): this class is the core a calibrated board keeps. What it
 # needs once in a while is imported for that and dropped after it (firmware.compat.drop): its
 # construction (firmware/appsetup.py), the store's load and save (firmware/persist.py with
-# firmware/slots.py), the calibration session (firmware/session.py with the calibrator, the
+# firmware/slots.py), the calibration session (firmware/calibrate/session.py with the calibrator, the
 # sample buffer, the moment sums, the solver and the history), which ends once a good fit is
 # saved and the board brings no new direction, and the status line (firmware/status.py).
 # tests/test_layout.py checks which modules a board holds.
@@ -83,7 +83,7 @@ there is no good calibration yet, collect and solve one in the background.
 # Save on every accept; a failed save (OSError, StoreError, MemoryError) is counted in
 # .save_errors, never stops the loop, and is retried every _SAVE_RETRY_US.
 #
-# History (firmware.history, imported at the first accept): before an accepted calibration
+# History (firmware.calibrate.history, imported at the first accept): before an accepted calibration
 # replaces the one in force it is compared with the store's history of accepted calibrations.
 # Inside the limits, it is put in force, saved and, once saved, recorded. Outside, it is kept as evidence
 # (.pending, recorded as a pending entry) and NOT put in force: .status reads "hardware
@@ -95,7 +95,7 @@ there is no good calibration yet, collect and solve one in the background.
 # when the board knows it (e.g. after NTP), written with each entry. History errors are
 # counted in .history_errors (the last one in .history_reason) and never stop the loop.
 from firmware.compass import FLAG_NO_GRAVITY
-from firmware.compat import const, drop, ticks_diff
+from firmware.compat import const, drop, drop_part, ticks_diff
 from firmware.errors import SensorOverflow, DataReadyTimeout
 from firmware.health import SPELL_FIELD, SPELL_JUMP
 
@@ -118,10 +118,10 @@ STATUS_JUMP = "heading jumped"        # it moved > 4 deg since the last sample: 
 STATUS_NO_MEMORY = "out of memory"  # the heap cannot hold a job the board needs (.no_memory
 #                                       says which: "start", "load", "calibrate", "heading");
 #                                       it keeps running and tries again
-STATUS_CALIBRATING = "calibrating"    # calibration mode (firmware/calmode.py): no heading
+STATUS_CALIBRATING = "calibrating"    # calibration mode (firmware/calibrate/calmode.py): no heading
 STATUS_GYRO_HELD = "gyro held"        # use_gyro(): the field is not used (interference), the
 #                                       gyroscope holds the heading and still vouches for it
-#                                       (firmware/attitude.py)
+#                                       (firmware/gyro/attitude.py)
 
 
 SOLVE_EVERY = const(25)       # kept samples between solves: ~1/9 of a full sphere (225 held)
@@ -142,7 +142,7 @@ _LOAD_NO_MEMORY = "no_memory"  # firmware.persist.LOAD_NO_MEMORY
 _LOAD_RETRY_US = const(5000000)  # a load (or the heading line) that found no room: again in 5 s
 _RETRY_PAUSE_US = const(5000)   # the pause of a step while the app itself does not fit
 _CAL_RETRY_US = const(60000000)  # a session that found no room: again in 60 s
-#                                  (firmware.calmode.RETRY_US)
+#                                  (firmware.calibrate.calmode.RETRY_US)
 _GAP_CAP_US = const(0x10000000)  # the time since the last read stops counting at 268 s
 _ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
 _ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
@@ -204,7 +204,7 @@ def _status_of(e):
 
 def _collector_attr(name, default):
     # an app attribute that is the collector's; when not collecting, what the last session
-    # left (firmware/session.py ENDED), else `default`
+    # left (firmware/calibrate/session.py ENDED), else `default`
     return property(lambda self: getattr(self.collector, name) if self.collector is not None
                     else self._ended.get(name, default))
 
@@ -216,8 +216,8 @@ class CompassApp:
     # save_errors, load_reason, reinits, relearning, fast, pending, change, history_errors,
     # location, quick, accuracy, watch (firmware/health.py FieldWatch), dip (its DipCheck).
 
-    location = None  # a firmware.location.Location after set_location()
-    mode = "heading"  # "calibrating": calibration mode, one job in RAM (firmware/calmode.py)
+    location = None  # a firmware.field.location.Location after set_location()
+    mode = "heading"  # "calibrating": calibration mode, one job in RAM (firmware/calibrate/calmode.py)
     no_memory = None  # what the heap could not hold: "start", "load", "calibrate" (status line)
     _args = None     # the constructor's arguments while the heap could not hold the app
     _calmode_due = False
@@ -226,10 +226,10 @@ class CompassApp:
     _relearn_due = False
     _retry_us = 0
     not_installed = None  # "calibrate": calibrate() found no calibration machinery
-    quick = None     # the firmware.quickcal.QuickCal of the last quick_calibrate()
-    attitude = None  # the firmware.attitude.Attitude of use_gyro()
+    quick = None     # the firmware.field.quickcal.QuickCal of the last quick_calibrate()
+    attitude = None  # the firmware.gyro.attitude.Attitude of use_gyro()
     mounting = None  # (verdict, MAG_AXES the data say) of the last mounting check
-    #                  (firmware/mountcheck.py), None before any
+    #                  (firmware/calibrate/mountcheck.py), None before any
     _axes_status = None  # the status while that check names another MAG_AXES
 
     def __init__(self, i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z",
@@ -337,19 +337,19 @@ class CompassApp:
 
     def use_calibration(self, cal, save=True):
         """Put `cal` (a Calibration made outside the app, e.g. from MotionCal's packet by
-        firmware/motioncal_mode.py) in force now, and save it to the store when `save`."""
+        firmware/motioncal/mode.py) in force now, and save it to the store when `save`."""
         self._use(cal)
         if save:
             self._save()
 
     def calibrate(self):
         # Start collecting samples for a new calibration (imports the calibration machinery,
-        # firmware/session.py); the calibration in force stays until a better one is accepted.
+        # firmware/calibrate/session.py); the calibration in force stays until a better one is accepted.
         # Returns the collector; None when the calibrate part is not installed (then
         # .not_installed says so and the heading goes on with the calibration in force).
         if self.collector is None and self.mode == "heading":
             try:
-                from firmware import calmode  # the room a session needs beside the heading
+                from firmware.calibrate import calmode  # the room a session needs beside the heading
             except ImportError:  # package-calibrate.json not installed on this board
                 self.not_installed = "calibrate"
                 return None
@@ -362,9 +362,9 @@ class CompassApp:
                 self._calmode_due = True  # the next step lets go of the heading line first
                 return None
             calmode = None
-            drop("calmode")
+            drop("calibrate.calmode")
             try:
-                from firmware import session
+                from firmware.calibrate import session
                 self._session = session
                 self.collector = session.start(self)
             except ImportError:  # package-calibrate.json not installed on this board
@@ -372,19 +372,17 @@ class CompassApp:
                 return None
             except MemoryError:  # no room beside the heading line after all
                 self._session = self.collector = session = None
-                from firmware.calmode import MACHINERY
-                drop(*MACHINERY)
-                drop("calmode")
+                drop_part("calibrate")
                 self._calmode_due = True
                 return None
             self._locate()
         return self.collector
 
     def _calmode(self):
-        # calibration mode (firmware/calmode.py): the heading line goes, the session comes
+        # calibration mode (firmware/calibrate/calmode.py): the heading line goes, the session comes
         self._calmode_due = False
         try:
-            from firmware import calmode
+            from firmware.calibrate import calmode
             c = calmode.enter(self)
         except ImportError:
             self.not_installed = "calibrate"
@@ -399,18 +397,21 @@ class CompassApp:
             c.relearn(_STALE_AGE_S)
         self._relearn_due = False
 
-    # --- where the board is (firmware/location.py, firmware/quickcal.py) ----------------
+    # --- where the board is (firmware/field/location.py, firmware/field/quickcal.py) ----------------
     def set_location(self, lat_e7, lon_e7, year_e3=None, table=None):
         # The board's place (1e-7 deg, north and east positive) and date (decimal year *
-        # 1000, firmware.field.decimal_year_e3; None: unknown). With a usable field model the
+        # 1000, firmware.field.wmm.decimal_year_e3; None: unknown). With a usable field model the
         # declination becomes the model's, a new fit's B is checked against the model's |B|
         # (field_mismatch) and the interference window and dip come from the model
-        # (firmware/location.py). Returns the location's status: "ok", "no date", "caution
+        # (firmware/field/location.py). Returns the location's status: "ok", "no date", "caution
         # zone", "blackout zone", or why the model cannot be used ("no field model: ...",
         # "outside model validity") - then the declination given to the constructor stays.
         # TypeError / ValueError name a bad argument and its unit. `table`: the table file
-        # (None: wmm2025.bin next to firmware/field.py).
-        from firmware.location import Location
+        # (None: wmm2025.bin next to firmware/field/wmm.py).
+        try:
+            from firmware.field.location import Location
+        except ImportError:  # an optional part (docs/design.md, parts)
+            raise ImportError("set_location() needs the field part: install package-field.json")
         loc = Location(lat_e7, lon_e7, year_e3, table)
         prev = self.location
         loc.manual_declination_kang = (prev.manual_declination_kang if prev is not None
@@ -423,31 +424,38 @@ class CompassApp:
         if self.location is not None:
             self.location.apply(self)
             if self.collector is None:  # the model's figures are kept: its table code and
-                drop("field", "acceptance")  # the field check leave (docs/design.md)
+                drop("field.wmm", "calibrate.acceptance")  # the field check leave (docs/design.md)
 
     def quick_calibrate(self, true_heading_cdeg, refine=False, samples=32):
-        """Hard iron from this pose and its known true heading (firmware/quickcal.py
+        """Hard iron from this pose and its known true heading (firmware/field/quickcal.py
         quick_calibrate has the whole story): puts the result in force, saves it and returns
         it; raises CalibrationRejected with a reason and keeps the calibration in force.
         Needs set_location() first."""
-        from firmware.quickcal import quick_calibrate
+        try:
+            from firmware.field.quickcal import quick_calibrate
+        except ImportError:
+            raise ImportError("quick_calibrate() needs the field part: install "
+                              "package-field.json")
         return quick_calibrate(self, true_heading_cdeg, refine, samples)
 
-    # --- gyro-aided heading (firmware/attitude.py) ----------------------------------------
+    # --- gyro-aided heading (firmware/gyro/attitude.py) ----------------------------------------
     def use_gyro(self, **options):
         # Let the MPU6050's gyroscope hold the heading through magnets, motors and shaking
-        # (docs/gyro.md): loads firmware/attitude.py, reads the gyroscope with the accelerometer
+        # (docs/gyro.md): loads firmware/gyro/attitude.py, reads the gyroscope with the accelerometer
         # (one burst) and makes the filter's heading the app's, with the status "gyro held"
         # while it holds the heading without the field. `options` are Attitude's (gain,
         # mag_gain, bias_gain, accel_reject_cdeg, mag_reject_cdeg, recovery_us,
         # max_uncertainty_cdeg). Returns the Attitude (.attitude); ValueError when there is no
         # MPU6050.
-        from firmware.gyrosetup import attach
-        from firmware import attitude
+        try:
+            from firmware.gyro.gyrosetup import attach
+            from firmware.gyro import attitude
+        except ImportError:
+            raise ImportError("use_gyro() needs the gyro part: install package-gyro.json")
         attitude.use_kernels(None if self.fast else False)  # the app's kernel set
         a = attach(self, attitude.Attitude, options)
         attach = None
-        drop("gyrosetup")
+        drop("gyro.gyrosetup")
         # calibration mode lets the filter go, then remakes it (no options: nothing held)
         self._gyro_options = options if options else ()
         return a
@@ -534,7 +542,7 @@ class CompassApp:
             self.status = STATUS_NO_MEMORY  # a heading, but not the calibrated one it should be
 
     def _calibrating(self, st):
-        # calibration mode's step (firmware/calmode.py): the sample checked, kept, solved
+        # calibration mode's step (firmware/calibrate/calmode.py): the sample checked, kept, solved
         if st == STATUS_OK:
             self._fails = 0
             self._reinit_level = 0
@@ -548,14 +556,14 @@ class CompassApp:
 
     def _leave_calmode(self):
         try:
-            from firmware import calmode
+            from firmware.calibrate import calmode
             calmode.leave(self)
         except MemoryError:  # no room for the heading line yet: no heading, said, retried
             self.mode = "calibrating"
             self.no_memory = "heading"
             self._retry_us = _LOAD_RETRY_US
         calmode = None
-        drop("calmode")
+        drop("calibrate.calmode")
 
     def _internal(self, e):
         self._ok = False
@@ -785,7 +793,7 @@ class CompassApp:
         c = self.collector
         if c is not None:
             c.feed(self.raw)
-            if c.pairs is not None and self.tilt:  # the mounting check's (firmware/mounting.py)
+            if c.pairs is not None and self.tilt:  # the mounting check's (firmware/calibrate/mounting.py)
                 c.pairs.feed(self.raw, self._acc)
 
     def _failed(self, st):
@@ -852,7 +860,7 @@ class CompassApp:
         drop("devinit")  # the drivers' start-up code and error texts
         return ok
 
-    # --- the calibration session (firmware/session.py, while collecting) ----------------
+    # --- the calibration session (firmware/calibrate/session.py, while collecting) ----------------
     def _solve(self):
         self._session.solve(self)
 

@@ -6,7 +6,7 @@ boards/main.py calls it; the memory benchmarks boot through it the same way.
 """
 # start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_options)
 #   store_dir  the directory of the calibration store (firmware/store.py); None: no store
-#   cal_file   a calibration file to import once (firmware/calimport.py); None:
+#   cal_file   a calibration file to import once (firmware/calfile/calimport.py); None:
 #              store_dir + "/calibration.json"
 #   returns (CompassApp, note): note is None, or what the calibration import said
 # Exceptions: the drivers' OSError (SensorNotFound, BusError): wiring or power, the caller
@@ -27,12 +27,12 @@ def _exists(path):
 
 def _import(cal_file, store, mag):
     try:
-        from firmware.calimport import import_calibration
-    except ImportError:  # package-import.json not installed: the file waits for it
-        return "%s found, but firmware.calimport is not installed" % cal_file
+        from firmware.calfile.calimport import import_calibration
+    except ImportError:  # package-calfile.json not installed: the file waits for it
+        return "%s found, but firmware.calfile.calimport is not installed" % cal_file
     imported = import_calibration(cal_file, store, mag)  # never raises
     import_calibration = None
-    drop("calimport")
+    drop("calfile.calimport")
     return imported[1] if imported is not None else None
 
 

@@ -23,7 +23,7 @@ from firmware.compat import const, free_bytes
 _QUIET_HINT_US = const(3000000)  # no new direction for 3 s before "planar"
 _STATUS_INTERFERENCE = "interference"  # firmware.app.STATUS_INTERFERENCE
 _LINE_MAX = const(400)  # bytes: the longest line (a jump, the location, a hint) fits
-_MODE_NEED_KB = const(140)  # firmware.calmode.MODE_NEED_KB (not imported: it is dropped)
+_MODE_NEED_KB = const(140)  # firmware.calibrate.calmode.MODE_NEED_KB (not imported: it is dropped)
 _buf = bytearray(_LINE_MAX)
 _mv = memoryview(_buf)
 _n = 0
@@ -238,7 +238,7 @@ def _save_failed(app):
 
 
 def _calibrating(app):
-    """Calibration mode (firmware/calmode.py): no heading; the session's progress."""
+    """Calibration mode (firmware/calibrate/calmode.py): no heading; the session's progress."""
     _put("calibration mode (no heading) | ")
     _put(app.status)
     _story(app)

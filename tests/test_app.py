@@ -162,7 +162,7 @@ def test_progress_reports_coverage_samples_model_fit_error_and_refusals(session)
 
 
 def test_the_calibration_session_ends_once_a_good_fit_is_saved_and_the_board_rests(session):
-    # the machinery leaves (firmware/session.py): nothing collects, the counters stay. While
+    # the machinery leaves (firmware/calibrate/session.py): nothing collects, the counters stay. While
     # the figure-8 goes on the session goes on (a later fit may be better)
     app = session.app
     assert session.final["collecting"]

@@ -37,7 +37,7 @@ def build(tmp_path_factory):
         out["rom_bytes"] = os.path.getsize(out["rom"])
     if WASM.available:
         out["bytecode"] = bench.build_mpy(os.path.join(d, "bytecode"), bench.MPY_CROSS,
-                                          "x64", skip=("fast.py", "attitude_fast.py"))
+                                          "x64", skip=("fast.py", "gyro/attitude_fast.py"))
     return out
 
 
@@ -80,7 +80,8 @@ def test_the_gyro_aided_heading_costs_within_its_budget_and_nothing_per_sample(p
     assert g["bytes_per_sample"] == BUDGETS["bytes_per_sample"]
     # the filter and the one kernel set in use stay (x86-32 has the emitter: the viper one),
     # its construction left
-    assert set(g["modules"]) - set(h["modules"]) == {"attitude", "attitude_fast"}
+    assert set(g["modules"]) - set(h["modules"]) == {"gyro", "gyro.attitude",
+                                                     "gyro.attitude_fast"}
 
 
 def test_a_calibrated_board_stays_within_its_heap_budget_from_romfs(profiles_romfs):
@@ -110,8 +111,10 @@ def test_calibration_mode_holds_only_the_calibrating_part_at_its_solving_peak(bu
     assert r["peak_mode"] == "calibrating", r["peak_mode"]
     held = set(r["peak_modules"])
     assert not held & {"compass", "fast", "trig", "kang_tables", "accuracy", "detect",
-                       "appsetup", "devinit", "boot", "persist", "slots", "history"}, held
-    assert {"calibrator", "solve", "samples", "accum"} <= held, held
+                       "appsetup", "devinit", "boot", "persist", "slots",
+                       "calibrate.history"}, held
+    assert {"calibrate.calibrator", "calibrate.solve", "calibrate.samples",
+            "calibrate.accum"} <= held, held
     assert r["peak_solving"] <= BUDGETS["mode_peak_mpy"], r["peak_solving"]
 
 

@@ -208,7 +208,7 @@ def qmc_log(tmp_path, n=600, name="qmc.csv", comment=True):
 
 
 def test_capacity_is_bounded_by_what_the_calibrator_holds(tmp_path):
-    from firmware.samples import MAX_CAPACITY
+    from firmware.calibrate.samples import MAX_CAPACITY
     p = qmc_log(tmp_path)
     rc, out, err = cli_run("calibrate", p, "--capacity", MAX_CAPACITY + 1)
     line = one_error_line(err)

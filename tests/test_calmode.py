@@ -1,4 +1,4 @@
-"""Calibration mode (firmware/calmode.py): where the heap cannot hold the heading line and a
+"""Calibration mode (firmware/calibrate/calmode.py): where the heap cannot hold the heading line and a
 session together, the board calibrates holding only what calibrating needs, then shows
 headings again without the session's code. Forced here by saying there is no room (CPython
 cannot measure its heap); tests/test_heap_sweep.py runs it where the heap is really short."""
@@ -40,7 +40,7 @@ def _modules_back():
 
 @pytest.fixture
 def no_room(monkeypatch):
-    # 1 KB free, whenever asked (firmware/calmode.py is imported afresh for each use)
+    # 1 KB free, whenever asked (firmware/calibrate/calmode.py is imported afresh for each use)
     monkeypatch.setattr(compat, "free_bytes", lambda: 1024)
 
 
@@ -60,7 +60,7 @@ def test_a_board_without_room_calibrates_in_calibration_mode_then_shows_headings
     assert app.mode == "heading", lines[-3:]
     assert lines[0].startswith("calibration mode (no heading) | calibrating | uncalibrated")
     assert app.calibration.model == 10 and app.stored >= 1 and app.collector is None
-    assert "firmware.session" not in sys.modules and "firmware.solve" not in sys.modules
+    assert "firmware.calibrate.session" not in sys.modules and "firmware.calibrate.solve" not in sys.modules
     # the heading line again, on the fit just saved
     W.run_until(app, b, b.clock.now_us / 1e6 + 2)
     assert app.step() is True and app.compass is not None
@@ -80,16 +80,19 @@ def test_calibration_mode_relearns_the_same_way(no_room):
 
 
 def test_calibration_mode_names_the_same_machinery_as_the_session():
-    # firmware/calmode.py keeps its own copy (a session that failed to start may not have
-    # loaded firmware/session.py): the two lists stay one
-    from firmware import calmode, session
-    assert calmode.MACHINERY == session.MACHINERY
+    # firmware/calibrate/calmode.py keeps its own copy (a session that failed to start may not have
+    # loaded firmware/calibrate/session.py): the two lists stay one
+    from firmware.calibrate import calmode
+    from firmware.calibrate import session
+    assert calmode.KEEP == ("calibrate.calmode",)
+    assert "drop_part(\"calibrate\", (\"calibrate.calmode\",))" in open(session.__file__).read()
 
 
 def test_the_heap_a_first_calibration_needs_is_one_figure():
     # the status line says what calibration mode measured (firmware/status.py keeps its own
     # copy: calibration mode's module is dropped when it is not running)
-    from firmware import calmode, status
+    from firmware import status
+    from firmware.calibrate import calmode
     assert calmode.MODE_NEED_KB == status._MODE_NEED_KB
 
 
@@ -97,7 +100,7 @@ def test_the_heap_a_first_calibration_needs_is_one_figure():
 def test_between_solves_the_solver_stays_only_where_the_board_compiled_it(tier, tmp_path):
     # from .py sources a board compiles the solver again for every solve (~10x its import from
     # .mpy: about a second on a board, the sample loop stalled meanwhile), so it stays; from
-    # .mpy files, frozen or ROMFS code it goes between solves (firmware/calibrator.py)
+    # .mpy files, frozen or ROMFS code it goes between solves (firmware/calibrate/calibrator.py)
     import json
     import subprocess
     from host_sim.cli import bench

@@ -25,8 +25,9 @@ def no_room_for(monkeypatch):
 
     def imp(name, globals=None, locals=None, fromlist=(), level=0):
         wanted = {name[len("firmware."):]} if name.startswith("firmware.") else set()
-        if name == "firmware" and fromlist:
-            wanted |= set(fromlist)
+        if name.startswith("firmware") and fromlist:  # from firmware(.part) import x
+            pre = name[len("firmware."):] + "." if name != "firmware" else ""
+            wanted |= {pre + f for f in fromlist}
         if wanted & Gate.names:
             raise MemoryError("memory allocation failed (test)")
         return real(name, globals, locals, fromlist, level)
@@ -55,7 +56,7 @@ def test_a_load_short_of_memory_is_not_uncalibrated_and_is_tried_again(no_room_f
 
 
 def test_no_room_for_a_session_says_what_calibrating_needs_and_keeps_the_heading(no_room_for):
-    no_room_for.names = {"session"}
+    no_room_for.names = {"calibrate.session"}
     b = W.make_sim("gy271", m=motion.figure8(), seed=3)
     app = W.make_app(b, store=CalStore("/", fs=W.MemFs()))
     W.run_until(app, b, 2.0)
@@ -91,7 +92,7 @@ def test_the_status_line_without_room_is_a_fixed_line(no_room_for):
 def test_no_room_even_to_ask_for_a_session_is_said_and_tried_again(no_room_for):
     b = W.make_sim("gy271", m=motion.figure8(), seed=3)
     app = W.make_app(b, store=CalStore("/", fs=W.MemFs()), learn=False)
-    no_room_for.names = {"calmode"}
+    no_room_for.names = {"calibrate.calmode"}
     assert app.calibrate() is None and app.no_memory == "calibrate"  # no MemoryError out
     W.run_until(app, b, 1.0)
     assert "calibration needs ~" in status_line(app)

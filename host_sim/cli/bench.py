@@ -231,29 +231,31 @@ def build_mpy(out_dir, cross=None, march="x64", skip=()):
     modules named in `skip` left out."""
     import shutil
     cross = cross or MPY_CROSS
+    from host_sim.cli.packaging import firmware_files
     pkg = os.path.join(out_dir, "firmware")
-    os.makedirs(pkg, exist_ok=True)
-    for fn in sorted(os.listdir(os.path.join(ROOT, "firmware"))):
+    for fn in firmware_files():
+        os.makedirs(os.path.dirname(os.path.join(pkg, fn)), exist_ok=True)
         if fn.endswith(".py") and fn not in skip:
             r = compile_mpy(cross, fn, os.path.join(pkg, fn[:-3] + ".mpy"), march)
             if r.returncode != 0:
                 raise BenchError("mpy-cross %s: %s" % (fn, r.stderr))
         elif fn.endswith(".bin"):
-            shutil.copy(os.path.join(ROOT, "firmware", fn), pkg)
+            shutil.copy(os.path.join(ROOT, "firmware", fn), os.path.join(pkg, fn))
     return out_dir
 
 
 def mpy_sizes(arch):
     """Bytes of each firmware module compiled for `arch` (bytecode a board loads)."""
     import tempfile
+    from host_sim.cli.packaging import firmware_files
     sizes = {}
     with tempfile.TemporaryDirectory() as d:
-        for fn in sorted(os.listdir(os.path.join(ROOT, "firmware"))):
+        for fn in firmware_files():
             if fn.endswith(".py"):
-                dst = os.path.join(d, fn[:-3] + ".mpy")
+                dst = os.path.join(d, "m.mpy")
                 r = compile_mpy(MPY_CROSS, fn, dst, arch)
                 if r.returncode == 0:
-                    sizes[fn[:-3]] = os.path.getsize(dst)
+                    sizes[fn[:-3].replace("/", ".")] = os.path.getsize(dst)
     return sizes
 
 
@@ -575,16 +577,14 @@ def board_install(out_dir, kind):
     """A board's filesystem as `make deploy` (kind "mpy": x86 .mpy files) or `mip` from the
     sources (kind "py") leaves it: firmware/ and main.py (boards/main.py)."""
     import shutil
+    from host_sim.cli.packaging import firmware_files
     if kind == "mpy":
         build_mpy(out_dir, MPY_CROSS_32, "x86")
     else:
-        os.makedirs(os.path.join(out_dir, "firmware"), exist_ok=True)
-        for fn in os.listdir(os.path.join(ROOT, "firmware")):
-            if fn.endswith(".py"):
-                shutil.copy(os.path.join(ROOT, "firmware", fn), os.path.join(out_dir, "firmware"))
-    for fn in os.listdir(os.path.join(ROOT, "firmware")):
-        if fn.endswith(".bin"):
-            shutil.copy(os.path.join(ROOT, "firmware", fn), os.path.join(out_dir, "firmware"))
+        for fn in firmware_files():
+            dst = os.path.join(out_dir, "firmware", fn)
+            os.makedirs(os.path.dirname(dst), exist_ok=True)
+            shutil.copy(os.path.join(ROOT, "firmware", fn), dst)
     shutil.copy(os.path.join(ROOT, "boards", "main.py"), os.path.join(out_dir, "main.py"))
     return out_dir
 
@@ -885,7 +885,7 @@ def rows_location(res):
                       "goal <= 0.1 / 0.5, 0.3, 0.5" if key != "polar" else "reported",
                       verdict(ok) if key != "polar" else ""))
         tb = fa.get("table_bytes")
-        R.append(("8 field model table on flash (firmware/wmm2025.bin)", _f(tb, "%.0f B"), "",
+        R.append(("8 field model table on flash (firmware/field/wmm2025.bin)", _f(tb, "%.0f B"), "",
                   "goal <= 16 KB", verdict(tb is not None and tb <= 16 * 1024)))
     for label in ("micropython", "x86-32"):
         h = _get(res, "fieldheap", label) or {}
@@ -1043,10 +1043,10 @@ def rows_profiles(m):
                       % kind, "", _kbf(net), "budget <= %s" % _kbf(b),
                       "within" if net <= b else "OVER"))
     R.extend(rows_mode(m))
-    a = _get(m, "import_py", "modules", "solve") or {}
-    b = _get(m, "import_mpy", "modules", "solve") or {}
+    a = _get(m, "import_py", "modules", "calibrate.solve") or {}
+    b = _get(m, "import_mpy", "modules", "calibrate.solve") or {}
     if a.get("us") and b.get("us"):
-        R.append(("4 importing the solver (firmware/solve.py) again, x86-32: from .py source "
+        R.append(("4 importing the solver (firmware/calibrate/solve.py) again, x86-32: from .py source "
                   "(compiled) / from .mpy [ms]", "", "%.2f / %.2f" % (a["us"] / 1000,
                                                                      b["us"] / 1000),
                   "from .py calibration mode keeps it between solves", ""))
@@ -1438,7 +1438,7 @@ def splice_soak(section, path=None):
 
 
 def _slice_ops():
-    from firmware import solve
+    from firmware.calibrate import solve
     return solve.SLICE_OPS
 
 
@@ -1622,7 +1622,8 @@ def part_heap(res):
     rf = _get(res, "memory32", "modules_romfs", "modules") or {}
     out = {}
     for part, files in PARTS.items():
-        mods = [f[:-3] for f in files if f.endswith(".py") and f[:-3] in mp]
+        mods = [f[:-3].replace("/", ".") for f in files if f.endswith(".py")]
+        mods = [m for m in mods if m in mp]
         if mods:
             out[part] = (sum(mp[n] for n in mods), sum(rf.get(n, 0) for n in mods))
     return out
@@ -1646,12 +1647,7 @@ def boards_section(res):
         rows.append("| %s | %s | %s | %s | %s | %s |" % (
             label, _kbf(h), fits(h), _kbf(net), fits(net), _kbf(c.get("ended"))))
     parts = part_heap(res)
-    names = {"core": "a calibrated board: drivers, boot, store, heading, status line",
-             "calibrate": "calibrating on the board (collect, solve, accept, history)",
-             "motioncal": "PJRC MotionCal mode", "field": "field model, set_location, "
-             "quick calibration", "import": "a desktop calibration file imported at boot",
-             "circuitpython": "CircuitPython's busio.I2C",
-             "gyro": "gyro-aided heading, use_gyro() (the MPU6050's gyroscope)"}
+    from host_sim.cli.packaging import ABOUT as names
     lines = [README_BEGIN,
              "*Measured by `make bench` on a 32-bit MicroPython (x86-32 build; "
              "docs/benchmarks.md), %s.*" % machine()["date_utc"][:10], "",

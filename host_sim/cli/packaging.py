@@ -6,8 +6,9 @@
 
 Each lands in the board's lib folder as lib/firmware/NAME.
 
-Install what you use: the firmware also comes in parts (PARTS), one package file each at the
-repository's top, package-PART.json, with the same relative URLs (micropython-lib splits a
+Install what you use: the firmware also comes in parts, one folder each (firmware/PART/;
+core is the files at firmware/'s root), and one package file each at the repository's top,
+package-PART.json, with the same relative URLs (micropython-lib splits a
 large package into feature packages the same way):
 
     mpremote mip install github:OWNER/REPO/package-core.json       # a calibrated board
@@ -30,31 +31,59 @@ from host_sim.cli.args import Parser
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
-# part -> firmware files (docs/design.md, memory: what each job loads)
-PARTS = {
-    "core": ("__init__.py", "compat.py", "errors.py", "fixedpoint.py", "i2cdevice.py",
-             "devinit.py", "detect.py", "qmc5883l.py", "qmc5883p.py", "hmc5883l.py",
-             "mpu6050.py", "axes.py", "calibration.py", "kang_tables.py", "trig.py",
-             "compass.py", "health.py", "fieldwatch.py", "store.py", "slots.py", "persist.py", "appsetup.py",
-             "app.py", "status.py", "accuracy.py", "boot.py", "fast.py", "mountnote.py"),
-    # collecting, solving (4, 7, 10 elements), accepting and the history of fits
-    "calibrate": ("session.py", "calibrator.py", "samples.py", "accum.py", "solve.py",
-                  "acceptance.py", "history.py", "calmode.py", "mounting.py", "mountcheck.py"),
-    # PJRC MotionCal's serial protocol and the board's MotionCal mode
-    "motioncal": ("motioncal.py", "motioncal_mode.py"),
-    # the World Magnetic Model on the board, set_location(), quick_calibrate()
-    "field": ("field.py", "wmm2025.bin", "location.py", "quickcal.py"),
-    # a calibration file fitted on the desktop, imported at boot
-    "import": ("calimport.py",),
-    # the gyro-aided heading: the MPU6050's gyroscope in an attitude filter (use_gyro())
-    "gyro": ("attitude.py", "attitude_plain.py", "attitude_fast.py", "gyrosetup.py"),
-    # CircuitPython's busio.I2C behind the machine.I2C calls the drivers make
-    "circuitpython": ("busio_i2c.py",),
+FIRMWARE = os.path.join(ROOT, "firmware")
+# what each part is for (the part is its folder: firmware/PART/, core the files at the root)
+ABOUT = {
+    "core": "a calibrated board: drivers, heading, store, status line",
+    "calibrate": "collecting, solving (4, 7, 10 elements), accepting and the history of fits",
+    "motioncal": "PJRC MotionCal's serial protocol and the board's MotionCal mode",
+    "field": "the World Magnetic Model on the board, set_location(), quick_calibrate()",
+    "calfile": "a calibration file fitted on the desktop, imported at boot",
+    "gyro": "the gyro-aided heading: the MPU6050's gyroscope in an attitude filter",
+    "circuitpython": "CircuitPython's busio.I2C behind the machine.I2C calls the drivers make",
 }
-# the parts each part needs installed beside it
+# the parts each part needs installed beside it (tests/test_packaging.py checks every import
+# of a part resolves within it and these)
 REQUIRES = {"core": (), "calibrate": ("core",), "motioncal": ("core", "calibrate"),
-            "field": ("core", "calibrate"), "import": ("core",), "gyro": ("core",),
+            "field": ("core", "calibrate"), "calfile": ("core", "calibrate"), "gyro": ("core",),
             "circuitpython": ("core",)}
+
+
+def firmware_files(root=FIRMWARE):
+    """Every file a board installs, as paths below firmware/ ("app.py", "calibrate/solve.py",
+    "field/wmm2025.bin"), sorted."""
+    out = []
+    for d, dirs, files in os.walk(root):
+        dirs[:] = sorted(x for x in dirs if not x.startswith((".", "__")))
+        rel = os.path.relpath(d, root).replace(os.sep, "/")
+        for f in files:
+            if f.endswith((".py", ".bin")):
+                out.append(f if rel == "." else rel + "/" + f)
+    return sorted(out)
+
+
+def part_of(path):
+    """The part a file below firmware/ belongs to: its folder, or core at the root."""
+    return path.split("/")[0] if "/" in path else "core"
+
+
+def module_name(path):
+    """"calibrate/solve.py" -> "firmware.calibrate.solve" (None for a data file)."""
+    if not path.endswith(".py"):
+        return None
+    m = "firmware." + path[:-3].replace("/", ".")
+    return m[:-9] if m.endswith(".__init__") else m
+
+
+def _parts():
+    parts = {p: [] for p in ABOUT}
+    for f in firmware_files():
+        parts.setdefault(part_of(f), []).append(f)
+    return {p: tuple(fs) for p, fs in parts.items()}
+
+
+# part -> its files below firmware/, from the folders
+PARTS = _parts()
 
 
 def _entry(files):
@@ -71,8 +100,7 @@ def package_json(part=None):
     """The package file of `part` (None: the whole firmware, package.json)."""
     if part is not None:
         return _entry(PARTS[part])
-    return _entry(f for f in os.listdir(os.path.join(ROOT, "firmware"))
-                  if f.endswith(".py") or f.endswith(".bin"))  # .bin: field.py's table
+    return _entry(firmware_files())
 
 
 def write_all():

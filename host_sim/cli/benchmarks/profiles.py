@@ -109,7 +109,7 @@ def main():
         res["saved"] = live() - base
         res["model"] = app.calibration.model
         # the board put down: it jitters about the directions of the first 50 samples, which
-        # the buffer holds already, so the session ends (firmware/session.py)
+        # the buffer holds already, so the session ends (firmware/calibrate/session.py)
         k = 0
         while app.collector is not None and k < 12000:  # 60 s at the most
             if k % 50 == 0:

@@ -1,5 +1,5 @@
 """Import a calibration file at boot: from a log fitted on the desktop to the board's store."""
-#     from firmware.calimport import import_calibration
+#     from firmware.calfile.calimport import import_calibration
 #     result = import_calibration("/calibration.json", store, mag)   # None: no file there
 #     print(result[1])                         # 'imported ...' or 'rejected ...: why'
 #
@@ -8,7 +8,7 @@
 # that it is that format and version, that it was made for this chip (`sensor` == mag.KIND) at
 # this range (`range_code` == mag.range_code), and that the record means something (the
 # Calibration constructor refuses a bad field with ValueError naming it) and that it meets the
-# board's own bar (firmware.acceptance.check_calibration: plausible fields, InvW positive
+# board's own bar (firmware.calibrate.acceptance.check_calibration: plausible fields, InvW positive
 # definite within 5:1, offsets in range; a refusal names its reason). A valid file is saved
 # with the store's power-safe save() and renamed NAME.imported, so it is imported once; an
 # invalid one is renamed NAME.rejected and the store is left as it was. If the save itself fails
@@ -107,7 +107,10 @@ def import_calibration(path, store, mag):
 
 
 def _import(path, store, mag):
-    from firmware.acceptance import check_calibration
+    try:
+        from firmware.calibrate.acceptance import check_calibration
+    except ImportError:  # the gate is the calibrate part's: the file waits for it
+        return False, "not imported %s: install package-calibrate.json too" % path
     from firmware.errors import CalibrationRejected
     text = _read(path)
     if text is None:

@@ -5,7 +5,7 @@
 #     m.s[m.index(2, 1, 0)]     # sum of dx**2 * dy over the held samples
 #
 # AN4246 eqs. 35-36 build X^T X and X^T Y of the 4-element fit from sums of products of the
-# samples. The 7- and 10-element ellipsoid fits (firmware/solve.py) need products up to degree 4,
+# samples. The 7- and 10-element ellipsoid fits (firmware/calibrate/solve.py) need products up to degree 4,
 # so this keeps all 35 moment sums  S[i, j, k] = sum(dx**i * dy**j * dz**k),  i + j + k <= 4,
 # over d = p - c, where c is a fixed integer reference centre (the first sample added after an
 # empty state). Every normal matrix, right-hand side and residual sum Y^T Y is a sum of these.
@@ -17,7 +17,7 @@
 # bits above 4 * log2(diameter) + log2(count). On a board these are long ints, which is fine:
 # add() runs only for a KEPT sample (rare once the buffer is spread over the sphere); the reject
 # path of SampleBuffer.offer allocates nothing. Every fit is invariant under translation (see
-# firmware/solve.py), so the choice of c changes the size of the numbers, never the result.
+# firmware/calibrate/solve.py), so the choice of c changes the size of the numbers, never the result.
 from firmware.compat import const
 
 NUM_MOMENTS = const(35)  # monomials of degree 0..4 in three variables

@@ -47,7 +47,7 @@ F32_INF = "inf"
 F32_NAN = "nan"
 
 # calibration_fields() refusals (CalibrationRejected.reason); the shared names are
-# firmware/acceptance.py's
+# firmware/calibrate/acceptance.py's
 REASON_BAD_CRC = "bad_crc"
 REASON_NOT_A_NUMBER = "not_a_number"
 REASON_NOT_POSITIVE_DEFINITE = "not_positive_definite"
@@ -341,7 +341,7 @@ def _reject(reason, detail):
 
 
 def _run(steps, out):
-    # a solver generator (firmware/solve.py) run to completion; it leaves its result in out[0]
+    # a solver generator (firmware/calibrate/solve.py) run to completion; it leaves its result in out[0]
     for _ in steps:
         pass
     return out[0]
@@ -361,7 +361,8 @@ def calibration_fields(packet, counts_per_gauss):
     # Raises CalibrationRejected with .reason bad_crc, not_a_number, not_positive_definite,
     # soft_iron_out_of_range, field_out_of_range or offset_out_of_range, checked in that
     # order. The accel and gyro offsets (always 0 from MotionCal) are not used.
-    from firmware import acceptance, solve  # loaded only when a packet arrives
+    from firmware.calibrate import acceptance  # loaded only when a packet arrives
+    from firmware.calibrate import solve
 
     cpg = counts_per_gauss
     if not isinstance(cpg, int) or cpg <= 0:
@@ -387,7 +388,7 @@ def calibration_fields(packet, counts_per_gauss):
     if cond is None:
         _reject(REASON_NOT_POSITIVE_DEFINITE, "invW %r in Q15 is not positive definite"
                 % (invw,))
-    # the calibrator's own limits (firmware/acceptance.py): W^-1 within 5:1, B 10..90 uT
+    # the calibrator's own limits (firmware/calibrate/acceptance.py): W^-1 within 5:1, B 10..90 uT
     acceptance.check_soft_iron(cond, 1)
     bc_q16 = rdiv(b_q16 * cpg, 100)  # B in Q16 counts
     acceptance.check_field(bc_q16, cpg, _Q16)  # in Q16 counts: no rounding at the limits

@@ -1,6 +1,6 @@
-# The attitude filter's per-sample steps (firmware/attitude.py), plain: loaded by
+# The attitude filter's per-sample steps (firmware/gyro/attitude.py), plain: loaded by
 # attitude.use_kernels() on a port without the native emitter (or with fast=False); where the
-# emitter exists firmware/attitude_fast.py's viper mirrors run instead (the same bits), and
+# emitter exists firmware/gyro/attitude_fast.py's viper mirrors run instead (the same bits), and
 # this module is not loaded. Each function works on the filter's state `st` (array('i'); the
 # slot numbers below are attitude.py's) and the app's int16 arrays; each keeps its frame within
 # the 11 words MicroPython holds on the C stack (see firmware/compass.py), so nothing is

@@ -145,7 +145,7 @@ _CDPS = const(72)  # bias (1/4096 count) per cdeg/s
 _SNAP = const(73)  # 73..75 the bias at the block's start (or _sub()'s last call)
 _RUN = const(76)   # predict(): the app step whose gyro step ran
 _ACCOK = const(77)  # predict(): the accelerometer was plausible (app.tilt)
-_SIZE = const(78)  # (firmware/attitude_fast.py's mirrors use these numbers)
+_SIZE = const(78)  # (firmware/gyro/attitude_fast.py's mirrors use these numbers)
 
 
 def mul14(a, b):
@@ -207,8 +207,8 @@ def gravity(st, grav):
     grav[2] = (st[_D + 2] * k) >> 14
 
 
-# The steps the filter runs, module-wide: firmware/attitude_plain.py's functions, or their
-# viper mirrors in firmware/attitude_fast.py where the port has the native emitter (the same
+# The steps the filter runs, module-wide: firmware/gyro/attitude_plain.py's functions, or their
+# viper mirrors in firmware/gyro/attitude_fast.py where the port has the native emitter (the same
 # bits); only the set in use is loaded (see use_kernels).
 _KERNEL_NAMES = ("rates", "advance", "q_hi", "down", "tilt_error", "tilt_sine", "accel_apply",
                  "field_error", "yaw_rate", "angles")
@@ -218,18 +218,18 @@ KERNELS = None
 
 
 def use_kernels(kn=None):
-    """Run the filter with the kernel set `kn`: None picks firmware/attitude_fast.py where the
-    native emitter exists (firmware.compat.kernels()), else firmware/attitude_plain.py; False
+    """Run the filter with the kernel set `kn`: None picks firmware/gyro/attitude_fast.py where the
+    native emitter exists (firmware.compat.kernels()), else firmware/gyro/attitude_plain.py; False
     the plain set; a module with the same names, that module. Returns the module in use."""
     if kn is None:
         kn = False
         if kernels():
             try:
-                from firmware import attitude_fast as kn
+                from firmware.gyro import attitude_fast as kn
             except (ImportError, SyntaxError, ValueError, MemoryError):
                 kn = False  # no emitter after all, an .mpy of another architecture, no room
     if kn is False:
-        from firmware import attitude_plain as kn
+        from firmware.gyro import attitude_plain as kn
     g = globals()
     for name in _KERNEL_NAMES:
         g[name] = getattr(kn, name)
@@ -247,10 +247,10 @@ class Attitude:
 
     def __init__(self, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g,
                  **options):
-        from firmware.gyrosetup import init  # construction only: dropped after it
+        from firmware.gyro.gyrosetup import init  # construction only: dropped after it
         init(self, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g, options)
         init = None
-        drop("gyrosetup")
+        drop("gyro.gyrosetup")
         self._use(_UNKNOWN_CDPS)
 
     # results

@@ -1,8 +1,8 @@
 """Quick calibration: the hard iron V from one pose and a known heading, with the field model's
 field vector (PX4's `calibrate mag quick`, ArduPilot's fixed-yaw calibration), integer-only.
 """
-#     from firmware.quickcal import QuickCal
-#     qc = QuickCal(location, counts_per_gauss, mag_map)   # a usable firmware.location.Location
+#     from firmware.field.quickcal import QuickCal
+#     qc = QuickCal(location, counts_per_gauss, mag_map)   # a usable firmware.field.location.Location
 #     qc.add(raw_sum, gravity_sum, n, true_heading_kang)  # n samples of one pose, summed
 #     cal = qc.result()           # a 4-element-equivalent Calibration, or CalibrationRejected
 #
@@ -40,8 +40,8 @@ field vector (PX4's `calibrate mag quick`, ArduPilot's fixed-yaw calibration), i
 #                        sensor gain that is not what the driver reports. A full calibration is
 #                        needed.
 # Bad arguments (a float heading, a zero sample count) raise TypeError / ValueError naming them.
-from firmware import acceptance
-from firmware.acceptance import REASON_FIELD_MISMATCH, REASON_OFFSET_OUT_OF_RANGE, reject
+from firmware.calibrate import acceptance
+from firmware.calibrate.acceptance import REASON_FIELD_MISMATCH, REASON_OFFSET_OUT_OF_RANGE, reject
 from firmware.calibration import Calibration
 from firmware.compat import const
 from firmware.fixedpoint import rdiv
@@ -58,13 +58,13 @@ _MAX_OFFSET_MG = const(1800)   # ArduPilot: offsets <= 1800 mG
 _IDENTITY_Q15 = (32767, 0, 0, 0, 32767, 0, 0, 0, 32767)  # Calibration's own identity
 _Q15 = const(32768)
 _R15 = const(16384)
-_BLACKOUT = "blackout zone"  # firmware.field.STATUS_BLACKOUT (not imported: field loads late)
+_BLACKOUT = "blackout zone"  # firmware.field.wmm.STATUS_BLACKOUT (not imported: field loads late)
 
 
 class QuickCal:
     """Hard iron from poses of known heading; see the module's opening comment.
 
-    location: a firmware.location.Location; counts_per_gauss: the magnetometer's; mag_map: the
+    location: a firmware.field.location.Location; counts_per_gauss: the magnetometer's; mag_map: the
     app's firmware.axes.AxisMap (chip -> body). .poses: the per-pose V estimates, counts."""
 
     def __init__(self, location, counts_per_gauss, mag_map):

@@ -1,13 +1,13 @@
 """The calibrator: collects samples and orchestrates the solve (AN4246's pipeline)."""
-#     from firmware.calibrator import Calibrator
+#     from firmware.calibrate.calibrator import Calibrator
 #     cal = Calibrator(model=10, counts_per_gauss=12000)   # QMC5883L at +-2 G
 #     cal.add(x, y, z)                  # every raw sample; True when the buffer kept it
 #     c = cal.solve()                   # a Calibration, or raises CalibrationRejected(.reason)
 #     c.correct(raw, out)               # out = InvW (raw - V) >> 15
 #
-# Pipeline (AN4246): SampleBuffer (firmware/samples.py, distance-separated) -> exact moment
-# sums (firmware/accum.py, updated per kept/evicted sample) -> exact least squares and W^-1 =
-# A^1/2 (firmware/solve.py) -> the named checks of firmware/acceptance.py -> a Calibration
+# Pipeline (AN4246): SampleBuffer (firmware/calibrate/samples.py, distance-separated) -> exact moment
+# sums (firmware/calibrate/accum.py, updated per kept/evicted sample) -> exact least squares and W^-1 =
+# A^1/2 (firmware/calibrate/solve.py) -> the named checks of firmware/calibrate/acceptance.py -> a Calibration
 # (firmware/calibration.py: offset V, InvW in Q15, field B). The min/max model (the classic
 # hobbyist method) takes the running extremes of every raw sample since clear(), as users know
 # it; its fit error and its geometry check use the held samples like the other models.
@@ -18,14 +18,15 @@
 # samples.COVERAGE_CHUNK samples of the coverage count (tests/test_slices.py bounds both).
 from array import array
 
-from firmware import accum, acceptance
-from firmware.acceptance import (DEFAULT_MAX_FIT_ERROR, MIN_SAMPLES, MIN_SAMPLES_GEOMETRY,
+from firmware.calibrate import accum
+from firmware.calibrate import acceptance
+from firmware.calibrate.acceptance import (DEFAULT_MAX_FIT_ERROR, MIN_SAMPLES, MIN_SAMPLES_GEOMETRY,
                                  REASON_PLANAR, REASON_SINGULAR, reject)
 from firmware.calibration import MINMAX, MODELS, UNCALIBRATED, Calibration, correct
 from firmware.compat import compiled_here, const, drop
 from firmware.errors import CalibrationRejected
 from firmware.fixedpoint import rdiv
-from firmware.samples import (NOT_INT, REJECTED, REPLACED, SampleBuffer, bad_sample,
+from firmware.calibrate.samples import (NOT_INT, REJECTED, REPLACED, SampleBuffer, bad_sample,
                               separation_for)
 
 _RAIL_HI = const(32767)        # int16 rails: a clipping chip reads its axis as one of them
@@ -42,25 +43,25 @@ _FIT_ERROR_DOUBLING_S = const(60000)  # aging: NXP's e-folding time of 24 h = 59
 # operations (~1 ms on an RP2040); the caller decides how many fit between samples (the app
 # runs a quarter of the sample period's worth per step, firmware/app.py).
 DEFAULT_SLICE_GROUP = const(1)
-solve = None  # firmware.solve, loaded by the first solve (release_solver() lets it go)
+solve = None  # firmware.calibrate.solve, loaded by the first solve (release_solver() lets it go)
 
 
 def _load_solver():
     global solve
     if solve is None:
-        from firmware import solve as s
+        from firmware.calibrate import solve as s
         solve = s
 
 
 def release_solver():
     """Let the solver's code go until the next solve loads it again: calibration mode does so
-    between solves, so saving a fit never holds the solver too (firmware/calmode.py). Not
+    between solves, so saving a fit never holds the solver too (firmware/calibrate/calmode.py). Not
     where the board compiled it from source: it would compile again (compat.compiled_here)."""
     global solve
     if solve is None or compiled_here(solve):
         return
     solve = None
-    drop("solve")
+    drop("calibrate.solve")
 
 
 
@@ -97,7 +98,7 @@ class Calibrator:
     # current: the calibration in force (e.g. loaded from storage); new fits must beat it.
     # max_fit_error: hundredths of a percent (an int: 150 = 1.5 %); TypeError otherwise.
     # .expected_field: the field model's |B| in raw counts where the board is (set by
-    #   firmware/location.py), or None; when set, a fit whose B is off by more than
+    #   firmware/field/location.py), or None; when set, a fit whose B is off by more than
     #   acceptance.FIELD_MATCH_PCT is refused (field_mismatch).
     # overflow: a chip's overflow marker (the HMC5883L's -4096), or None. A sample with an axis
     #   at it or at the int16 rails (32767, -32768: a clipping chip) never enters a fit; add()
@@ -436,7 +437,7 @@ class Calibrator:
                      ep, red, ee * den - red)
 
     def _finish(self, model, n, offset, w, b_q16, fe, accept):
-        # InvW in Q15, the checks of firmware/acceptance.py in order, then the record
+        # InvW in Q15, the checks of firmware/calibrate/acceptance.py in order, then the record
         r = [None]
         yield from solve.q15_steps(w, solve.SQRT_FRAC_BITS, r)
         invw = r[0]
@@ -571,7 +572,7 @@ class Collector:
         self.last_detail = None
         self.last_model = None     # the model of the last solve attempt
         self.relearning = False
-        self.pairs = None          # firmware.mounting.Pairs, set by the session
+        self.pairs = None          # firmware.calibrate.mounting.Pairs, set by the session
         self._cov = 0
         self._cov_dirty = True
 

@@ -1,5 +1,5 @@
 """The Earth's field where the board is: the World Magnetic Model 2025, integer-only."""
-#     from firmware.field import FieldModel, decimal_year_e3
+#     from firmware.field.wmm import FieldModel, decimal_year_e3
 #     wmm = FieldModel()                       # opens wmm2025.bin next to this module
 #     decl_cdeg, incl_cdeg, field_nt, status = wmm.at(-339000000, 1512000000, decimal_year_e3(2026, 3, 1))
 #
@@ -356,6 +356,6 @@ def _default_path():
     try:
         here = __file__
     except NameError:  # frozen without __file__: the mip install location
-        return "/lib/firmware/" + TABLE_NAME
+        return "/lib/firmware/field/" + TABLE_NAME
     k = here.rfind("/")
     return (here[:k + 1] if k >= 0 else "") + TABLE_NAME

@@ -1,5 +1,5 @@
 """MotionCal mode: the compass app streaming to PJRC MotionCal and taking its calibration."""
-#     from firmware.motioncal_mode import MotionCalMode
+#     from firmware.motioncal.mode import MotionCalMode
 #     mode = MotionCalMode(app)          # app: a firmware.app.CompassApp (built with learn=False)
 #     mode.run()                         # Raw: lines at 50 Hz; Send Cal installs and stores the fit
 #
@@ -16,13 +16,13 @@
 #   kbd_intr  micropython.kbd_intr on a board (boards/main.py passes it: port shims live in
 #             firmware/compat.py); None: Ctrl-C is left alone (CPython, the simulator)
 #   viewer    also print the Adafruit WebSerial 3D viewer's Orientation:/Calibration: lines
-#             (MotionCal skips them; firmware/motioncal.py)
+#             (MotionCal skips them; firmware/motioncal/protocol.py)
 #
 # step() = the app's step, then: _listen (poll, feed the packet reader, act on its events),
 # _stream (a Raw line when due), _echo (Cal1/Cal2 again every echo_every_us once a packet is in
 # force). It never raises (but KeyboardInterrupt, see below).
 #
-# What goes out (firmware/motioncal.py has the format): `Raw:ax,ay,az,gx,gy,gz,mx,my,mz` CR LF,
+# What goes out (firmware/motioncal/protocol.py has the format): `Raw:ax,ay,az,gx,gy,gz,mx,my,mz` CR LF,
 # the magnetometer as read (chip axes: the frame the calibration is applied in) in 0.1 uT
 # whatever the chip and range, the accelerometer in 1/8192 g and the MPU6050's gyroscope in
 # 1/16 deg/s (MotionCal's units), both turned into the magnetometer's chip axes; zeros for the
@@ -36,7 +36,7 @@
 #   truncated    no byte for _PACKET_TIMEOUT_US while a packet is incomplete: status truncated.
 #   fields       motioncal.calibration_fields: not_a_number, not_positive_definite,
 #                soft_iron_out_of_range, field_out_of_range, offset_out_of_range (the
-#                acceptance rules of firmware/acceptance.py on V, InvW and B).
+#                acceptance rules of firmware/calibrate/acceptance.py on V, InvW and B).
 #   accepted     a 10-element Calibration with the record fields MotionCal does not send, set
 #                to the bounds its Send Cal rule guarantees (docs/motioncal.md):
 #                fit_error 500 (5.00 %: Send Cal needs fit error < 5 %), samples 150 (its
@@ -57,7 +57,7 @@
 import sys
 from array import array
 
-from firmware import motioncal as mc
+from firmware.motioncal import protocol as mc
 from firmware.axes import AxisMap, apply
 from firmware.compat import const, ticks_diff, ticks_us
 from firmware.errors import CalibrationRejected
@@ -342,12 +342,12 @@ class MotionCalMode:
 
     def _calibration(self, packet):
         from firmware.calibration import Calibration
-        from firmware.acceptance import check_calibration
+        from firmware.calibrate.acceptance import check_calibration
         f = mc.calibration_fields(packet, self._cpg)
         cal = Calibration(model=f["model"], offset=f["offset"], invw=f["invw"],
                           field=f["field"], field_out=f["field_out"],
                           fit_error=MC_FIT_ERROR, samples=MC_SAMPLES, coverage=MC_COVERAGE)
-        check_calibration(cal, self._cpg)  # the board's own bar (firmware/acceptance.py)
+        check_calibration(cal, self._cpg)  # the board's own bar (firmware/calibrate/acceptance.py)
         return cal
 
     def _refused(self, status, reason, detail):

@@ -1,7 +1,7 @@
 """The mounting check's samples: (magnetometer, accelerometer) pairs spread over orientations,
-collected while a calibration session runs; firmware/mountcheck.py judges them after a fit.
+collected while a calibration session runs; firmware/calibrate/mountcheck.py judges them after a fit.
 """
-#     from firmware.mounting import Pairs
+#     from firmware.calibrate.mounting import Pairs
 #     pairs = Pairs(accel.counts_per_g, mag.period_us)   # made by the calibration session
 #     pairs.feed(raw, acc)       # each step with a plausible accelerometer: both in chip counts
 #
@@ -28,7 +28,7 @@ from firmware.compat import const
 
 BINS = const(24)        # 3 nearest axes x 2 signs x 4 sign pairs of the other two
 WIDTH = const(7)        # int16 per bin: mag x, y, z, accel x, y, z, score (-1: empty)
-MIN_BINS = const(8)     # bins a check needs (firmware/mountcheck.py): a third of the
+MIN_BINS = const(8)     # bins a check needs (firmware/calibrate/mountcheck.py): a third of the
 #                         directions, gravity has left one face of the cube
 _PREV = const(168)      # BINS * WIDTH: the previous step's accelerometer
 _G_SHIFT = const(4)     # |a|^2 on a >> 4: int16 counts -> < 3 * 2**24
@@ -44,7 +44,7 @@ _OFF_SHIFT = const(4)   # |a|^2 - g^2 >> 4 beside the move: 1 % off 1 g weighs a
 class Pairs:
     """Up to BINS (magnetometer raw, accelerometer raw) pairs, one per direction of gravity
     (see the module's opening comment). counts_per_g: the accelerometer's 1 g; period_us: the sample
-    period (firmware.mountcheck.check() judges them)."""
+    period (firmware.calibrate.mountcheck.check() judges them)."""
 
     def __init__(self, counts_per_g=16384, period_us=20000):
         if (type(counts_per_g) is not int or type(period_us) is not int

@@ -1,7 +1,7 @@
 """The mounting check: do MAG_AXES and ACCEL_AXES describe how the two chips sit? Loaded after
 a calibration is accepted and dropped after the check (firmware.compat.drop).
 """
-#     from firmware.mountcheck import check, WRONG
+#     from firmware.calibrate.mountcheck import check, WRONG
 #     v, axes, sigma, best = check(pairs, cal, "x,-y,-z", "-x,y,z")
 #     if v == WRONG: print('MAG_AXES = "%s"' % axes)     # v: "ok", "wrong", "spread", "unsteady"
 #
@@ -17,7 +17,7 @@ a calibration is accepted and dropped after the check (firmware.compat.drop).
 # together, the data cannot tell (examples/check_axes.py asks for poses); the check names the
 # MAG_AXES that agrees with the ACCEL_AXES in use.
 #
-# check() corrects each pair's field (firmware/mounting.py Pairs) with the calibration
+# check() corrects each pair's field (firmware/calibrate/mounting.py Pairs) with the calibration
 # (calibration.correct), maps both vectors to the body frame (axes.apply), scales them to unit
 # vectors in Q14 and, for each of the 24 rotations R applied to the field, takes the cosine
 # c = (R b).g / |b||g| (the sine of the dip for the right one) in Q10. Its RMS spread over the
@@ -36,10 +36,10 @@ a calibration is accepted and dropped after the check (firmware.compat.drop).
 # were <= _STEADY_Q10, a factor of two apart.
 # check() returns (verdict, axes: the steadiest mapping's MAG_AXES, sigma: the spread of the
 # setting in use, best: the steadiest one's), the spreads in Q10 (1024 = 1). judge(app) runs
-# it for a CompassApp's calibration session (firmware/session.py mount_check: after each fit
+# it for a CompassApp's calibration session (firmware/calibrate/session.py mount_check: after each fit
 # put in force until a check gives an answer, and at the session's end): app.mounting,
 # and the status shown in place of "ok" while the data name another MAG_AXES. norm14 comes
-# from firmware.trig, imported for the check; in calibration mode (firmware/calmode.py), where
+# from firmware.trig, imported for the check; in calibration mode (firmware/calibrate/calmode.py), where
 # the heading line's trig is not loaded, it and its tables are let go again after it. check() allocates one work array of
 # 63 ints and the axes string (and parses spec strings when given them in place of
 # AxisMap.m arrays); 24 pairs x 24 rotations, once per accepted fit. Every intermediate stays
@@ -51,7 +51,7 @@ from firmware.axes import AxisMap, apply
 from firmware.calibration import correct
 from firmware.compat import const, drop
 from firmware.fixedpoint import isqrt, rdiv
-from firmware.mounting import BINS, MIN_BINS, WIDTH
+from firmware.calibrate.mounting import BINS, MIN_BINS, WIDTH
 
 OK = "ok"
 WRONG = "wrong"
@@ -162,7 +162,7 @@ def check(pairs, cal, mag_axes, accel_axes):
     t = array("i", bytes(12))
     d = pairs.data
     n = 0
-    # firmware.trig's norm14: in calibration mode (firmware/calmode.py) the heading line's
+    # firmware.trig's norm14: in calibration mode (firmware/calibrate/calmode.py) the heading line's
     # trig and its tables are not loaded; then they are loaded for this check and let go
     loaded = "firmware.trig" in sys.modules
     from firmware import trig
@@ -200,7 +200,7 @@ def check(pairs, cal, mag_axes, accel_axes):
 
 
 def judge(app):
-    # The check of a CompassApp's calibration session (firmware/session.py mount_check):
+    # The check of a CompassApp's calibration session (firmware/calibrate/session.py mount_check):
     # the pairs its collector kept, the calibration in force, the app's maps. Sets
     # app.mounting = (verdict, axes) and, when the verdict is WRONG, app._axes_status, the
     # status the app shows in place of "ok" (`check MAG_AXES: the data say "y,x,-z"`); OK

@@ -2,7 +2,7 @@
 history, save; then leave. Imported by CompassApp.calibrate(), dropped when the session ends.
 """
 #     app.calibrate()            # starts one (imports this module and the calibration machinery)
-#     app.collector              # firmware.calibrator.Collector while it runs, None after
+#     app.collector              # firmware.calibrate.calibrator.Collector while it runs, None after
 #
 # A session ends once a calibration good enough to boot without collecting
 # (CompassApp._good_enough: the configured model, fit error within 5 %) is in force and saved,
@@ -15,39 +15,36 @@ history, save; then leave. Imported by CompassApp.calibrate(), dropped when the 
 # (docs/design.md, memory; docs/benchmarks.md measures it).
 #
 # The steps (CompassApp._step calls solve() when a solve is running or due):
-#   solve    a few slices of the running solve (firmware.calibrator.Collector.slice): each at
+#   solve    a few slices of the running solve (firmware.calibrate.calibrator.Collector.slice): each at
 #            most solve.SLICE_OPS long-int operations; a step runs period / 4 ms of them.
 #   accept   a calibration the Calibrator accepted (sour grapes: it beat the current one) is
-#            judged against the history of accepted calibrations (firmware/history.py): inside
+#            judged against the history of accepted calibrations (firmware/calibrate/history.py): inside
 #            its limits it is put in force and saved; outside it is kept as .pending ("hardware
 #            changed?") and not put in force until accept_change().
-from firmware.compat import const, drop, kernels
+from firmware.compat import const, drop, drop_part, kernels
 
 _DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
 _HMC_OVERFLOW = const(-4096)  # the HMC5883L's overflow marker (its datasheet, data registers)
 _DONE_QUIET_US = const(3000000)  # no new direction for 3 s (the collector's quiet period)
-_FLAG_ACCEPTED = const(1)     # firmware.history's entry flags
+_FLAG_ACCEPTED = const(1)     # firmware.calibrate.history's entry flags
 _FLAG_PENDING = const(2)
 _FLAG_BASELINE = const(4)
 # what a finished session leaves for CompassApp's counters (accepted, refused, ...)
 ENDED = ("accepted", "refused", "solves", "last_reason", "last_detail", "last_model")
-# the calibration machinery: loaded for a session, dropped at its end
-MACHINERY = ("session", "calibrator", "samples", "accum", "solve", "acceptance", "history",
-             "mounting")
 
 
 def start(app, fast=True):
-    """A collector for `app` (firmware.calibrator.Collector), with the kernel set it chose
-    (fast False: the plain functions, as in firmware/calmode.py, which lets firmware.fast go)."""
-    from firmware import samples
-    from firmware.calibrator import Collector
+    """A collector for `app` (firmware.calibrate.calibrator.Collector), with the kernel set it chose
+    (fast False: the plain functions, as in firmware/calibrate/calmode.py, which lets firmware.fast go)."""
+    from firmware.calibrate import samples
+    from firmware.calibrate.calibrator import Collector
     samples.use_kernels((kernels() if fast and app.fast else None) or False)
     c = Collector(model=app.model, capacity=app.capacity,
                   counts_per_gauss=app.mag.counts_per_gauss, current=app.calibration,
                   solve_every=app.solve_every, fallback=app.fallback,
                   overflow=_HMC_OVERFLOW if app.mag.KIND == "hmc5883l" else None)
-    if app.accel is not None:  # the mounting check's pairs (firmware/mounting.py)
-        from firmware.mounting import Pairs
+    if app.accel is not None:  # the mounting check's pairs (firmware/calibrate/mounting.py)
+        from firmware.calibrate.mounting import Pairs
         c.pairs = Pairs(app.accel.counts_per_g,
                         getattr(app.mag, "period_us", _DEFAULT_PERIOD_US))
     return c
@@ -67,7 +64,7 @@ def solve(app):
             accept(app, cal)
             if app.mode != "heading":
                 app._hist = None  # calibration mode: the history's code goes too
-                drop("history")
+                drop("calibrate.history")
         n -= 1
     d = app._wall_diff(app._wall(), t)
     app.slices = (app.slices + 1) & 0x3FFFFFFF
@@ -78,16 +75,16 @@ def solve(app):
 
 
 def _phase_done(app):
-    # calibration mode (firmware/calmode.py): the solver's code goes when a solve ends, so
+    # calibration mode (firmware/calibrate/calmode.py): the solver's code goes when a solve ends, so
     # the save that may follow does not hold it too; the next solve loads it again
-    from firmware.calibrator import release_solver
+    from firmware.calibrate.calibrator import release_solver
     release_solver()
 
 
 def accept(app, cal):
-    from firmware.acceptance import check_calibration
+    from firmware.calibrate.acceptance import check_calibration
     from firmware.errors import CalibrationRejected
-    try:  # the gate every calibration meets (firmware/acceptance.py); the fit passed its parts
+    try:  # the gate every calibration meets (firmware/calibrate/acceptance.py); the fit passed its parts
         check_calibration(cal, app.mag.counts_per_gauss)
     except CalibrationRejected as e:
         c = app.collector
@@ -111,7 +108,7 @@ def accept(app, cal):
         app.change = jump
         history_record(app, cal, _FLAG_PENDING)  # evidence, not in force
         # the calibration in force may not fit the board: its samples keep refining the
-        # evidence, as while relearning (firmware.calibrator.Collector.relearning)
+        # evidence, as while relearning (firmware.calibrate.calibrator.Collector.relearning)
         app.collector.relearning = True
 
 
@@ -132,12 +129,12 @@ def end_if_done(app):
     app.collector = None
     app._hist = None
     app._session = None
-    drop(*MACHINERY)  # (in calibration mode the app's next step makes the heading line again)
+    drop_part("calibrate", ("calibrate.calmode",))  # (in calibration mode the app's next step makes the heading line again)
     return True
 
 
 def mount_check(app):
-    # The mounting check (firmware/mountcheck.py: loaded for it, dropped after) of the pairs
+    # The mounting check (firmware/calibrate/mountcheck.py: loaded for it, dropped after) of the pairs
     # kept against the calibration in force, until one gives an answer (ok or wrong) that is
     # kept for the next boot (firmware/mountnote.py save): app.mounting, and app._axes_status
     # the status while it names another MAG_AXES. Then the session's pairs go: a board short of
@@ -149,15 +146,15 @@ def mount_check(app):
     p = c.pairs
     if p is None or app.calibration.model is None:
         return
-    from firmware.mounting import MIN_BINS
+    from firmware.calibrate.mounting import MIN_BINS
     if p.count < MIN_BINS:
         return  # too few directions of gravity yet
     name = "firmware.mountnote"
     try:
-        from firmware import mountcheck
+        from firmware.calibrate import mountcheck
         v = mountcheck.judge(app)
         mountcheck = None
-        drop("mountcheck")
+        drop("calibrate.mountcheck")
         st = app.store
         if v == "ok" and st is not None:
             try:  # firmware.mountnote.NAME
@@ -172,7 +169,7 @@ def mount_check(app):
         pass  # no room now: the next fit, or the session's end, checks again
     except OSError:
         pass  # the verdict could not be kept: the same
-    drop("mountcheck", name[9:], "slots")
+    drop("calibrate.mountcheck", name[9:], "slots")
 
 
 def history_check(app, cal):
@@ -181,7 +178,7 @@ def history_check(app, cal):
         if app._hist is None:
             if app.store is None or not hasattr(app.store, "prefix"):
                 return None
-            from firmware.history import History
+            from firmware.calibrate.history import History
             app._hist = History(app.store)
         return app._hist.check(cal, app.calibration)
     except Exception as e:  # noqa: BLE001 - evidence only: never stop the loop for it

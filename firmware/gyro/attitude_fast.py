@@ -1,4 +1,4 @@
-# The attitude filter's per-sample steps as viper mirrors of firmware/attitude_plain.py: the
+# The attitude filter's per-sample steps as viper mirrors of firmware/gyro/attitude_plain.py: the
 # same names, signatures and bits. attitude.use_kernels() imports this module, inside
 # try/except, where the port has the native emitter (firmware/fast.py loaded: its atan2 is
 # used here); on any other port it is never imported.

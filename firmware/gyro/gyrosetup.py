@@ -1,4 +1,4 @@
-"""The gyro-aided heading's construction (firmware/attitude.py), imported for it and dropped
+"""The gyro-aided heading's construction (firmware/gyro/attitude.py), imported for it and dropped
 after it: the options checked, the filter's scale factors computed (long-int arithmetic, once),
 and CompassApp.use_gyro()'s attach.
 """
@@ -7,7 +7,7 @@ and CompassApp.use_gyro()'s attach.
 #     ranges: the start-up gains), then bias_gain 1 .. 4 times), mag_gain); ValueError names a
 #     bad option and its unit.
 # init(a, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g, options): the
-#     Attitude a's attributes and state array (its slots: firmware/attitude.py's numbers,
+#     Attitude a's attributes and state array (its slots: firmware/gyro/attitude.py's numbers,
 #     tests/test_attitude.py checks they agree).
 # attach(app, cls, options) -> the Attitude (cls) on the app's arrays, its MPU6050 reading the gyroscope in
 #     the accelerometer's burst (driver .gyro_into), app.attitude set.
@@ -16,7 +16,7 @@ from array import array
 from firmware.compat import const
 from firmware.trig import sin
 
-# firmware/attitude.py's slots
+# firmware/gyro/attitude.py's slots
 _Q = const(0)
 _KI = const(23)
 _KF = const(24)

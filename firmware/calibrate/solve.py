@@ -57,7 +57,7 @@
 # column explains, per sample, relative to the spread of the data). On a uniformly covered
 # sphere rho = 1/3 for the centre, 1/15 for dx dy, 1/5 for dx^2-dz^2; see firmware/magcal.py
 # for the thresholds.
-from firmware.accum import EXPONENTS, INDEX_TABLE, NUM_MOMENTS, index, shifted_steps
+from firmware.calibrate.accum import EXPONENTS, INDEX_TABLE, NUM_MOMENTS, index, shifted_steps
 from firmware.fixedpoint import bit_length, isqrt, rdiv
 
 from firmware.compat import const

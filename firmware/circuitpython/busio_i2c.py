@@ -1,7 +1,7 @@
 """machine.I2C's register transfers over CircuitPython's busio.I2C, so the drivers run there.
 
     import board, busio
-    from firmware.busio_i2c import BusioI2C
+    from firmware.circuitpython.busio_i2c import BusioI2C
     mag = detect(BusioI2C(busio.I2C(board.SCL, board.SDA, frequency=400000)))
 """
 # BusioI2C(i2c, lock_timeout_us=50000, delay_us=None)

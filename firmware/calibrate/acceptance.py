@@ -1,6 +1,6 @@
 """Acceptance of a new calibration: the thresholds, and a named reason for every refusal.
 
-    from firmware import acceptance
+    from firmware.calibrate import acceptance
     acceptance.check_field(field_counts, counts_per_gauss)   # raises CalibrationRejected(reason)
 """
 # A fit is accepted only when it passes every check below, in this order (the calibrator runs
@@ -9,7 +9,7 @@
 #   too_few_samples   fewer held samples than the model needs (MIN_SAMPLES).
 #   planar            the samples do not determine the model (Judd's degenerate ellipsoids):
 #                     singular normal equations, or a parameter whose degeneracy ratio rho
-#                     (firmware/solve.py) is below its limit - e.g. a flat spin.
+#                     (firmware/calibrate/solve.py) is below its limit - e.g. a flat spin.
 #   singular          the solver broke down: the quadric is not an ellipsoid, or W^-1 did not
 #                     converge.
 #   offset_out_of_range  V outside int16 (correct() could not represent it; ArduPilot also
@@ -56,7 +56,7 @@
 #                     sphere to another, so they are not judged this way; states that alternate
 #                     faster than half a collection put both in each half and show only as a
 #                     high fit error. The collector then drops the held samples
-#                     (firmware.calibrator.Collector): the next fit sees one state.
+#                     (firmware.calibrate.calibrator.Collector): the next fit sees one state.
 from firmware.calibration import MINMAX, ORDER
 from firmware.compat import const
 from firmware.errors import CalibrationRejected
@@ -82,7 +82,7 @@ MIN_SAMPLES_GEOMETRY = const(12)  # enough to tell a flat spin from a start (4-e
 # Coverage (% of 100 equal-area regions around V; one great circle crosses ~20 of them);
 # min/max needs both extremes of every axis.
 MIN_COVERAGE = {MINMAX: 40, 4: 30, 7: 40, 10: 50}
-# Degeneracy ratios rho (firmware/solve.py; parts per million). A fully covered sphere gives
+# Degeneracy ratios rho (firmware/calibrate/solve.py; parts per million). A fully covered sphere gives
 # 333333 for the centre, 66667 (dx dy) and 200000 (dx^2 - dz^2) for the shape; soft iron
 # lowers them as the ellipsoid flattens (roughly as 1 / axis ratio^2), so each threshold is
 # half the value measured on a fully covered ellipsoid with 5:1 axes, the most anisotropic
@@ -207,7 +207,7 @@ def field_matches(field, expected):
 
 def check_expected_field(field, expected):
     """field_mismatch unless B (counts) is within FIELD_MATCH_PCT of the field model's |B|
-    in the same counts (firmware/location.py converts nT with the driver's counts_per_gauss)."""
+    in the same counts (firmware/field/location.py converts nT with the driver's counts_per_gauss)."""
     if field_matches(field, expected):
         return
     reject(REASON_FIELD_MISMATCH, "B = %d counts is %d %% of the %d counts the field model "
@@ -286,7 +286,7 @@ def check_calibration(cal, counts_per_gauss):
     q = cal.invw
     if q[1] != q[3] or q[2] != q[6] or q[5] != q[7]:
         reject(REASON_SOFT_IRON_OUT_OF_RANGE, "InvW %r is not symmetric" % (tuple(q),))
-    from firmware import solve  # the gate's own: a board showing headings never loads it
+    from firmware.calibrate import solve  # the gate's own: a board showing headings never loads it
     r = [None]
     for _ in solve.cond_steps(q, r):
         pass

@@ -15,7 +15,7 @@
 # this mode finds no room, the heading line is made again, app.no_memory says what could not be
 # done and what to do instead, and the app tries again after RETRY_US. docs/design.md (memory)
 # has the figures; make bench measures them (docs/benchmarks.md).
-from firmware.compat import const, drop, free_bytes
+from firmware.compat import const, drop, drop_part, free_bytes
 
 # free heap (bytes, after a collection) a calibration session needs beside the heading line
 # for the board to keep both: below it the board calibrates in this mode. Measured on the
@@ -32,7 +32,8 @@ MODE_HEADING = "heading"
 MODE_CALIBRATING = "calibrating"
 # the heading line's modules: dropped while this mode runs (their objects let go first)
 HEADING_LINE = ("compass", "fieldwatch", "fast", "kang_tables", "trig", "accuracy", "status",
-                "location", "field", "attitude", "attitude_fast", "attitude_plain")
+                "field.location", "field.wmm", "gyro.attitude", "gyro.attitude_fast",
+                "gyro.attitude_plain")
 
 
 def room():
@@ -69,14 +70,14 @@ def enter(app):
     drop(*HEADING_LINE)
     free_bytes()
     try:
-        from firmware import session
+        from firmware.calibrate import session
         app._session = session
         app.collector = session.start(app, False)
         return app.collector
     except MemoryError:
         app._session = app.collector = None
         session = None
-        drop(*MACHINERY)
+        drop_part("calibrate", KEEP)
         app.no_memory = "calibrate"
         try:
             leave(app)
@@ -107,7 +108,5 @@ def leave(app):
             app._gyro_options = None  # (status line: no "gyro:" part; use_gyro() again)
 
 
-# firmware/session.py MACHINERY (named here too: a session that failed to start may not have
-# loaded it)
-MACHINERY = ("session", "calibrator", "samples", "accum", "solve", "acceptance", "history",
-              "mounting")
+# what stays of the calibrate part when a session's machinery goes: this mode itself
+KEEP = ("calibrate.calmode",)

@@ -3,7 +3,7 @@
 # spread its history shows, reveals changed hardware (a magnet fixed near the sensor, another
 # chip, a new mounting) before it costs a wrong heading.
 #
-#     from firmware.history import History
+#     from firmware.calibrate.history import History
 #     h = History(store)                   # files <store.prefix>_h0.cal .. _h7.cal
 #     jump = h.check(cal, current)         # None, or (parameter, value, low, high)
 #     h.record(cal, FLAG_ACCEPTED, date_s) # the entry's count
@@ -265,3 +265,4 @@ class History:
             raise StoreError("verify_failed", "%s read back %d bytes of %d"
                              % (path, len(back), len(rec)))
         return count
+

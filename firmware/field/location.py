@@ -2,7 +2,7 @@
 works in, and what the app does with it (automatic declination, the field-strength check of a
 new calibration, the interference window, quick calibration's expected field vector).
 """
-#     from firmware.location import Location
+#     from firmware.field.location import Location
 #     loc = Location(-339000000, 1512000000, year_e3=2026160)   # Sydney, 2026-03-01
 #     if loc.usable:
 #         print(loc.declination_cdeg, loc.field_counts(12000))  # cdeg east, |B| in counts
@@ -12,7 +12,7 @@ new calibration, the interference window, quick calibration's expected field vec
 # CompassApp.set_location(lat_e7, lon_e7, year_e3=None) builds one and applies it (apply()).
 #
 # Units: lat_e7, lon_e7 in 1e-7 deg, north and east positive (GPS receivers and ArduPilot give
-# int32 in these units); year_e3 the decimal year * 1000 (firmware.field.decimal_year_e3
+# int32 in these units); year_e3 the decimal year * 1000 (firmware.field.wmm.decimal_year_e3
 # converts a date), None when the board has no date (the model's mid-life is used and the
 # status says "no date"). Declination and inclination in centidegrees (_cdeg) and KANG (_kang);
 # field_nt, north_nt, east_nt, down_nt, horizontal_nt in nT; the _counts methods convert nT to
@@ -24,14 +24,14 @@ new calibration, the interference window, quick calibration's expected field vec
 # board cannot help is a status, not an exception, so the compass keeps running with the
 # declination the user typed: .usable is False and .status is
 #   "no field model: <reason>: <detail>"   the table is missing, truncated or corrupt
-#                                           (firmware.field.FieldTableError's reason and detail)
+#                                           (firmware.field.wmm.FieldTableError's reason and detail)
 #   "outside model validity"               a date before 2025.0 or after 2030.0 (the model is
 #                                           not extrapolated)
 # A usable location's .status is the field model's: "ok", "no date", "caution zone" (H < 6000
 # nT: heading accuracy degraded), "blackout zone" (H < 2000 nT: magnetic heading unreliable;
 # firmware/accuracy.py reports level 0 there).
 #
-# Memory: firmware.field is imported here, and this module is imported only by set_location: a
+# Memory: firmware.field.wmm is imported here, and this module is imported only by set_location: a
 # board that never calls it loads neither. The table file is opened, read at 16 grid nodes and
 # closed in the constructor (docs/field_model.md); a Location keeps a dozen ints.
 #
@@ -102,7 +102,7 @@ class Location:
         self.usable = self.field_nt is not None
 
     def _query(self, path):
-        from firmware.field import FieldModel, FieldTableError
+        from firmware.field.wmm import FieldModel, FieldTableError
         try:
             m = FieldModel(path)
         except FieldTableError as e:
@@ -178,5 +178,5 @@ class Location:
 
 
 def _matches(field, expected):
-    from firmware.acceptance import field_matches
+    from firmware.calibrate.acceptance import field_matches
     return field_matches(field, expected)
