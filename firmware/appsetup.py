@@ -110,8 +110,7 @@ def setup(app, i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, s
 
 def heading_line(app, declination_kang):
     """What showing a heading needs beside the drivers: the kernel set (firmware/fast.py where
-    the port has the emitter), the Compass and the field watch. Made here at construction and
-    again when a calibration mode ends (firmware/calibrate/calmode.py releases them while it runs)."""
+    the port has the emitter), the Compass and the field watch."""
     fast = app._fast_opt
     kn = kernels() if fast is None or fast is True else None
     app.fast = kn is not None

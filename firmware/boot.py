@@ -36,6 +36,34 @@ def _import(cal_file, store, mag):
     return imported[1] if imported is not None else None
 
 
+def calibrated(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, model=10):
+    """True when the heading can start: a calibration file waits to be imported, or the store
+    holds a good-enough fit (the model asked for, fit error within 5 %) for the chip found;
+    False: boards/main.py runs the calibration program (firmware/calibrate/program.py)."""
+    from firmware import detect
+    from firmware.calibration import GOOD_FIT_ERROR, Calibration
+    from firmware.store import CalStore
+    opts = dict(mag_options or {})
+    if delay_us is not None:
+        opts["delay_us"] = delay_us
+    mag = detect.detect(i2c, **opts)
+    detect = None
+    drop("detect", "devinit")
+    if cal_file is None:
+        cal_file = store_dir.rstrip("/") + "/calibration.json"
+    if _exists(cal_file):
+        return True
+    st = CalStore(store_dir, sensor=mag.KIND, range_code=mag.range_code,
+                  validate=Calibration.from_bytes)
+    try:
+        cal = Calibration.from_bytes(st.load())
+    except Exception:  # noqa: BLE001 - none, torn, unreadable: not calibrated
+        return False
+    finally:
+        drop("slots")
+    return cal.model == model and cal.fit_error <= GOOD_FIT_ERROR
+
+
 def start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_options):
     # one step at a time, each step's code let go before the next loads (docs/design.md,
     # memory): the chips, the store, a calibration file, then the app

@@ -32,8 +32,8 @@
 #                   compile (firmware/calibrate/calibrator.py keeps the solver then; boards/main.py
 #                   says a board runs from sources).
 # free_bytes()      gc.mem_free() after a collection: the heap a job can have now; None where the
-#                   port does not tell (CPython). A board holds one job at a time when this is
-#                   short (firmware/calibrate/calmode.py; docs/design.md, memory).
+#                   port does not tell (CPython): whether a calibration session fits beside the
+#                   heading (firmware/app.py SESSION_ROOM; docs/design.md, memory).
 # drop(*names)      forget the firmware modules `names` ("detect", "calibrator", ...): out of
 #                   sys.modules and off the firmware package, so their code and tables are
 #                   freed at the next collection once nothing else refers to them (a

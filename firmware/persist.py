@@ -105,7 +105,7 @@ def _failed(app, reason):
 def _record(app):
     # the payload saved: the calibration in force with the dip it measures, when known
     c = app.calibration
-    d = app.dip  # None in calibration mode (firmware/calibrate/calmode.py): not measured there
+    d = app.dip
     if d is not None and d.armed and c.model is not None and c.dip_kang != d.ref:
         c = c.with_dip(d.ref)
     return c.to_bytes()

@@ -100,22 +100,21 @@ def test_the_calibration_machinery_leaves_when_the_session_ends(profiles_mpy):
     assert c["bytes_per_sample"] == BUDGETS["bytes_per_sample"]
 
 
-def test_calibration_mode_holds_only_the_calibrating_part_at_its_solving_peak(build):
-    # a board with little room (bench.MODE_PROFILE_KB) calibrates in calibration mode: at the
-    # solving peak it holds neither the heading line (compass, fast, trig, the status line's
-    # accuracy part) nor what only boot, a save or the history need, and the peak stays within
-    # its budget (make bench: docs/benchmarks.md, calibration mode)
+def test_the_calibration_program_holds_only_what_calibrating_needs_at_its_solving_peak(build):
+    # boards/main.py runs it alone on a board without a calibration: at the solving peak it
+    # holds neither the heading line (app, compass, fast, trig, the status line) nor what
+    # only boot, a save or the history need, and the peak stays within its budget (make
+    # bench: docs/benchmarks.md, calibration program)
     b = _x86(build)
-    r = bench.mode_profile(b["session"], b["mpy"])
+    r = bench.program_profile(b["session"], b["mpy"])
     assert "error" not in r and r["complete"], r
-    assert r["peak_mode"] == "calibrating", r["peak_mode"]
     held = set(r["peak_modules"])
-    assert not held & {"compass", "fast", "trig", "kang_tables", "accuracy", "detect",
-                       "appsetup", "devinit", "boot", "persist", "slots",
-                       "calibrate.history"}, held
-    assert {"calibrate.calibrator", "calibrate.solve", "calibrate.samples",
-            "calibrate.accum"} <= held, held
-    assert r["peak_solving"] <= BUDGETS["mode_peak_mpy"], r["peak_solving"]
+    assert not held & {"app", "appsetup", "compass", "fast", "trig", "kang_tables", "status",
+                       "accuracy", "fieldwatch", "detect", "devinit", "boot", "persist",
+                       "slots", "calibrate.history", "calibrate.session"}, held
+    assert {"calibrate.calibrator", "calibrate.samples", "calibrate.accum",
+            "calibrate.program"} <= held, held
+    assert r["peak_solving"] <= BUDGETS["program_peak_mpy"], r["peak_solving"]
 
 
 @pytest.mark.parametrize("kind", ["mpy", "romfs"])
@@ -128,7 +127,7 @@ def test_a_first_calibration_completes_within_its_smallest_heap_budget(build, ki
     extra = [b["rom"], "--romfs"] if kind == "romfs" else []
     with bench.ProfileRun(b["mpy"] if kind == "mpy" else None, extra) as pr:
         for kb in range((heap + KB - 1) // KB, (heap + KB - 1) // KB + 8):
-            r = pr.run(b["session"], "calibrate", heap="%dk" % kb, flags=["--min"],
+            r = pr.run(b["session"], "program", heap="%dk" % kb, flags=["--min"],
                        fresh_store=True)
             assert r.get("complete") is True, (kb, r)
 

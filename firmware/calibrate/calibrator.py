@@ -54,9 +54,10 @@ def _load_solver():
 
 
 def release_solver():
-    """Let the solver's code go until the next solve loads it again: calibration mode does so
-    between solves, so saving a fit never holds the solver too (firmware/calibrate/calmode.py). Not
-    where the board compiled it from source: it would compile again (compat.compiled_here)."""
+    """Let the solver's code go until the next solve loads it again: the calibration program
+    does so between solves, so saving a fit never holds the solver too
+    (firmware/calibrate/program.py). Not where the board compiled it from source: it would
+    compile again (compat.compiled_here)."""
     global solve
     if solve is None or compiled_here(solve):
         return

@@ -266,3 +266,33 @@ class History:
                              % (path, len(back), len(rec)))
         return count
 
+
+# --- the history of a calibration's owner (a CompassApp's session, the calibration program):
+# owner.store, owner.calibration (the one in force), owner._hist (None until the first use),
+# owner.date_s (None, or a function giving the date in seconds), owner.history_errors and
+# .history_reason (what went wrong last). Evidence only: neither raises.
+def judge(owner, cal):
+    """cal against the owner's history: None (in limits, or nothing to judge by) or
+    (parameter, value, low, high) of the parameter that jumped."""
+    try:
+        if owner._hist is None:
+            if owner.store is None or not hasattr(owner.store, "prefix"):
+                return None
+            owner._hist = History(owner.store)
+        return owner._hist.check(cal, owner.calibration)
+    except Exception as e:  # noqa: BLE001 - evidence only: never stop the loop for it
+        failed(owner, e)
+    return None
+
+
+def keep(owner, cal, flags):
+    """Record cal with `flags` in the owner's history."""
+    try:
+        owner._hist.record(cal, flags, owner.date_s() if owner.date_s is not None else 0)
+    except Exception as e:  # noqa: BLE001 - as above
+        failed(owner, e)
+
+
+def failed(owner, e):
+    owner.history_errors += 1
+    owner.history_reason = "%s %s" % (type(e).__name__, e.args[0] if e.args else "")

@@ -39,8 +39,8 @@ a calibration is accepted and dropped after the check (firmware.compat.drop).
 # it for a CompassApp's calibration session (firmware/calibrate/session.py mount_check: after each fit
 # put in force until a check gives an answer, and at the session's end): app.mounting,
 # and the status shown in place of "ok" while the data name another MAG_AXES. norm14 comes
-# from firmware.trig, imported for the check; in calibration mode (firmware/calibrate/calmode.py), where
-# the heading line's trig is not loaded, it and its tables are let go again after it. check() allocates one work array of
+# from firmware.trig, imported for the check; where the heading line's trig is not loaded (the
+# calibration program), it and its tables are let go again after it. check() allocates one work array of
 # 63 ints and the axes string (and parses spec strings when given them in place of
 # AxisMap.m arrays); 24 pairs x 24 rotations, once per accepted fit. Every intermediate stays
 # below 2**30 (tests/test_mounting.py drives tests/intcheck).
@@ -162,8 +162,8 @@ def check(pairs, cal, mag_axes, accel_axes):
     t = array("i", bytes(12))
     d = pairs.data
     n = 0
-    # firmware.trig's norm14: in calibration mode (firmware/calibrate/calmode.py) the heading line's
-    # trig and its tables are not loaded; then they are loaded for this check and let go
+    # firmware.trig's norm14: the calibration program (firmware/calibrate/program.py) holds no
+    # trig and its tables; then they are loaded for this check and let go
     loaded = "firmware.trig" in sys.modules
     from firmware import trig
     for i in range(BINS):

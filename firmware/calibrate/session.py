@@ -34,8 +34,8 @@ ENDED = ("accepted", "refused", "solves", "last_reason", "last_detail", "last_mo
 
 
 def start(app, fast=True):
-    """A collector for `app` (firmware.calibrate.calibrator.Collector), with the kernel set it chose
-    (fast False: the plain functions, as in firmware/calibrate/calmode.py, which lets firmware.fast go)."""
+    """A collector for `app` (firmware.calibrate.calibrator.Collector), with the kernel set it
+    chose (fast False: the plain functions)."""
     from firmware.calibrate import samples
     from firmware.calibrate.calibrator import Collector
     samples.use_kernels((kernels() if fast and app.fast else None) or False)
@@ -58,13 +58,8 @@ def solve(app):
     n = app._slices_per_step
     while n and c.job is not None:
         cal = c.slice()
-        if c.job is None and app.mode != "heading":
-            _phase_done(app)
         if cal is not None:
             accept(app, cal)
-            if app.mode != "heading":
-                app._hist = None  # calibration mode: the history's code goes too
-                drop("calibrate.history")
         n -= 1
     d = app._wall_diff(app._wall(), t)
     app.slices = (app.slices + 1) & 0x3FFFFFFF
@@ -72,13 +67,6 @@ def solve(app):
         app.worst_stall_us = d
     if app.collector is not None and app.collector.job is None:
         end_if_done(app)
-
-
-def _phase_done(app):
-    # calibration mode (firmware/calibrate/calmode.py): the solver's code goes when a solve ends, so
-    # the save that may follow does not hold it too; the next solve loads it again
-    from firmware.calibrate.calibrator import release_solver
-    release_solver()
 
 
 def accept(app, cal):
@@ -93,9 +81,6 @@ def accept(app, cal):
         c.last_reason = e.reason
         c.last_detail = e.detail
         return
-    finally:
-        if app.mode != "heading":  # the gate loaded the solver's code: what follows (the
-            _phase_done(app)       # history, the mounting check, the save) does not hold it
     jump = history_check(app, cal)
     if jump is None:
         app._use(cal)
@@ -116,10 +101,7 @@ def end_if_done(app):
     """End the session when its job is done (see the module's opening comment): the collector, the
     history and the calibration machinery leave. True when it ended."""
     c = app.collector
-    # calibration mode ends with its fit in force even when the save failed: the heading line
-    # retries it (CompassApp._retry_save) with the session's heap free again
-    unsaved = app._unsaved and app.mode == "heading"
-    if (app.learn or app.pending is not None or unsaved or c.relearning
+    if (app.learn or app.pending is not None or app._unsaved or c.relearning
             or c.job is not None or c.kept or c.since_kept_us < _DONE_QUIET_US
             or not app._good_enough(app.calibration)):
         return False
@@ -129,7 +111,7 @@ def end_if_done(app):
     app.collector = None
     app._hist = None
     app._session = None
-    drop_part("calibrate", ("calibrate.calmode",))  # (in calibration mode the app's next step makes the heading line again)
+    drop_part("calibrate")
     return True
 
 
@@ -175,30 +157,16 @@ def mount_check(app):
 def history_check(app, cal):
     # -> None (in limits, or no history to judge by) or (parameter, value, low, high)
     try:
-        if app._hist is None:
-            if app.store is None or not hasattr(app.store, "prefix"):
-                return None
-            from firmware.calibrate.history import History
-            app._hist = History(app.store)
-        return app._hist.check(cal, app.calibration)
-    except Exception as e:  # noqa: BLE001 - evidence only: never stop the loop for it
-        history_failed(app, e)
-    return None
+        from firmware.calibrate.history import judge
+    except MemoryError:
+        return None  # evidence only: no room for it now
+    return judge(app, cal)
 
 
 def history_record(app, cal, flags):
-    h = app._hist
-    if h is None:
-        return
-    try:
-        h.record(cal, flags, app.date_s() if app.date_s is not None else 0)
-    except Exception as e:  # noqa: BLE001 - as above
-        history_failed(app, e)
-
-
-def history_failed(app, e):
-    app.history_errors += 1
-    app.history_reason = "%s %s" % (type(e).__name__, e.args[0] if e.args else "")
+    if app._hist is not None:
+        from firmware.calibrate.history import keep
+        keep(app, cal, flags)
 
 
 def saved(app, flags):
