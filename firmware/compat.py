@@ -50,6 +50,10 @@ except ImportError:  # CPython, or a port without micropython.const
 
     def const(x):
         return x
+try:
+    from micropython import kbd_intr  # Ctrl-C on or off (MotionCal's packets carry 0x03)
+except ImportError:
+    kbd_intr = None
 
 _TICKS_MAX = const((1 << 30) - 1)   # MicroPython's ticks wrap at 2**30 (time.ticks_add docs)
 _TICKS_HALF = const(1 << 29)

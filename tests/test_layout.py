@@ -20,8 +20,9 @@ PIPELINE = ["compat", "errors", "fixedpoint", "i2cdevice", "detect", "qmc5883l",
             # construction, the drivers' start-up and error texts, the store's load and save,
             # the calibration session, calibration mode where the heap holds one job at a
             # time, the status line)
-            "boot", "appsetup", "devinit", "persist", "calibrate.session", "calibrate.calmode",
-            "status"]
+            "boot", "appsetup", "devinit", "persist", "calibrate.session", "status", "hints",
+            # the calibration program, and what a board's main.py runs
+            "calibrate.program", "runner"]
 CALIBRATION_MACHINERY = {"firmware.calibrate.calibrator", "firmware.calibrate.solve", "firmware.calibrate.accum",
                          "firmware.calibrate.samples", "firmware.calibrate.acceptance", "firmware.calibrate.session",
                          "firmware.calibrate.history"}

@@ -1,22 +1,13 @@
-"""The calibration program: run alone after a reset, it holds only what calibrating needs,
-saves a fit the acceptance gate passed, reads it back and returns; the board then restarts into
-the heading (boards/main.py; docs/calibration.md, on the board).
-
-    from firmware.calibrate.program import Program
-    p = Program(i2c, "/", mag_axes="x,-y,-z", accel_axes="-x,y,z")
-    cal = p.run()   # a progress line every 0.5 s; the saved Calibration, or None (p.reason)
-"""
-# A sample is read, checked (firmware/health.py) and offered to the collector
-# (firmware/calibrate/calibrator.py Collector); when a solve is due, sampling pauses and the
-# solve runs to its end in one go, with the driver's work and the progress line set aside:
-# the heap holds the solver or the sample loop's garbage, never both (docs/design.md,
-# calibration program). A fit the collector accepted meets the acceptance gate
-# (firmware/calibrate/acceptance.py check_calibration) and the history's limits; the
-# mounting check (firmware/calibrate/mountcheck.py) judges MAG_AXES on the pairs kept. A
-# good-enough fit (the model asked for, fit error within GOOD_FIT_ERROR) is saved power-safely
-# (firmware/store.py) and read back; run() returns it. The program never raises for the
-# hardware or the heap: a read error is counted and the chip set up again, a MemoryError in
-# a solve is a refusal said on the progress line, a failed save is tried again.
+"""The calibration program: run alone after a start, it calibrates, saves, reads back and
+returns; boards/main.py then restarts the board into the heading (docs/calibration.md)."""
+#     from firmware.calibrate.program import Program
+#     p = Program(i2c, "/", mag_axes="x,-y,-z", accel_axes="-x,y,z")
+#     cal = p.run()   # a progress line every 0.5 s; the saved Calibration, or None (p.reason)
+#
+# A sample is checked (firmware/health.py) and offered to the collector (calibrator.py);
+# while a solve runs, sampling pauses and the drivers are let go. A fit meets the acceptance
+# gate, the history's limits and the mounting check; a good one is saved power-safely and read
+# back. Never raises for the hardware or the heap (docs/design.md, the calibration program).
 import gc
 from array import array
 
@@ -36,10 +27,10 @@ _SHORT_GIVE_UP = const(3)  # solves or steps in a row short of heap: the program
 
 
 class Program:
-    """See the module's opening comment. Attributes: mag, accel, store, collector, status,
-    reason (why run() returned None), samples, bad (samples refused by the checks), reinits,
-    saved (the Calibration saved and read back), saved_us, save_errors, short (solves in a
-    row without room), free_at_solve, mounting ((verdict, MAG_AXES) or None)."""
+    # See the module's opening comment. Attributes: mag, accel, store, collector, status,
+    # reason (why run() returned None), samples, bad (samples refused by the checks), reinits,
+    # saved (the Calibration saved and read back), saved_us, save_errors, short (solves in a
+    # row without room), free_at_solve, mounting ((verdict, MAG_AXES) or None).
 
     def __init__(self, i2c, store_dir, mag_axes="x,-y,-z", accel_axes="-x,y,z", model=10,
                  capacity=300, mag=None, accel=None, fs=None, ticks_us_=None, delay_us=None,

@@ -639,7 +639,6 @@ def board_run(install, session, kb, store_dir):
     return {"kb": kb, "exit": code, "traceback": "Traceback" in err or code != 0,
             "stderr": err[-400:], "lines": shown, "final": final, "restarts": restarts,
             "complete": bool(final and final.startswith("boardrun: model 10 ")
-                             and ("stored 0" not in final or restarts)
                              and last.startswith("heading ") and "---.-" not in last
                              and "model 10" in last and "out of memory" not in last
                              and "save failed" not in last)}

@@ -11,6 +11,7 @@ from array import array
 import micropython
 
 from firmware import axes, calibration, compat, fixedpoint, trig  # noqa: F401 - the core's
+import firmware.calibrate  # noqa: F401,E402 - the part's folder: the session has it already
 
 # a board turning slowly through every direction of gravity: 24 directions, each held for a
 # few steps (the first step of a new direction moves too far and is refused)

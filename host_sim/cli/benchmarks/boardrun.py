@@ -123,7 +123,7 @@ except SystemExit:
 except _Restart:
     print("boardrun: restart at %d" % _bus.now)
     _restarted = True
-_app = _g.get("app")
+_app = _g.get("app") or getattr(sys.modules.get("firmware.runner"), "app", None)
 if _restarted:
     pass
 elif _app is None:

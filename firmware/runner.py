@@ -1,0 +1,258 @@
+"""What boards/main.py runs: the calibration program or the heading, and the calls a REPL
+user makes (calibrate(), motioncal()). Its code is a module of the firmware, so a board loads
+it as bytecode instead of compiling a long main.py at every boot."""
+# run()        boot: a board without a good stored calibration runs the calibration program
+#              (firmware/calibrate/program.py) and restarts; otherwise the app shows headings
+#              (its status line every 0.5 s) or, board.MODE = "motioncal", streams to MotionCal.
+# calibrate()  from the REPL: restart into the calibration program.
+# motioncal()  from the REPL: MotionCal mode on the running app until Ctrl-C.
+# `board` is the board's own module (boards/<board>/board.py): pins, axes, STORE_DIR, and on
+# the simulated board its clock and restart().
+import sys
+
+import board
+from firmware import compat
+from firmware.compat import compiled_here, drop, drop_part, free_bytes, sleep_us
+
+app = None  # the CompassApp, once the heading runs
+
+# A calibration fitted on the desktop (python -m host_sim calibrate LOG --sensor ... --out
+# calibration.json) copied here is imported once at boot (docs/calibration.md).
+CAL_FILE = getattr(board, "CALIBRATION_FILE", None) or (
+    board.STORE_DIR.rstrip("/") + "/calibration.json")
+
+MOTIONCAL = getattr(board, "MODE", "compass") == "motioncal"
+# None on a real board (time.sleep_us, time.ticks_us); the simulated board (boards/host)
+# brings its own clock
+delay_us = getattr(board, "delay_us", None)
+# calibrate(): the calibration program at the next start, even with a good calibration
+REQUEST = board.STORE_DIR.rstrip("/") + "/calibrate.req"
+
+
+def wait_s(s):
+    if delay_us is not None:
+        delay_us(s * 1000000)
+    else:
+        sleep_us(s * 1000000)
+
+
+def free_kb():
+    f = free_bytes()  # after a collection; None where the port does not tell
+    return f // 1024 if f is not None else -1
+
+
+def restart():
+    """Start afresh: board.restart() where the board module has one (the simulated board),
+    else the port's reset."""
+    r = getattr(board, "restart", None)
+    if r is None:
+        import machine
+        r = machine.reset
+    r()
+
+
+def calibrate():
+    """From the REPL (Ctrl-C stops the compass): restart into the calibration program."""
+    _request("calibrate")
+    restart()
+
+
+def _request(what):
+    with open(REQUEST, "w") as f:
+        f.write(what)
+
+
+def _asked():
+    # the request's word ("calibrate", "relearn", "skip"), read once: a program cut short by
+    # a power cut is not run again
+    try:
+        import os
+        with open(REQUEST) as f:
+            what = f.read(16)
+        os.remove(REQUEST)
+        return what
+    except OSError:
+        return None
+
+
+def _program_due(i2c, what):
+    # "auto" (board.CALIBRATE's default): when no good calibration is stored; "never": the
+    # board never calibrates itself (a desktop, MotionCal or browser calibration instead).
+    # `what`: the request found at this start (_asked)
+    if what == "skip":  # the program just said it could not run here: the heading now
+        return None
+    if what:
+        return "asked"
+    if getattr(board, "CALIBRATE", "auto") != "auto":
+        return None
+    from firmware.boot import calibrated
+    try:
+        return None if calibrated(i2c, board.STORE_DIR, cal_file=CAL_FILE,
+                                  delay_us=delay_us) else "uncalibrated"
+    finally:
+        calibrated = None
+        drop("boot")
+
+
+def _need_kb():
+    try:
+        from firmware.status import PROGRAM_NEED_KB
+        return PROGRAM_NEED_KB
+    except MemoryError:
+        return "?"
+
+
+def run_program(i2c, why):
+    """The calibration program alone (firmware/calibrate/program.py), then a restart: into
+    the heading with its fit, or, when it could not run (said why), without running it again."""
+    # asked for (`why`), any good fit may replace the stored one: a new mounting, new iron
+    try:
+        from firmware.calibrate.program import Program
+        p = Program(i2c, board.STORE_DIR, mag_axes=board.MAG_AXES, accel_axes=board.ACCEL_AXES,
+                    ticks_us_=getattr(board, "ticks_us", None), delay_us=delay_us,
+                    renew=why == "asked")
+        Program = None
+        print("eCompass: calibrating (%s, accelerometer %s): turn the board through a figure-8, "
+              "over and around" % (p.mag.KIND, "yes" if p.accel else "no"))
+        if p.run() is not None:
+            restart()  # into the heading, with the calibration just saved
+        print("eCompass: the calibration program ran out of memory (%s KB free at a solve): "
+              "it needs ~%s KB of heap; use .mpy files or a frozen build, or calibrate on the "
+              "desktop or in the browser (docs/calibration.md)"
+              % (p.free_at_solve // 1024 if p.free_at_solve else "?", _need_kb()))
+    except ImportError:
+        print("eCompass: cannot calibrate on the board: install package-calibrate.json "
+              "(or calibrate on the desktop: docs/calibration.md)")
+        return
+    except MemoryError:
+        p = Program = None
+        print("eCompass: the calibration program needs ~%s KB of heap, more than this board "
+              "has: use .mpy files or a frozen build, or calibrate on the desktop or in the "
+              "browser (docs/calibration.md)" % _need_kb())
+    p = Program = None
+    _request("skip")
+    restart()  # a clean heap for the heading
+
+
+_PY_SHORT_KB = 96  # free heap below which a board running from .py sources is told so
+status_line = status_view = None
+
+
+def _boot():
+    # the heading's app (or the calibration program first, which restarts the board)
+    global app, status_line, status_view
+    what = _asked()
+    checked = MOTIONCAL  # the program is considered once a start (the boot loop retries)
+    while True:
+        try:
+            i2c = board.make_i2c()
+            if not checked:
+                # the boot check and the program run the plain kernels (same bits):
+                # firmware.fast and its tables stay out of the program's heap
+                compat.FAST = False
+                why = _program_due(i2c, what)
+                checked = True
+                if why:
+                    run_program(i2c, why)  # restarts, unless calibrate is not installed
+                    i2c = board.make_i2c()
+                compat.FAST = True
+            from firmware.app import status_line, status_view
+            from firmware.boot import start
+            # MotionCal mode: an HMC5883L at 75 Hz for 50 Raw lines/s (the QMC chips take no rate)
+            app, note = start(i2c, board.STORE_DIR, cal_file=CAL_FILE,
+                              mag_options={"rate": 75} if MOTIONCAL else None, delay_us=delay_us,
+                              mag_axes=board.MAG_AXES, accel_axes=board.ACCEL_AXES,
+                              declination_cdeg=board.DECLINATION_CDEG,
+                              ticks_us=getattr(board, "ticks_us", None),
+                              # MotionCal mode: its calibration, not the app's own
+                              learn=False if MOTIONCAL else None)
+            if note is not None:
+                print("eCompass: %s" % note)
+            break
+        except OSError as e:  # SensorNotFound, BusError: wiring or power; say so and retry
+            print("eCompass: %s" % e)
+            wait_s(2)
+        except MemoryError:  # not even the app fits: say so, and what to do, and try again
+            start = status_line = status_view = None
+            drop("app", "boot", "detect", "appsetup", "devinit", "store", "persist", "slots")
+            print("eCompass: out of memory at boot (%d KB free): use the .mpy or frozen "
+                  "install (docs/design.md, memory)" % free_kb())
+            wait_s(5)
+        except Exception as e:  # noqa: BLE001 - a board keeps running and says why
+            print("eCompass: cannot start: %s %s" % (type(e).__name__, e))
+            wait_s(5)
+    start = None
+    drop("boot")  # a running board holds only what it runs (docs/design.md, memory)
+
+
+def announce():
+    """What was found, and what the board will do (one line each)."""
+    if app.no_memory is not None:
+        print("eCompass: %s" % status_line(app))
+    else:
+        print("eCompass: %s, accelerometer %s, stored calibration: %s%s" % (
+            app.mag.KIND, "yes" if app.accel else "no", app.load_reason or "loaded",
+            ""))
+    if compiled_here(sys.modules.get("firmware.app")) and free_kb() < _PY_SHORT_KB:
+        print("eCompass: running from .py sources, %d KB free: .mpy files (make deploy) or "
+              "a frozen build need much less heap (docs/design.md, memory)" % free_kb())
+    if getattr(board, "GYRO", False) and not MOTIONCAL:
+        try:
+            app.use_gyro()  # docs/gyro.md: status "gyro held" while it holds the heading
+            print("eCompass: gyro-aided heading on")
+        except (ImportError, ValueError, MemoryError) as e:  # no part; no MPU6050; no room
+            print("eCompass: no gyro-aided heading: %s" % (e or "out of memory"))
+
+
+_out = getattr(sys.stdout, "buffer", sys.stdout)
+
+
+def report(a):
+    # the status line from the buffer firmware/status.py keeps: no garbage every half second
+    try:
+        _out.write(status_view(a))
+        _out.write(b"\n")
+    except MemoryError:  # no room to print this one: the next report tries again
+        pass
+
+
+
+
+def motioncal(rate_hz=50):
+    """MotionCal mode on this app until Ctrl-C (firmware/motioncal/mode.py)."""
+    try:
+        from firmware.motioncal.mode import MotionCalMode
+    except ImportError:
+        raise ImportError("motioncal() needs the motioncal part: install package-motioncal.json")
+    kbd_intr = compat.kbd_intr  # 0x03 in MotionCal's packet is data
+    try:
+        MotionCalMode(app, rate_hz=rate_hz, mag_axes=board.MAG_AXES, kbd_intr=kbd_intr,
+                      ticks_us=getattr(board, "ticks_us", None)).run()
+    finally:  # MotionCal mode is done: its code leaves (docs/design.md, memory)
+        if app.collector is None:
+            drop_part("motioncal")
+            drop("calibrate.acceptance", "calibrate.solve")
+        else:
+            drop_part("motioncal")
+
+
+def run():
+    """Boot, then the heading's loop (or MotionCal mode) for good."""
+    _boot()
+    try:
+        announce()
+    except MemoryError:  # the board runs on; its status line says the rest
+        pass
+    if MOTIONCAL:
+        motioncal()
+    else:
+        while True:
+            try:
+                app.run(None, report=report, every_us=500000)
+            except MemoryError:  # step() never raises; the loop's own bookkeeping: go on
+                pass
+            if app.relearn_due and getattr(board, "CALIBRATE", "auto") != "never":
+                print("eCompass: the calibration no longer fits the board and no session fits "
+                      "beside the heading: restarting into the calibration program")
+                _request("relearn")
+                restart()
