@@ -215,7 +215,7 @@ def test_the_bench_sweeps_boards_main_and_no_run_ends_in_a_traceback(smoke):
     if bs is None:
         pytest.skip("no x86-32 tier: the sweep needs its collector")
     assert "error" not in bs, bs
-    for name in ("mpy_first", "mpy_stored", "py_first", "py_stored"):
+    for name in ("mpy_first", "mpy_stored", "mip_first", "mip_stored"):
         assert bs[name]["heaps"] == 3 and bs[name]["tracebacks"] == [], (name, bs[name])
     assert bs["mpy_stored"]["smallest_kb"] is not None  # 160 and 320 KB boot a calibrated board
     lines = bench.board_sweep_rows(d["results"])

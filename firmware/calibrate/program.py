@@ -334,7 +334,6 @@ class Program:
         if self.saved is None:
             return
         self.reason = None
-        self.status = "saved"
         if self._hist is not None:  # the history follows the store (a jump: a new baseline)
             from firmware.calibrate import history
             history.keep(self, cal, history.FLAG_ACCEPTED | (

@@ -315,23 +315,25 @@ def collect(smoke, log=print):
 
 
 SWEEP_KB = (32, 320, 4)  # boards/main.py's heaps in make bench (tests/test_heap_sweep.py: 32 KB)
+SWEEP_KINDS = ("mpy", "mip")  # make deploy's .mpy files, and what mip installs
 
 
 def board_sweeps(session, build, smoke, log=print):
-    """boards/main.py at every heap of SWEEP_KB (smoke: three), from .mpy and .py, with an
-    empty store and with a stored calibration: {'mpy_first': {'smallest_kb', 'tracebacks',
-    'heaps'}, ...}. The smallest heap from which every larger one completes (smallest_complete)."""
+    """boards/main.py at every heap of SWEEP_KB (smoke: three), from .mpy files (make deploy)
+    and from what mip installs, with an empty store and with a stored calibration:
+    {'mpy_first': {'smallest_kb', 'tracebacks', 'heaps'}, ...}. The smallest heap from which
+    every larger one completes (smallest_complete)."""
     import tempfile
     lo, hi, step = SWEEP_KB
     kbs = [64, 160, 320] if smoke else list(range(lo, hi + 1, step))
     out = {}
     with tempfile.TemporaryDirectory() as d:
-        inst = {k: board_install(os.path.join(d, k), k) for k in ("mpy", "py")}
+        inst = {k: board_install(os.path.join(d, k), k) for k in SWEEP_KINDS}
         store = os.path.join(d, "calibrated")
         os.makedirs(store)
         if not board_run(inst["mpy"], session, 512, store)["complete"]:
             return {"error": "no calibration completed in 512 KB to boot from"}
-        for kind in ("mpy", "py"):
+        for kind in SWEEP_KINDS:
             for stored in (False, True):
                 name = "%s_%s" % (kind, "stored" if stored else "first")
                 log("  board sweep %s (%d heaps)" % (name, len(kbs)))
@@ -361,7 +363,7 @@ def board_sweep_rows(res):
              "completes, and the runs that ended in a traceback (the goal: none)." % (lo, hi, step),
              "", "| install | first calibration on the board | fits | a calibrated board boots "
              "| fits | tracebacks |", "|---|---|---|---|---|---|"]
-    for kind, label in (("mpy", ".mpy files (make deploy)"), ("py", ".py sources (mip)")):
+    for kind, label in (("mpy", ".mpy files (make deploy)"), ("mip", "what mip installs")):
         f, c = kb(kind + "_first"), kb(kind + "_stored")
         tb = sum(len((bs.get(kind + x) or {}).get("tracebacks") or ())
                  for x in ("_first", "_stored"))
@@ -1647,8 +1649,8 @@ def part_heap(res):
 
 
 def boards_section(res):
-    """README.md's board table and parts (between README_BEGIN and README_END): what each job
-    needs on a 32-bit MicroPython, from this run's measurements."""
+    """docs/install.md's heap tables and parts (between README_BEGIN and README_END): what
+    each job needs on a 32-bit MicroPython, from this run's measurements."""
     m = res.get("memory32") or {}
     sb = m.get("session_bytes") or 0
     rb = m.get("romfs_bytes") or 0
@@ -1683,9 +1685,59 @@ def boards_section(res):
 
 
 def splice_readme(section, path=None):
-    """Replace README.md's block between README_BEGIN and README_END with `section`."""
-    return splice_block(path or os.path.join(ROOT, "README.md"), README_BEGIN, README_END,
-                        section)
+    """Replace docs/install.md's block between README_BEGIN and README_END with `section`."""
+    return splice_block(path or os.path.join(ROOT, "docs", "install.md"), README_BEGIN,
+                        README_END, section)
+
+
+BOARDS_BEGIN = "<!-- by-board:begin -->"
+BOARDS_END = "<!-- by-board:end -->"
+# the boards README.md speaks of, with the heap MicroPython leaves them (KB; None: it varies)
+BOARDS = (("Raspberry Pi Pico (RP2040)", 190, "about 190 KB"),
+          ("Raspberry Pi Pico W", None, "less than a Pico (the Wi-Fi driver's buffers): "
+           "`gc.mem_free()` after boot tells"),
+          ("ESP32 without PSRAM (DevKit)", 110, "about 110 KB"),
+          ("ESP32-S3, boards with PSRAM", 2048, "MBs"))
+
+
+def by_board_section(res):
+    """README.md's table by board (between BOARDS_BEGIN and BOARDS_END): whether each board
+    calibrates on the board and boots calibrated, from this run's sweep of boards/main.py."""
+    bs = res.get("board_sweep") or {}
+    first = (bs.get("mpy_first") or {}).get("smallest_kb")
+    mip = (bs.get("mip_first") or {}).get("smallest_kb")
+    boot = (bs.get("mpy_stored") or {}).get("smallest_kb")
+    if not first or not boot:
+        return None
+    need = max(first, mip or first)
+    m = res.get("memory32") or {}
+    rom = _get(m, "min_heap_romfs", "kb")  # the calibration program from ROMFS (as frozen)
+    rom = (rom * 1024 - (m.get("session_bytes") or 0) - (m.get("romfs_bytes") or 0)
+           + 1023) // 1024 if rom else None
+    lines = [BOARDS_BEGIN,
+             "| board | free heap | calibrates on the board | shows a calibrated heading |",
+             "|---|---|---|---|"]
+    for name, kb, heap in BOARDS:
+        if kb is None:
+            cal = "if it has %d KB free; else as the ESP32 below" % need
+            head = "yes (from %d KB)" % boot
+        else:
+            if need <= kb:
+                cal = "yes: the calibration program (needs %d KB)" % need
+            elif rom and rom <= kb:
+                cal = ("from a frozen or ROMFS build (needs %d KB; `.mpy` files %d KB); or "
+                       "calibrate on the desktop, in the browser or with MotionCal" % (rom, need))
+            else:
+                cal = ("no (the program needs %d KB): calibrate on the desktop, in the "
+                       "browser or with MotionCal" % need)
+            head = "yes (from %d KB)" % boot if boot <= kb else "no"
+        lines.append("| %s | %s | %s | %s |" % (name, heap, cal, head))
+    lines.append("")
+    lines.append("*Smallest heaps of `boards/main.py` with its status line, on the 32-bit "
+                 "x86 build (`make bench`, %s; docs/install.md has the details).*"
+                 % machine()["date_utc"][:10])
+    lines.append(BOARDS_END)
+    return "\n".join(lines)
 
 
 def splice_block(path, begin, end, section):
@@ -1869,6 +1921,10 @@ def body(opts):
         write_doc(readme_section(R, m, derived, res))
         print("docs/benchmarks.md written")
         if not opts["smoke"] and splice_readme(boards_section(res)):
+            print("docs/install.md heap tables written")
+        bb = by_board_section(res)
+        if not opts["smoke"] and bb and splice_block(os.path.join(ROOT, "README.md"),
+                                                    BOARDS_BEGIN, BOARDS_END, bb):
             print("README.md board table written")
         if not opts["smoke"] and splice_logs(res):
             print("docs/calibration.md log table written")
