@@ -116,6 +116,8 @@ class STMagModel(MagnetometerModel):
         self.da = True
         if self.fault == "freeze":
             return
+        for _ in range(min(n - 1, len(self.injected))):
+            self.injected.pop(0)       # the sets overwritten before anyone could read them
         raw = self._measure(t)
         if self.bdu() and self._read:
             self._pending = raw
