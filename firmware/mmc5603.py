@@ -54,7 +54,7 @@ _RANGES_G = (4, 8, 16, 30)                  # shift s = index + 1
 _COUNTS_PER_GAUSS = (8192, 4096, 2048, 1024)
 _BWS = (0, 1, 2, 3)
 _MEAS_US = (6600, 3500, 2000, 1200)         # measurement time per BW code
-_PERIODS_US = (14200, 8000, 5000, 3400)     # two measurements and the transfers
+_PERIODS_US = (14400, 8200, 5200, 3600)     # two measurements, 1.2 ms of transfers at 400 kHz
 
 
 class MMC5603(Magnetometer):
