@@ -1,4 +1,4 @@
-"""LIS2MDL register model (I2C 0x1E), from ST's LIS2MDL datasheet (DocID030924) and AN5069;
+"""LIS2MDL register model (I2C 0x1E), from ST's LIS2MDL datasheet and AN5069 (DocID030934);
 the LSM303AGR's magnetometer (DocID027765) has the same register map and ID, so this model
 stands for it too. docs/hardware.md lists the facts and where they are.
 
