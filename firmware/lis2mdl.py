@@ -1,11 +1,11 @@
-"""LIS2MDL 3-axis magnetometer (ST), I2C address 0x1E; also the magnetometer of the LSM303AGR
-(same register map and ID, address 0x1E beside its accelerometer at 0x19).
+"""LIS2MDL 3-axis magnetometer (ST), I2C address 0x1E; also the LSM303AGR's magnetometer.
 
     from machine import I2C, Pin
     from firmware.lis2mdl import LIS2MDL
     x, y, z = LIS2MDL(I2C(0, scl=Pin(5), sda=Pin(4), freq=400000)).read()
 """
 # LIS2MDL(i2c, address=0x1E, *, range=16, odr=20, delay_us=None, timeout_us=None)
+#   (the LSM303AGR has the same register map and ID at 0x1E, its accelerometer at 0x19)
 #   range  16 (gauss): the span of the counts this driver returns (see below)
 #   odr    output data rate in Hz: 10, 20, 50, 100 (CFG_REG_A ODR[3:2])
 # read() -> (x, y, z) counts in the chip's axes; read_into(buf) fills buf[0..2] without

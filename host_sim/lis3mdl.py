@@ -20,7 +20,8 @@ Model choices where the sources are silent, stated so that tests show what a dri
   same register. Some libraries read the block without SUB(7) and report that it works, so
   real parts may advance regardless: the model keeps the datasheet's rule. Within the data
   block the address wraps from OUT_Z_H back to OUT_X_L (a reading of 0x28-0x2F in one
-  transfer returns X again where the temperature would be: PX4 issue 12514's bus trace).
+  transfer returns X again where the temperature would be: a bus trace reported at
+  github.com/PX4/PX4-Autopilot/issues/12514).
 - SOFT_RST: every register to its default (power-down, no data); the bit reads 0 after.
   REBOOT: no effect but reads 0 after.
 - Single mode: one set one output period after the CTRL_REG3 write, then MD reads 11.
