@@ -28,11 +28,13 @@ def bus_error(e, address, register):
                     address=address, register=register, errno=n)
 
 
-def option_code(chip, name, value, table):
-    """The register code of a keyword option: its index in `table`, or ValueError naming it."""
+def option_code(chip, name, value, table, unit=None):
+    """The register code of a keyword option: its index in `table`, or ValueError naming it
+    (and the option's unit, when it has one)."""
     if value not in table:
-        raise ValueError("%s %s=%s: expected one of %s"
-                         % (chip, name, value, ", ".join(str(v) for v in table)))
+        raise ValueError("%s %s=%r: expected one of %s%s"
+                         % (chip, name, value, ", ".join(str(v) for v in table),
+                            " (%s)" % unit if unit else ""))
     return table.index(value)
 
 
@@ -76,7 +78,9 @@ def timed_out(dev, reg, status, waited):
 
 def magnetometer(dev, device_init, i2c, address, delay_us, timeout_us, values):
     """Magnetometer.__init__: option codes, timing, the ID probe, the configuration."""
-    codes = [option_code(dev.KIND.upper(), dev.OPTIONS[i], v, dev.TABLES[i])
+    units = getattr(dev, "UNITS", ())
+    codes = [option_code(dev.KIND.upper(), dev.OPTIONS[i], v, dev.TABLES[i],
+                         units[i] if i < len(units) else None)
              for i, v in enumerate(values)]
     periods, counts = dev.PER_CODE
     device_init(dev, i2c, address, periods[codes[1]], delay_us, timeout_us)

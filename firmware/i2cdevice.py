@@ -183,6 +183,7 @@ class Magnetometer(Device):
     # keeps its datasheet's facts and gives them as class attributes:
     #
     #   KIND, OPTIONS  the driver's name in records and its keyword options (public)
+    #   UNITS          (optional) each option's unit, named by a bad value's ValueError
     #   TABLES         per option the values offered, register code = index; the first option
     #                  is the range (its code is .range_code), the second the output rate
     #   PER_CODE       (output period in us per rate code, counts/G per range code)

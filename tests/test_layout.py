@@ -12,7 +12,7 @@ from tests import mp
 ROOT = mp.ROOT
 FW = os.path.join(ROOT, "firmware")
 PIPELINE = ["compat", "errors", "fixedpoint", "i2cdevice", "detect", "qmc5883l", "hmc5883l",
-            "qmc5883p", "mpu6050", "axes", "calibrate.samples", "calibrate.accum",
+            "qmc5883p", "lis3mdl", "lis2mdl", "mmc5603", "mpu6050", "axes", "calibrate.samples", "calibrate.accum",
             "calibrate.solve", "calibration", "calibrate.acceptance", "calibrate.calibrator",
             "kang_tables", "trig", "compass", "store", "slots", "calibrate.history", "health",
             "fieldwatch", "app", "fast",
@@ -119,7 +119,7 @@ def test_no_import_cycles_in_firmware():
 
 def test_chip_drivers_import_only_the_device_base_and_errors():
     g = _graph()
-    for chip in ("qmc5883l", "hmc5883l", "qmc5883p", "mpu6050"):
+    for chip in ("qmc5883l", "hmc5883l", "qmc5883p", "lis3mdl", "lis2mdl", "mmc5603", "mpu6050"):
         assert set(g[chip]) <= {"compat", "errors", "i2cdevice"}, (chip, g[chip])
 
 
