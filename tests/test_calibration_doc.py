@@ -1,0 +1,21 @@
+"""docs/calibration.md's transcript of the calibration program is what boards/main.py prints on
+the simulated board (boards/host), line for line in the order shown."""
+import os
+
+from tests import mp
+
+DOC = os.path.join(mp.ROOT, "docs", "calibration.md")
+
+
+def test_the_progress_transcript_is_what_the_simulated_board_prints(tmp_path):
+    text = open(DOC).read()
+    body = text[text.index("### The calibration program's progress line"):]
+    body = body[body.index("```\n") + 4:]
+    shown = [ln for ln in body[:body.index("```")].splitlines() if not ln.startswith("(")]
+    out = mp.run(["tests/scenarios/app_main.py", "boards/main.py", str(tmp_path), "20"],
+                 micro=False).splitlines()
+    i = 0
+    for ln in shown:  # each line, in order
+        while i < len(out) and out[i] != ln:
+            i += 1
+        assert i < len(out), ln
