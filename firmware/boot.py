@@ -37,9 +37,10 @@ def _import(cal_file, store, mag):
 
 
 def calibrated(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, model=10):
-    """True when the heading can start: a calibration file waits to be imported, or the store
-    holds a good-enough fit (the model asked for, fit error within 5 %) for the chip found;
-    False: boards/main.py runs the calibration program (firmware/calibrate/program.py)."""
+    """(ok, mag): ok True when the heading can start (a calibration file waits to be
+    imported, or the store holds a good-enough fit for the chip found: the model asked for,
+    fit error within 5 %), False when boards/main.py runs the calibration program; mag the
+    driver found (start(mag=...) takes it)."""
     from firmware import detect
     from firmware.calibration import GOOD_FIT_ERROR, Calibration
     from firmware.store import CalStore
@@ -52,16 +53,16 @@ def calibrated(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, m
     if cal_file is None:
         cal_file = store_dir.rstrip("/") + "/calibration.json"
     if _exists(cal_file):
-        return True
+        return True, mag
     st = CalStore(store_dir, sensor=mag.KIND, range_code=mag.range_code,
                   validate=Calibration.from_bytes)
     try:
         cal = Calibration.from_bytes(st.load())
     except Exception:  # noqa: BLE001 - none, torn, unreadable: not calibrated
-        return False
+        return False, mag
     finally:
         drop("slots")
-    return cal.model == model and cal.fit_error <= GOOD_FIT_ERROR
+    return cal.model == model and cal.fit_error <= GOOD_FIT_ERROR, mag
 
 
 def start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_options):
@@ -71,7 +72,7 @@ def start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_
     opts = dict(mag_options or {})
     if delay_us is not None:
         opts["delay_us"] = delay_us
-    mag = detect.detect(i2c, **opts)
+    mag = app_options.pop("mag", None) or detect.detect(i2c, **opts)  # (found by calibrated())
     if "accel" not in app_options:
         acc = detect.detect_accel(i2c)
         if acc:  # (absent: the app looks for one again now and then)

@@ -15,6 +15,7 @@ from firmware import compat
 from firmware.compat import compiled_here, drop, drop_part, free_bytes, sleep_us
 
 app = None  # the CompassApp, once the heading runs
+_mag = None  # the magnetometer the boot check found: the app takes it over
 
 # A calibration fitted on the desktop (python -m host_sim calibrate LOG --sensor ... --out
 # calibration.json) copied here is imported once at boot (docs/calibration.md).
@@ -85,10 +86,12 @@ def _program_due(i2c, what):
         return "asked"
     if getattr(board, "CALIBRATE", "auto") != "auto":
         return None
+    global _mag
     from firmware.boot import calibrated
     try:
-        return None if calibrated(i2c, board.STORE_DIR, cal_file=CAL_FILE,
-                                  delay_us=delay_us) else "uncalibrated"
+        ok, _mag = calibrated(i2c, board.STORE_DIR, cal_file=CAL_FILE, delay_us=delay_us,
+                              mag_options={"rate": 75} if MOTIONCAL else None)
+        return None if ok else "uncalibrated"
     finally:
         calibrated = None
         drop("boot")
@@ -140,7 +143,7 @@ status_line = status_view = None
 
 def _boot():
     # the heading's app (or the calibration program first, which restarts the board)
-    global app, status_line, status_view
+    global app, status_line, status_view, _mag
     what = _asked()
     checked = MOTIONCAL  # the program is considered once a start (the boot loop retries)
     while True:
@@ -153,6 +156,7 @@ def _boot():
                 why = _program_due(i2c, what)
                 checked = True
                 if why:
+                    _mag = None
                     run_program(i2c, why)  # restarts, unless calibrate is not installed
                     i2c = board.make_i2c()
                 compat.FAST = True
@@ -165,7 +169,8 @@ def _boot():
                               declination_cdeg=board.DECLINATION_CDEG,
                               ticks_us=getattr(board, "ticks_us", None),
                               # MotionCal mode: its calibration, not the app's own
-                              learn=False if MOTIONCAL else None)
+                              learn=False if MOTIONCAL else None, mag=_mag)
+            _mag = None
             if note is not None:
                 print("eCompass: %s" % note)
             break

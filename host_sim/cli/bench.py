@@ -635,7 +635,8 @@ def board_run(install, session, kb, store_dir):
             restarts.append(int(got[-1].split()[-1]))
             continue
         break
-    final = lines[-1] if lines and lines[-1].startswith("boardrun: model") else None
+    final = (lines[-1] if lines and lines[-1].startswith("boardrun:")
+             and not lines[-1].startswith("boardrun: restart") else None)
     shown = [ln for ln in lines if not ln.startswith("boardrun:")]
     last = shown[-1] if shown else ""
     return {"kb": kb, "exit": code, "traceback": "Traceback" in err or code != 0,
