@@ -96,7 +96,11 @@ def test_refusal_exits_1_with_the_reason_and_what_to_try(tmp_path, capsys):
     assert r["rejected"] == "planar" and r["detail"] and "--force" in r["hint"]
     assert cap.err.count("\n") == 1 and "refused (planar)" in cap.err
     assert cli.main([p]) == 1
-    assert "refused: planar" in capsys.readouterr().out
+    # without --json: the refusal once, on stderr, with what to try; nothing on stdout
+    cap = capsys.readouterr()
+    assert cap.out == "" and cap.err.count("\n") == 1 and cap.err.count("planar") == 1
+    assert cap.err.startswith("host_sim calibrate: calibration refused (planar): ")
+    assert "try: " in cap.err and "--force" in cap.err
 
 
 def test_bad_usage_exits_2(tmp_path, capsys):
@@ -227,7 +231,7 @@ def test_a_log_of_another_chip_is_counted_once_and_the_warning_says_which(tmp_pa
     assert "log more samples" not in r["hint"] and "--sensor" in r["hint"]
     assert "outside hmc5883l's output" in err and "refused" in err.splitlines()[-1]
     rc, out, err = cli_run("calibrate", p, "--sensor", "hmc5883l")
-    assert rc == 1 and "  600 rows (%d skipped)" % r["skipped_rows"] in out
+    assert rc == 1 and out == "" and "(600 rows, %d skipped;" % r["skipped_rows"] in err
     # no comment naming the chip: the int16 counts still point at the QMC chips
     p = qmc_log(tmp_path, name="bare.csv", comment=False)
     rc, out, _ = cli_run("calibrate", p, "--sensor", "hmc5883l", "--json")

@@ -443,19 +443,16 @@ def _refused(opts, rej, info):
     fail = info.get("force_failed")
     if fail is not None:
         hint = "even --force cannot fit: %s: %s" % (fail.reason, fail.detail)
-    print("%s %s: calibration refused (%s): %s; try: %s"
-          % ("host_sim", COMMAND, rej.reason, rej.detail, hint), file=sys.stderr)
+    # once, on stderr (stdout carries only a result: the JSON record with --json)
+    print("%s %s: calibration refused (%s): %s (%d rows, %d skipped; %d samples held, "
+          "separation %d counts); try: %s"
+          % ("host_sim", COMMAND, rej.reason, rej.detail, info["rows"], info["skipped"],
+             info["held"], info["separation"], hint), file=sys.stderr)
     if opts["json"]:
         print(json.dumps({"rejected": rej.reason, "detail": rej.detail, "hint": hint,
                           "rows": info["rows"], "skipped_rows": info["skipped"],
                           "rail_samples": info["railed"],
                           "samples_held": info["held"], "warnings": warning_list(info)}))
-    else:
-        print("calibration refused: %s" % rej.reason)
-        print("  %s" % rej.detail)
-        print("  try: %s" % hint)
-        print("  %d rows (%d skipped), %d samples held (separation %d counts)"
-              % (info["rows"], info["skipped"], info["held"], info["separation"]))
     return STATUS_REFUSED
 
 
