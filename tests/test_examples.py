@@ -58,8 +58,39 @@ def test_a_log_fitted_on_the_desktop_is_loaded_onto_the_board_once(tmp_path):
     assert out.startswith("imported"), out
     assert os.path.exists(cal + ".imported") and not os.path.exists(cal)
     assert any(f.endswith(".cal") for f in os.listdir(store))
-    again = mp.run(["examples/load_calibration.py", cal, str(store)], micro=True)
-    assert again.startswith("no calibration file")  # imported once
+    # imported once: a second run finds no file, says so on stderr and exits 2
+    again = subprocess.run([mp.MICROPYTHON, "examples/load_calibration.py", cal, str(store)],
+                           cwd=mp.ROOT, env=mp._env(True), capture_output=True, text=True)
+    assert again.returncode == 2 and again.stdout == "", again
+    assert again.stderr.startswith("no calibration file") and "Traceback" not in again.stderr
+
+
+@pytest.mark.parametrize("micro", [False, True])
+def test_a_refused_calibration_file_is_said_once_and_exits_1(tmp_path, micro):
+    # a file written for another chip than the one the board finds (the simulator's QMC5883L)
+    import json
+    from host_sim.cli import calfile
+    log = str(tmp_path / "log.csv")
+    cal = str(tmp_path / "calibration.json")
+    mp.run(["examples/log_csv.py", log, "12000"], micro=True)
+    p = subprocess.run([sys.executable, "-m", "host_sim", "calibrate", log, "--sensor",
+                        "qmc5883l", "--out", cal], cwd=mp.ROOT, capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    d = calfile.read(cal)
+    d.update(sensor="hmc5883l", range_code=1, range_gauss=1.3, counts_per_gauss=1090)
+    with open(cal, "w") as f:
+        json.dump(d, f)
+    store = tmp_path / "store"
+    store.mkdir()
+    exe = [mp.MICROPYTHON] if micro else [sys.executable]
+    r = subprocess.run(exe + ["examples/load_calibration.py", cal, str(store)], cwd=mp.ROOT,
+                       env=mp._env(micro), capture_output=True, text=True)
+    assert r.returncode == 1 and r.stdout == "", r
+    line = r.stderr.strip()
+    assert "\n" not in line and line.startswith("rejected %s: " % cal), line
+    why = line[len("rejected %s: " % cal):]
+    assert "hmc5883l" in why and "refused" not in why and "rejected" not in why  # said once
+    assert os.path.exists(cal + ".rejected") and os.listdir(str(store)) == []
 
 
 def test_gyro_heading_holds_through_the_magnet_the_same_on_both_interpreters():
