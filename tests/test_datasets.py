@@ -195,3 +195,43 @@ def test_noisy_log_at_a_boards_300_samples_passes_as_noise():
     # follow from one kept sample to the next (lag-1 correlation below 1/4)
     pct, rho, refused = _consistency("qmc5883l_tomisuarez_noisy", "--board-like")
     assert pct > 3 and rho < 0.25 and refused is None
+
+
+# ---- the settings datasets/README.md documents for a log are the ones that calibrate it -----
+
+def _documented_commands():
+    """(name, argv after `-m host_sim calibrate`) of every command datasets/README.md quotes."""
+    readme = open(os.path.join(SHIPPED, "README.md"), encoding="utf-8").read()
+    out = []
+    for m in re.finditer(r"`python3 -m host_sim calibrate datasets/(\w+)\.csv([^`]*)`", readme):
+        out.append((m.group(1), ["datasets/%s.csv" % m.group(1)] + m.group(2).split()))
+    return out
+
+
+def test_a_log_with_a_stated_range_calibrates_with_the_options_its_readme_and_json_give(capsys):
+    stated = [n for n in ALL_LOGS if log_path(n) and "calibrate" in meta(n)]
+    assert set(stated) >= {"qmc5883l_tomisuarez_filtered", "qmc5883l_tomisuarez_noisy"}
+    documented = dict((n, argv[1:]) for n, argv in _documented_commands() if len(argv) > 1)
+    assert documented["qmc5883l_tomisuarez_filtered"] == meta(
+        "qmc5883l_tomisuarez_filtered")["calibrate"]
+    import json
+    for name in stated:
+        opts = meta(name)["calibrate"]
+        path = log_path(name)
+        assert calibrate.main([path, "--json"] + opts) == 0, capsys.readouterr().err
+        r = json.loads(capsys.readouterr().out)
+        assert r["model"] == 10 and 22 <= r["field_ut"] <= 67, r     # a geomagnetic field
+        rng = opts[opts.index("--range") + 1]
+        assert float(r["range_gauss"]) == float(rng)
+        # the chip's default range (what the README said before: +-2 G) holds 9 uT: refused
+        assert calibrate.main([path, "--json", "--sensor", opts[opts.index("--sensor") + 1]]) == 1
+        assert json.loads(capsys.readouterr().out)["rejected"] == "field_out_of_range"
+
+
+def test_every_calibrate_command_datasets_readme_quotes_runs(capsys):
+    cmds = _documented_commands()
+    assert len(cmds) >= 2
+    for name, argv in cmds:
+        assert calibrate.main([os.path.join(ROOT, argv[0])] + argv[1:]) == 0, (
+            argv, capsys.readouterr().err)
+        capsys.readouterr()
