@@ -88,7 +88,9 @@ def _parser():
              help="the file's units: counts, uT, mG, G, nT (any case; with a\n"
                   "micro sign, microtesla, gauss, milligauss, nanotesla too);\n"
                   "uT/mG/G/nT files are converted to the board's counts (or\n"
-                  "checked against 10..90 uT)")
+                  "checked against 10..90 uT). Default: the units the header's\n"
+                  "names state ('Mag_X (uT)', 'mx_mG', 'x [G]'); a --units that\n"
+                  "differs wins, with a warning")
     p.option("--scale", "decimal", lo="0.000001", hi=1000000, metavar="K",
              help="counts per file unit, instead of --units (e.g. 6.6667 for\n"
                   "an AK09916 log in uT: 0.15 uT per count)")
@@ -134,7 +136,7 @@ warning naming the line, on stderr; errors and warnings always go to stderr.
 JSON: model, offset, field, invw (W^-1, det 1; file units), scale (counts per file unit),
 invw_q15, offset_counts, field_counts, field_out_counts (the magnitude the compass checks),
 fit_error_x100, fit_error_percent, samples_used, coverage_percent, date, rows, skipped_rows,
-forced, refusal, warnings, and sensor, range_gauss, range_code, counts_per_gauss, field_ut
+units (the file's: --units, else the header's, else null), forced, refusal, warnings, and sensor, range_gauss, range_code, counts_per_gauss, field_ut
 when known; mounting (a log with accelerometer columns: the mounting check, its verdict
 and the MAG_AXES the data say; docs/calibration.md, troubleshooting); after a refusal
 {"rejected", "detail", "hint", rows, samples_held}.
@@ -285,6 +287,7 @@ def run(opts):
             raise UsageError("%s: no data rows left after --skip %d" % (path, opts["skip"]))
         raise UsageError("%s: no data rows%s" % (path, " after the header (line %d)"
                                                  % log.header_line if log.header_line else ""))
+    opts, units_note = header_units(opts, log)
     num, den, cpg, p = conversion(opts, board, mag, path)
     capacity, separation, step = desktop_plan(log.rows_read, opts["capacity"],
                                               opts["separation"], opts["board_like"])
@@ -331,7 +334,7 @@ def run(opts):
     if board.sensor is not None and outside * 2 > rows:
         note = calopts.range_advice(board, opts, outside, rows, peak,
                                     calopts.named_sensor(path))
-    info = {"rows": rows, "range_note": note, "outside": outside, "used": used, "railed": cal.railed + markers,
+    info = {"rows": rows, "range_note": note, "units": opts["units"], "units_note": units_note, "outside": outside, "used": used, "railed": cal.railed + markers,
             "skipped": log.skipped,
             "warnings": log.warnings, "num": num, "den": den, "p": p, "cpg": cpg,
             "held": cal.count, "separation": cal.separation, "step": step, "board": board,
@@ -358,6 +361,24 @@ def run(opts):
         return None, rej, info
     info["forced"] = rej
     return c, None, info
+
+
+def header_units(opts, log):
+    """(opts, note): the units the header's column names state ('Mag_X (uT)', 'mx_mG', 'x [G]')
+    are the file's when neither --units nor --scale says; an explicit --units that differs
+    from them wins, with a note (one warning line) saying so."""
+    said = log.header_units()
+    if said is None:
+        return opts, None
+    if opts["units"] is None and opts["scale"] is None:
+        opts = dict(opts)
+        opts["units"] = said
+        return opts, None
+    if opts["units"] is not None and opts["units"] != said:
+        return opts, ("--units %s differs from the header's units, %s (%s): the file is read "
+                      "as %s (--units wins)" % (opts["units"], said,
+                                                ", ".join(log.column_names()), opts["units"]))
+    return opts, None
 
 
 def _unit(v, num, den):
@@ -391,7 +412,7 @@ def report(c, info, date):
         "fit_error_percent": c.fit_error / 100,
         "samples_used": c.samples,
         "rows": info["rows"], "skipped_rows": info["skipped"], "rail_samples": info["railed"],
-        "warnings": warning_list(info),
+        "units": info["units"], "warnings": warning_list(info),
     })
     if info["cpg"]:
         r["field_ut"] = c.field * 100 / info["cpg"]
@@ -404,14 +425,14 @@ def warning_list(info):
     """The JSON's warnings: the rows skipped (the first few, by line), then what the options
     and the log say together (a breakout read as its chip; most rows outside the chip)."""
     out = ["line %d: %s" % w for w in info["warnings"]]
-    for w in (info["board"].note, info.get("range_note")):
+    for w in (info["board"].note, info.get("range_note"), info.get("units_note")):
         if w:
             out.append(w)
     return out
 
 
 def _print_notes(info):
-    for w in (info["board"].note, info.get("range_note")):
+    for w in (info["board"].note, info.get("range_note"), info.get("units_note")):
         if w:
             warn(COMMAND, w)
 
