@@ -49,9 +49,12 @@ def test_a_log_fitted_on_the_desktop_is_loaded_onto_the_board_once(tmp_path):
     log = str(tmp_path / "log.csv")
     cal = str(tmp_path / "calibration.json")
     mp.run(["examples/log_csv.py", log, "12000"], micro=True)
-    p = subprocess.run([sys.executable, "-m", "host_sim", "calibrate", log, "--sensor",
-                        "qmc5883l", "--out", cal], cwd=mp.ROOT, capture_output=True, text=True)
-    assert p.returncode == 0, p.stderr
+    # no --sensor: the log's first line names the chip and its range
+    p = subprocess.run([sys.executable, "-m", "host_sim", "calibrate", log, "--out", cal],
+                       cwd=mp.ROOT, capture_output=True, text=True)
+    assert p.returncode == 0 and p.stderr == "", p.stderr
+    assert "board          qmc5883l at 2 G (range code 0, 12000 counts/G); the log's line " \
+        "'# qmc5883l range_code 0 counts_per_gauss 12000'" in p.stdout
     store = tmp_path / "store"
     store.mkdir()
     out = mp.run(["examples/load_calibration.py", cal, str(store)], micro=True)
