@@ -118,11 +118,11 @@ def logged_board(path):
         line = raw.strip()
         if line[:1] != b"#":
             continue
-        w = line[1:].decode("ascii", "replace").split()
+        text = "".join([chr(c) if c < 128 else "?" for c in line])   # any bytes, any port
+        w = text[1:].split()
         if len(w) < 3 or w[0].lower() not in calfile.SENSOR_NAMES or w[1] != "range_code":
             continue
         chip = w[0].lower()
-        text = line.decode("ascii", "replace")
         for rng, code, cpg in calfile.SENSORS[chip]["ranges"]:
             if w[2] == str(code):
                 if len(w) >= 5 and w[3] == "counts_per_gauss" and w[4] != str(cpg):
