@@ -74,9 +74,9 @@ QEMU_RUN = os.path.join(ROOT, "tools", "run-qemu-mps2.sh")
 def _wasm_reason():
     # the same words as `make wasm` prints ("wasm tier skipped: <why>")
     if not shutil.which("node"):
-        return "node not found on PATH"
+        return "node not found on PATH (install Node.js and npm, then make wasm)"
     if not shutil.which("npm"):
-        return "npm not found on PATH"
+        return "npm not found on PATH (install npm, then make wasm)"
     if not os.path.exists(WASM_PKG):
         return "build/npm/node_modules not installed (make wasm)"
     return None

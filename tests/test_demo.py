@@ -232,7 +232,8 @@ def test_run_exits_0_and_tells_the_story():
 
 
 def test_plot_is_written_when_matplotlib_is_present(tmp_path):
-    pytest.importorskip("matplotlib")
+    pytest.importorskip("matplotlib", reason="matplotlib not installed (requirements.txt: make "
+                        "venv)")
     path = tmp_path / "sub" / "cal.png"
     rc, out = run_demo("--chip", "qmc5883l", "--seed", "1", "--plot", str(path))
     assert rc == 0

@@ -180,3 +180,71 @@ def test_the_tier_messages_name_the_tag_the_build_script_pins():
     assert re.search(r"^MICROPYTHON_TAG := (\S+)$", make, re.M).group(1) == tag
     assert mp.MICROPYTHON_TAG == tag and "--branch %s " % tag in mp.BUILD_HINT
     assert "MICROPYTHON_SRC=build/micropython make tiers" in mp.BUILD_HINT
+
+
+# ---- `make test` says why each skipped test skipped, and what runs it ------------------------
+
+def _skip_calls():
+    """(file:line, literal text or None) of every skip in tests/*.py: pytest.skip(...),
+    pytest.importorskip(..., reason=...), @pytest.mark.skipif(..., reason=...); None when the
+    text is computed (a tier's reason, missing_reason(), ...)."""
+    import ast
+    out = []
+    for path in sorted(glob.glob(os.path.join(ROOT, "tests", "*.py"))):
+        for node in ast.walk(ast.parse(open(path).read())):
+            if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)):
+                continue
+            name = node.func.attr
+            if name == "skip" and node.args:
+                arg = node.args[0]
+            elif name in ("importorskip", "skipif"):
+                arg = dict((k.arg, k.value) for k in node.keywords).get("reason")
+            else:
+                continue
+            where = "%s:%d" % (os.path.relpath(path, ROOT), node.lineno)
+            if arg is None:                      # importorskip's own text names no command
+                out.append((where, ""))
+                continue
+            texts = [n.value for n in ast.walk(arg)
+                     if isinstance(n, ast.Constant) and isinstance(n.value, str)]
+            computed = any(isinstance(n, (ast.Call, ast.Attribute, ast.Name))
+                           for n in ast.walk(arg))
+            out.append((where, None if computed else "".join(texts)))
+    return out
+
+
+# skips no command can lift: what the platform lacks
+PLATFORM = ("os.openpty",)
+
+
+def test_every_literal_skip_reason_says_what_to_run_or_install():
+    calls = _skip_calls()
+    assert len(calls) >= 15
+    vague = [(w, t) for w, t in calls if t is not None and not re.search(
+        r"\bmake [a-z]|apt-get install|requirements\.txt", t) and not any(
+        p in t for p in PLATFORM)]
+    assert vague == []
+
+
+def test_computed_skip_reasons_name_what_to_run(monkeypatch):
+    # the reasons the tiers, the fetched logs and the browser tier give when they are missing
+    import shutil
+    from host_sim.cli.benchmarks.reference import missing_reason
+    from tests import mp
+    from tests import test_web
+    monkeypatch.setattr(shutil, "which", lambda name: None)
+    assert "make wasm" in mp._wasm_reason()
+    monkeypatch.setattr(mp, "X86_32", os.path.join(ROOT, "build", "no-such-tool"))
+    assert "make tiers" in mp._x86_reason()
+    monkeypatch.setenv("ARM_TIER", "0")
+    assert "make test-arm" in mp._arm_reason()
+    assert "make datasets" in missing_reason(["a"]) and "make datasets" in missing_reason(
+        ["a", "b", "c"])
+    assert "make web" in test_web._why_skip()
+
+
+def test_make_test_prints_the_skip_reasons():
+    # -rs: a line per reason (pytest groups the skips that share one) after the dots
+    make = open(os.path.join(ROOT, "Makefile")).read()
+    recipe = re.search(r"^test:.*\n((?:\t.*\n)+)", make, re.M).group(1)
+    assert re.search(r"-m pytest\b.*\s-rs\b", recipe), recipe

@@ -269,7 +269,7 @@ def test_serve_usage_error_is_one_line_exit_2():
     assert err.count(b"\n") == 1 and b"--protocol" in err
 
 
-@pytest.mark.skipif(not hasattr(os, "openpty"), reason="no pseudo-terminals here")
+@pytest.mark.skipif(not hasattr(os, "openpty"), reason="no pseudo-terminals here (os.openpty: Linux and macOS)")
 def test_serve_on_a_pty_like_motioncal_would_open_it():
     import tty
     proc = _serve("--pty", "--fast", "--seconds", "20")

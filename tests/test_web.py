@@ -45,7 +45,8 @@ COUNTS_PER_GAUSS = 1000   # web/webcal.py: MotionCal's 0.1 uT counts
 
 def _why_skip():
     if shutil.which("node") is None:
-        return "browser tier skipped: node not found on PATH"
+        return ("browser tier skipped: node not found on PATH (install Node.js and npm, then "
+                "make web)")
     if not os.path.exists(CHROMIUM):
         return ("browser tier skipped: %s missing (as root: apt-get install -y chromium; "
                 "`make web` does it)" % CHROMIUM)
