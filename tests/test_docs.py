@@ -248,3 +248,117 @@ def test_make_test_prints_the_skip_reasons():
     make = open(os.path.join(ROOT, "Makefile")).read()
     recipe = re.search(r"^test:.*\n((?:\t.*\n)+)", make, re.M).group(1)
     assert re.search(r"-m pytest\b.*\s-rs\b", recipe), recipe
+
+
+# ---- every firmware name README and docs quote exists ----------------------------------------
+# `firmware.mod.attr` (a module, then attributes: imported and looked up) and `firmware/mod.py`
+# (a file or folder; a glob must match one), resolved against the tree as it is, so a module
+# moved into a sub-package must be quoted by its new name. `x` / `y` are placeholders
+# (`from firmware.x import y`); `/firmware/...` after a slash is a URL path, not a name.
+
+_FW_NAME = re.compile(r"(?<![\w/.-])firmware((?:\.[A-Za-z_]\w*)+|/[\w*./-]*)")
+PLACEHOLDERS = ("x", "y")
+
+
+def _defined(body):
+    """{name: node} of what a module or class body defines (def, class, assignment, import,
+    and the same inside its try / if blocks)."""
+    import ast
+    out = {}
+    for node in body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            out[node.name] = node
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            for t in (node.targets if isinstance(node, ast.Assign) else [node.target]):
+                for n in ast.walk(t):
+                    if isinstance(n, ast.Name):
+                        out[n.id] = node
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            for a in node.names:
+                out[(a.asname or a.name).split(".")[0]] = node
+        elif isinstance(node, (ast.Try, ast.If, ast.With)):
+            for block in ([node.body, node.orelse] + [h.body for h in getattr(
+                    node, "handlers", [])] + [getattr(node, "finalbody", [])]):
+                out.update(_defined(block))
+    return out
+
+
+def unresolved_firmware_name(name, root=ROOT):
+    """None when `name` ('firmware.trig.atan2', 'firmware/store.py') exists, else why not.
+    Read from the sources (not imported: some modules import only on MicroPython)."""
+    import ast
+    if "/" in name or name == "firmware":
+        path = name.rstrip(".")
+        if "..." in path or any(p in PLACEHOLDERS for p in re.split(r"[/.]", path)):
+            return None
+        full = os.path.join(root, path)
+        if "*" in path:
+            return None if glob.glob(full) else "no file matches"
+        if os.path.exists(full) or os.path.exists(full + ".py"):
+            return None
+        return "no such file or folder"
+    parts = name.split(".")
+    if any(p in PLACEHOLDERS for p in parts[1:2]):
+        return None
+    k = len(parts)        # the longest prefix that is a module: a .py or a package folder
+    while k > 1 and not (os.path.isfile(os.path.join(root, *parts[:k]) + ".py") or
+                         os.path.isdir(os.path.join(root, *parts[:k]))):
+        k -= 1
+    if k == 1:
+        return "no module %s" % ".".join(parts[:2])
+    mod = ".".join(parts[:k])
+    src = os.path.join(root, *parts[:k]) + ".py"
+    if not os.path.isfile(src):
+        src = os.path.join(root, *(parts[:k] + ["__init__.py"]))
+        if not os.path.isfile(src):       # a folder without __init__.py: modules only
+            return None if k == len(parts) else "no module %s" % ".".join(parts[:k + 1])
+    body = ast.parse(open(src, encoding="utf-8").read()).body
+    for a in parts[k:]:
+        node = _defined(body).get(a)
+        if node is None:
+            return "%s has no %s" % (mod, ".".join(parts[k:]))
+        body = node.body if isinstance(node, ast.ClassDef) else []
+    return None
+
+
+def test_the_firmware_name_check_finds_a_wrong_module_and_a_wrong_attribute():
+    assert unresolved_firmware_name("firmware.trig.atan2") is None
+    assert unresolved_firmware_name("firmware.heading.atan2") == "no module firmware.heading"
+    assert unresolved_firmware_name("firmware.trig.atan3") == "firmware.trig has no atan3"
+    assert unresolved_firmware_name("firmware/trig.py") is None
+    assert unresolved_firmware_name("firmware/heading.py") == "no such file or folder"
+    assert unresolved_firmware_name("firmware/*.py") is None
+    assert unresolved_firmware_name("firmware.x") is None          # a placeholder
+    assert unresolved_firmware_name("firmware.fast.isqrt") is None  # imports only on MicroPython
+    assert unresolved_firmware_name("firmware.calibrator.Calibrator.solve") is None
+    assert unresolved_firmware_name("firmware.calibrator.Calibrator.nothing") is not None
+
+
+def test_the_firmware_name_check_follows_modules_into_sub_packages(tmp_path):
+    # a module moved into a sub-folder (with or without __init__.py) is found by its new name
+    sub = tmp_path / "firmware" / "calibrate"
+    sub.mkdir(parents=True)
+    (sub / "solve.py").write_text("class Fit:\n    def solve(self):\n        pass\n")
+    (tmp_path / "firmware" / "gyro").mkdir()
+    (tmp_path / "firmware" / "gyro" / "__init__.py").write_text("from firmware.x import y\n")
+    root = str(tmp_path)
+    for name in ("firmware.calibrate.solve.Fit.solve", "firmware/calibrate/solve.py",
+                 "firmware.calibrate", "firmware/calibrate/", "firmware.gyro.y"):
+        assert unresolved_firmware_name(name, root) is None, name
+    assert unresolved_firmware_name("firmware.solve.Fit", root) == "no module firmware.solve"
+    assert unresolved_firmware_name("firmware.calibrate.fit", root) == \
+        "no module firmware.calibrate.fit"
+    assert unresolved_firmware_name("firmware/solve.py", root) == "no such file or folder"
+
+
+def test_every_firmware_module_and_name_readme_and_docs_quote_exists():
+    bad, n = [], 0
+    for path in _doc_files():
+        for k, line in enumerate(open(path, encoding="utf-8"), 1):
+            for m in _FW_NAME.finditer(line):
+                n += 1
+                name = m.group(0).rstrip(".,;:")
+                why = unresolved_firmware_name(name)
+                if why:
+                    bad.append("%s:%d: %s (%s)" % (os.path.relpath(path, ROOT), k, name, why))
+    assert n >= 50 and not bad, "\n".join(bad)
