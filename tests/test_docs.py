@@ -362,3 +362,37 @@ def test_every_firmware_module_and_name_readme_and_docs_quote_exists():
                 if why:
                     bad.append("%s:%d: %s (%s)" % (os.path.relpath(path, ROOT), k, name, why))
     assert n >= 50 and not bad, "\n".join(bad)
+
+
+# ---- the lists the docs keep: every command, example and package part ------------------------
+
+def _section(path, heading):
+    """The text of README's / a doc's section whose heading contains `heading` (to the next
+    heading of the same or a higher level)."""
+    text = open(path, encoding="utf-8").read()
+    m = re.search(r"^(#+) [^\n]*%s[^\n]*\n" % re.escape(heading), text, re.M)
+    assert m, (path, heading)
+    end = re.compile(r"^#{1,%d} " % len(m.group(1)), re.M).search(text, m.end())
+    return text[m.end():end.start() if end else len(text)]
+
+
+def test_design_names_every_command_of_the_runner():
+    from host_sim.__main__ import _COMMANDS
+    text = open(os.path.join(ROOT, "docs", "design.md"), encoding="utf-8").read()
+    para = [p for p in text.split("\n\n") if "the command-line runner:" in p]
+    assert len(para) == 1
+    listed = re.findall(r"`(\w+)`", para[0].split("the command-line runner:")[1].split(";")[0])
+    assert listed == list(_COMMANDS)
+
+
+def test_readme_names_every_example_and_every_package_part():
+    readme = os.path.join(ROOT, "README.md")
+    examples = sorted(f for f in os.listdir(os.path.join(ROOT, "examples"))
+                      if f.endswith(".py") and f not in ("__init__.py", "bus.py"))
+    assert len(examples) >= 7
+    section = _section(readme, "Examples")
+    assert [f for f in examples if "`%s`" % f not in section] == []
+    parts = sorted(os.path.basename(p) for p in glob.glob(os.path.join(ROOT, "package-*.json")))
+    assert len(parts) >= 7
+    text = open(readme, encoding="utf-8").read()
+    assert [p for p in parts if "`%s`" % p not in text] == []
