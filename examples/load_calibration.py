@@ -1,10 +1,10 @@
 """Load a calibration file (the desktop tool's --out) into the board's store, once.
 
-    python -m host_sim calibrate mag_log.csv --sensor qmc5883l --out calibration.json
+    python3 -m host_sim calibrate mag_log.csv --out calibration.json  # the log names its chip
     mpremote cp calibration.json :calibration.json        # then, on the board:
     from examples.load_calibration import load; load()
 
-    python examples/load_calibration.py FILE [STORE_DIR]  # on the host (simulated board)
+    python3 examples/load_calibration.py FILE [STORE_DIR]  # on the host (simulated board)
 
 STORE_DIR (default /, the board's root) is made when it does not exist (one level).
 Exit status as a script: 0 imported; 1 refused (or the store could not save it); 2 no file

@@ -1,6 +1,6 @@
 """Log raw magnetometer samples to a CSV file on the board's flash, bounded in size.
 
-    python examples/log_csv.py [PATH] [MAX_BYTES]     # on the host (simulated board)
+    python3 examples/log_csv.py [PATH] [MAX_BYTES]    # on the host (simulated board)
     from examples.log_csv import log; log()           # on a board: writes /mag_log.csv
 
 Turn the board through figure-8s while it logs; copy the file to the desktop

@@ -94,7 +94,7 @@ def test_the_figures_docs_calibration_quotes_are_what_a_run_gives():
 
 def test_the_command_docs_calibration_shows_prints_what_it_shows():
     text = open(os.path.join(ROOT, "docs", "calibration.md")).read()
-    m = re.search(r"^\$ python -m host_sim calibrate (\S+)[^\n]*\n(.*?)^\.\.\.$", text,
+    m = re.search(r"^\$ python3 -m host_sim calibrate (\S+)[^\n]*\n(.*?)^\.\.\.$", text,
                   re.M | re.S)
     assert m and m.group(1).startswith("datasets/"), "the example runs on a shipped log"
     out = io.StringIO()

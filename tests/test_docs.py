@@ -396,3 +396,63 @@ def test_readme_names_every_example_and_every_package_part():
     assert len(parts) >= 7
     text = open(readme, encoding="utf-8").read()
     assert [p for p in parts if "`%s`" % p not in text] == []
+
+
+# ---- the interpreter the commands name --------------------------------------------------------
+# Stock Debian has python3 and no `python`: README, docs and the examples' usage lines say
+# python3 for what runs on the standard library alone, and .venv/bin/python (what `make run`
+# and `make test` make from requirements.txt) for what needs its packages.
+
+_BARE_PYTHON = re.compile(r"(?<![\w./-])python(?=\s)")
+# host_sim commands (and modules) that import a requirements.txt package: matplotlib for run's
+# plot and quality's plot, pygeomag for wmm, numpy for bench, pg8000 for a PostgreSQL database
+VENV_ONLY = re.compile(r"-m (host_sim (run|wmm|bench)\b|host_sim quality\b.*(\bplot\b|postgresql:)"
+                       r"|pytest\b)")
+
+
+def _command_lines():
+    """(where, line) of README, docs/*.md and the examples' docstrings, outside ```python
+    blocks (Python code, not commands)."""
+    out = []
+    for path in _doc_files():
+        fence = None
+        for k, line in enumerate(open(path, encoding="utf-8"), 1):
+            if line.lstrip().startswith("```"):
+                fence = None if fence is not None else line.strip()[3:]
+            elif fence != "python":
+                out.append(("%s:%d" % (os.path.relpath(path, ROOT), k), line))
+    for path in sorted(glob.glob(os.path.join(ROOT, "examples", "*.py"))):
+        doc = open(path, encoding="utf-8").read().split('"""')
+        if len(doc) > 2:
+            for k, line in enumerate(doc[1].splitlines(), 1):
+                out.append(("%s:%d" % (os.path.relpath(path, ROOT), k), line))
+    return out
+
+
+def test_no_command_starts_with_a_bare_python():
+    lines = _command_lines()
+    assert len(lines) > 2000
+    bare = ["%s: %s" % (w, ln.strip()) for w, ln in lines if _BARE_PYTHON.search(ln)]
+    assert bare == [], "\n".join(bare)
+
+
+def test_what_python3_runs_needs_only_the_standard_library():
+    import subprocess
+    import sys
+    seen, venv = set(), []
+    for where, line in _command_lines():
+        for m in re.finditer(r"(?<![\w./-])python3 -m ([\w.]+)(?: ([a-z]+))?", line):
+            if VENV_ONLY.search(line[m.start():]):
+                venv.append("%s: %s" % (where, line.strip()))
+            mod, cmd = m.group(1), m.group(2)
+            if mod.split(".")[0] in ("host_sim", "examples"):
+                seen.add((mod, cmd if mod == "host_sim" else None))
+    assert venv == [], "these need .venv/bin/python:\n" + "\n".join(venv)
+    assert ("host_sim", "calibrate") in seen and len(seen) >= 8
+    for mod, cmd in sorted(seen, key=str):
+        if mod == "host_sim":                    # the command's module, through the runner
+            argv = [sys.executable, "-S", "-m", mod] + ([cmd] if cmd else []) + ["--help"]
+        else:   # a script (a benchmark, an example): imported; their tests run them
+            argv = [sys.executable, "-S", "-c", "import %s" % mod]
+        p = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, timeout=120)
+        assert p.returncode == 0 and "Traceback" not in p.stderr, (argv, p.stderr[-1000:])

@@ -120,7 +120,7 @@ def usage_lines(name):
     """(host line, board line) from the docstring of examples/<name>.py."""
     doc = open(os.path.join(mp.ROOT, "examples", name + ".py")).read().split('"""')[1]
     host = [ln.split("#")[0].strip() for ln in doc.splitlines()
-            if ln.strip().startswith("python examples/%s.py" % name)]
+            if ln.strip().startswith("python3 examples/%s.py" % name)]
     board = [ln.split("#")[0].strip() for ln in doc.splitlines()
              if ln.strip().startswith("from examples.%s import " % name)]
     assert len(host) == 1 and len(board) == 1, (name, host, board)
@@ -132,7 +132,7 @@ def host_argv(line, tmp):
     cal = str(tmp / "calibration.json")
     values = {"[SECONDS]": "6", "[N]": "2", "[PATH]": str(tmp / "log.csv"),
               "[MAX_BYTES]": "2000", "FILE": cal, "[STORE_DIR]": str(tmp / "new_store")}
-    words = line.split()[1:]                     # without "python"
+    words = line.split()[1:]                     # without "python3"
     return [values.get(w, w) for w in words]
 
 
