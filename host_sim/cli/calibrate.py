@@ -138,10 +138,11 @@ warning naming the line, on stderr; errors and warnings always go to stderr.
 JSON: model, offset, field, invw (W^-1, det 1; file units), scale (counts per file unit),
 invw_q15, offset_counts, field_counts, field_out_counts (the magnitude the compass checks),
 fit_error_x100, fit_error_percent, samples_used, coverage_percent, date, rows, skipped_rows,
-units (the file's: --units, else the header's, else null), forced, refusal, warnings, and sensor, range_gauss, range_code, counts_per_gauss, field_ut
-when known; mounting (a log with accelerometer columns: the mounting check, its verdict
-and the MAG_AXES the data say; docs/calibration.md, troubleshooting); after a refusal
-{"rejected", "detail", "hint", rows, samples_held}.
+units (the file's: --units, else the header's, else null), forced, refusal, warnings, and
+sensor, range_gauss, range_code, counts_per_gauss, field_ut when known; mounting (a log with
+accelerometer columns: the mounting check, its verdict and the MAG_AXES the data say;
+docs/calibration.md, troubleshooting); after a refusal {"rejected", "detail", "hint", rows,
+samples_held}.
 
 --sensor takes a chip or its breakout in any case (GY-271 is read as its QMC5883L, with a
 warning naming the other chip it may carry). A log of a chip the firmware does not drive
@@ -341,7 +342,8 @@ def run(opts):
                                     calopts.named_sensor(path))
         board_note = None   # the advice names the log's chip already
     info = {"rows": rows, "range_note": note, "units": opts["units"], "units_note": units_note,
-            "board_note": board_note, "logged_board": opts.get("logged_board"), "outside": outside, "used": used, "railed": cal.railed + markers,
+            "board_note": board_note, "logged_board": opts.get("logged_board"),
+            "outside": outside, "used": used, "railed": cal.railed + markers,
             "skipped": log.skipped,
             "warnings": log.warnings, "num": num, "den": den, "p": p, "cpg": cpg,
             "held": cal.count, "separation": cal.separation, "step": step, "board": board,
