@@ -83,8 +83,13 @@ def _wasm_reason():
 
 
 def _x86_reason():
+    # short: `make test` prints it once per skipping test file (-rs); `make tiers` prints the
+    # commands of BUILD_HINT
     if not os.access(X86_32, os.X_OK):
-        return "no 32-bit unix port at %s: %s" % (X86_32, BUILD_HINT)
+        return ("no 32-bit unix port at %s: `make tiers` prints the three commands that build "
+                "it from MicroPython %s (gcc-multilib; about 2 min)"
+                % (os.path.relpath(X86_32, ROOT) if X86_32.startswith(ROOT + os.sep) else X86_32,
+                   MICROPYTHON_TAG))
     return None
 
 

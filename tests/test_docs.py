@@ -180,6 +180,7 @@ def test_the_tier_messages_name_the_tag_the_build_script_pins():
     assert re.search(r"^MICROPYTHON_TAG := (\S+)$", make, re.M).group(1) == tag
     assert mp.MICROPYTHON_TAG == tag and "--branch %s " % tag in mp.BUILD_HINT
     assert "MICROPYTHON_SRC=build/micropython make tiers" in mp.BUILD_HINT
+    assert "git clone --depth 1 --branch $(MICROPYTHON_TAG) " in make  # what make tiers prints
 
 
 # ---- `make test` says why each skipped test skipped, and what runs it ------------------------
@@ -235,7 +236,7 @@ def test_computed_skip_reasons_name_what_to_run(monkeypatch):
     monkeypatch.setattr(shutil, "which", lambda name: None)
     assert "make wasm" in mp._wasm_reason()
     monkeypatch.setattr(mp, "X86_32", os.path.join(ROOT, "build", "no-such-tool"))
-    assert "make tiers" in mp._x86_reason()
+    assert "make tiers" in mp._x86_reason() and mp.MICROPYTHON_TAG in mp._x86_reason()
     monkeypatch.setenv("ARM_TIER", "0")
     assert "make test-arm" in mp._arm_reason()
     assert "make datasets" in missing_reason(["a"]) and "make datasets" in missing_reason(
