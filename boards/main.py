@@ -1,9 +1,11 @@
-"""eCompass: runs at boot (main.py). Prints a status line every 0.5 s; calibrates as you move.
+"""eCompass: runs at boot (main.py). Prints a status line every 0.5 s.
 
+First run (no good stored calibration; or asked: calibrate() at the REPL, board.CALIBRATE =
+"always"): the calibration program runs alone. Turn the board through a figure-8 (every
+direction: over and around) while its progress line shows coverage, samples and the fit; once a
+fit is saved and read back, hold it still: the board restarts into the heading, which then
+starts from the stored calibration at every boot (docs/calibration.md).
 At boot a calibration file CAL_FILE (calibration.json) is imported into the store, once.
-First run: no stored calibration, so the heading is raw until you turn the board through a
-figure-8 (every direction: over and around); the line shows coverage and samples grow, then
-"model 4" or "model 10" once a calibration is accepted - it is saved and used at every boot.
 
 board.MODE = "motioncal": stream to PJRC MotionCal instead and take its Send Cal
 (docs/motioncal.md). From the REPL (Ctrl-C stops the compass loop): motioncal().
@@ -14,7 +16,8 @@ import sys
 import time
 
 import board
-from firmware.compat import compiled_here, drop, free_bytes
+from firmware import compat
+from firmware.compat import compiled_here, drop, drop_part, free_bytes
 
 # A calibration fitted on the desktop (python -m host_sim calibrate LOG --sensor ... --out
 # calibration.json) copied here is imported once at boot (docs/calibration.md).
@@ -25,6 +28,8 @@ MOTIONCAL = getattr(board, "MODE", "compass") == "motioncal"
 # None on a real board (time.sleep_us, time.ticks_us); the simulated board (boards/host)
 # brings its own clock
 delay_us = getattr(board, "delay_us", None)
+# calibrate(): the calibration program at the next start, even with a good calibration
+REQUEST = board.STORE_DIR.rstrip("/") + "/calibrate.req"
 
 
 def wait_s(s):
@@ -39,11 +44,105 @@ def free_kb():
     return f // 1024 if f is not None else -1
 
 
+def restart():
+    """Start afresh: board.restart() where the board module has one (the simulated board),
+    else the port's reset."""
+    r = getattr(board, "restart", None)
+    if r is None:
+        import machine
+        r = machine.reset
+    r()
+
+
+def calibrate():
+    """From the REPL (Ctrl-C stops the compass): restart into the calibration program."""
+    _request("calibrate")
+    restart()
+
+
+def _request(what):
+    with open(REQUEST, "w") as f:
+        f.write(what)
+
+
+def _asked():
+    # the request's word ("calibrate", "relearn", "skip"), read once: a program cut short by
+    # a power cut is not run again
+    try:
+        import os
+        with open(REQUEST) as f:
+            what = f.read(16)
+        os.remove(REQUEST)
+        return what
+    except OSError:
+        return None
+
+
+def _program_due(i2c):
+    # "auto" (board.CALIBRATE's default): when no good calibration is stored; "never": the
+    # board never calibrates itself (a desktop, MotionCal or browser calibration instead)
+    what = _asked()
+    if what == "skip":  # the program just said it could not run here: the heading now
+        return None
+    if what:
+        return "asked"
+    if getattr(board, "CALIBRATE", "auto") != "auto":
+        return None
+    from firmware.boot import calibrated
+    try:
+        return None if calibrated(i2c, board.STORE_DIR, cal_file=CAL_FILE,
+                                  delay_us=delay_us) else "uncalibrated"
+    finally:
+        calibrated = None
+        drop("boot")
+
+
+def run_program(i2c, why):
+    """The calibration program alone (firmware/calibrate/program.py), then a restart: into
+    the heading with the fit it saved, or, when it could not run (it says why), into the
+    heading without running it again. Asked for, any good fit may replace the stored one (a
+    new mounting, iron that changed)."""
+    try:
+        from firmware.calibrate.program import Program
+        p = Program(i2c, board.STORE_DIR, mag_axes=board.MAG_AXES, accel_axes=board.ACCEL_AXES,
+                    ticks_us_=getattr(board, "ticks_us", None), delay_us=delay_us,
+                    renew=why == "asked")
+        Program = None
+        print("eCompass: calibrating (%s, accelerometer %s): turn the board through a figure-8, "
+              "over and around" % (p.mag.KIND, "yes" if p.accel else "no"))
+        if p.run() is not None:
+            restart()  # into the heading, with the calibration just saved
+        print("eCompass: the calibration program ran out of memory (%s KB free at a solve): "
+              "it needs ~%d KB of heap; use .mpy files or a frozen build, or calibrate on the "
+              "desktop or in the browser (docs/calibration.md)"
+              % (p.free_at_solve // 1024 if p.free_at_solve else "?", _PROGRAM_NEED_KB))
+    except ImportError:
+        print("eCompass: cannot calibrate on the board: install package-calibrate.json "
+              "(or calibrate on the desktop: docs/calibration.md)")
+        return
+    except MemoryError:
+        print("eCompass: the calibration program needs ~%d KB of heap, more than this board "
+              "has: use .mpy files or a frozen build, or calibrate on the desktop or in the "
+              "browser (docs/calibration.md)" % _PROGRAM_NEED_KB)
+    p = Program = None
+    _request("skip")
+    restart()  # a clean heap for the heading
+
+
 _PY_SHORT_KB = 96  # free heap below which a board running from .py sources is told so
+_PROGRAM_NEED_KB = 96  # the calibration program's smallest heap (docs/benchmarks.md)
 status_line = status_view = None
 while True:
     try:
         i2c = board.make_i2c()
+        # the boot check and the program run the plain kernels (same bits): firmware.fast and
+        # its tables stay out of the program's heap; the heading chooses its own
+        compat.FAST = False
+        why = None if MOTIONCAL else _program_due(i2c)
+        if why:
+            run_program(i2c, why)  # restarts, unless the calibrate part is not installed
+            i2c = board.make_i2c()
+        compat.FAST = True
         from firmware.app import status_line, status_view
         from firmware.boot import start
         # MotionCal mode: an HMC5883L at 75 Hz for 50 Raw lines/s (the QMC chips take no rate)
@@ -78,8 +177,7 @@ def announce():
     else:
         print("eCompass: %s, accelerometer %s, stored calibration: %s%s" % (
             app.mag.KIND, "yes" if app.accel else "no", app.load_reason or "loaded",
-            "" if app.mode == "heading" and not app._calmode_due
-            else ", calibration mode (one job at a time)"))
+            ""))
     if compiled_here(sys.modules.get("firmware.app")) and free_kb() < _PY_SHORT_KB:
         print("eCompass: running from .py sources, %d KB free: .mpy files (make deploy) or "
               "a frozen build need much less heap (docs/design.md, memory)" % free_kb())
@@ -110,8 +208,8 @@ except MemoryError:  # the board runs on; its status line says the rest
 
 
 def motioncal(rate_hz=50):
-    """MotionCal mode on this app until Ctrl-C (firmware/motioncal_mode.py)."""
-    from firmware.motioncal_mode import MotionCalMode
+    """MotionCal mode on this app until Ctrl-C (firmware/motioncal/mode.py)."""
+    from firmware.motioncal.mode import MotionCalMode
     try:
         from micropython import kbd_intr  # 0x03 in MotionCal's packet is data
     except ImportError:
@@ -121,9 +219,10 @@ def motioncal(rate_hz=50):
                       ticks_us=getattr(board, "ticks_us", None)).run()
     finally:  # MotionCal mode is done: its code leaves (docs/design.md, memory)
         if app.collector is None:
-            drop("motioncal_mode", "motioncal", "acceptance", "solve")
+            drop_part("motioncal")
+            drop("calibrate.acceptance", "calibrate.solve")
         else:
-            drop("motioncal_mode", "motioncal")
+            drop_part("motioncal")
 
 
 if MOTIONCAL:
@@ -134,3 +233,8 @@ else:
             app.run(None, report=report, every_us=500000)
         except MemoryError:  # step() never raises; the loop's own bookkeeping: go on
             pass
+        if app.relearn_due and getattr(board, "CALIBRATE", "auto") != "never":
+            print("eCompass: the calibration no longer fits the board and no session fits "
+                  "beside the heading: restarting into the calibration program")
+            _request("relearn")
+            restart()

@@ -3,7 +3,7 @@
     python3 examples/calibrate_repl.py [SECONDS]                # on the host: a figure-8
     from examples.calibrate_repl import calibrate; calibrate()  # on a board: turn it 30 s
 
-Every raw sample goes to a Calibrator (firmware/calibrator.py), which keeps the ones that are
+Every raw sample goes to a Calibrator (firmware/calibrate/calibrator.py), which keeps the ones that are
 new information; solve() returns a Calibration or says why not (too few samples, planar: turn
 the board over, ...). The result is the record the app stores (hard iron V, InvW in Q15).
 """
@@ -14,7 +14,7 @@ try:
 except ImportError:  # run as a script, python examples/X.py: the folder above examples/
     sys.path.insert(0, sys.path[0] + "/..")
     from examples.bus import get_bus
-from firmware.calibrator import Calibrator
+from firmware.calibrate.calibrator import Calibrator
 from firmware.detect import detect
 from firmware.errors import CalibrationRejected
 

@@ -10,7 +10,7 @@ STORE_DIR (default /, the board's root) is made when it does not exist (one leve
 Exit status as a script: 0 imported; 1 refused (or the store could not save it); 2 no file
 at FILE, or no folder for the store. What went wrong is printed on stderr.
 
-firmware/calimport.py checks the file against the chip found (sensor kind, range) and the
+firmware/calfile/calimport.py checks the file against the chip found (sensor kind, range) and the
 record's meaning, stores it, and renames the file to FILE.imported (FILE.rejected when it is
 refused: the store is untouched). boards/main.py does the same at every boot.
 """
@@ -21,7 +21,7 @@ try:
 except ImportError:  # run as a script, python examples/X.py: the folder above examples/
     sys.path.insert(0, sys.path[0] + "/..")
     from examples.bus import get_bus
-from firmware.calimport import import_calibration
+from firmware.calfile.calimport import import_calibration
 from firmware.detect import detect
 from firmware.store import CalStore
 

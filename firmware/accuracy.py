@@ -17,7 +17,7 @@ so an app can ask the user to "move the board in a figure-8" at level <= 1.
 #   0      uncalibrated      no calibration in force
 #   0      mag_axes          the mounting check found MAG_AXES wrong for this board: the heading
 #                            is wrong once it tilts (status "check MAG_AXES: ...",
-#                            firmware/mountcheck.py)
+#                            firmware/calibrate/mountcheck.py)
 #   2      gyro_held         use_gyro(): the field is not used (a magnet, a fast turn) and the
 #                            gyroscope holds the heading within its vouched uncertainty
 #                            (docs/gyro.md; status "gyro held")
@@ -26,10 +26,10 @@ so an app can ask the user to "move the board in a figure-8" at level <= 1.
 #                            change of |b| or dip, a heading jump, until the field is clean)
 #   0      blackout_zone     the field model says H < 2000 nT here (WMM's blackout zone)
 #   1      minmax            the min/max calibration (hard iron from the extremes, no fit)
-#   1      fit_error_high    fit error above _GOOD_FIT_ERROR (5 %, MotionCal's "good" limit);
+#   1      fit_error_high    fit error above GOOD_FIT_ERROR (5 %, MotionCal's "good" limit);
 #                            not for a quick calibration, whose fit error is a placeholder
 #   1      field_mismatch    the calibration's B is off the field model's |B| here by more than
-#                            firmware.acceptance.FIELD_MATCH_PCT (made elsewhere, wrong range)
+#                            firmware.calibrate.acceptance.FIELD_MATCH_PCT (made elsewhere, wrong range)
 #   2      quick             a quick calibration (model 4, coverage 0: hard iron from a known
 #                            heading): within 2 deg while soft iron is <= 3 %
 #                            (docs/quick_calibration.md)
@@ -42,10 +42,11 @@ so an app can ask the user to "move the board in a figure-8" at level <= 1.
 #   2      coverage_fair     a 7/10 fit over less than _HIGH_COVERAGE (60 %) of the sphere
 #   3      high              a 7- or 10-element fit within 3.5 % over >= 60 % of the sphere,
 #                            tilt known, no flag up
-# Thresholds: _GOOD_FIT_ERROR is MotionCal's 5 %; _HIGH_FIT_ERROR NXP's 3.5 % (the fit error at
-# which a higher-order model is trusted over a lower one, firmware.acceptance); _HIGH_COVERAGE
+# Thresholds: GOOD_FIT_ERROR is MotionCal's 5 %; _HIGH_FIT_ERROR NXP's 3.5 % (the fit error at
+# which a higher-order model is trusted over a lower one, firmware.calibrate.acceptance); _HIGH_COVERAGE
 # 60 % of the 100 sphere regions (a fit over more than half the sphere; full figure-8s reach
 # 80-95 % in the simulator).
+from firmware.calibration import GOOD_FIT_ERROR
 from firmware.compat import const
 
 UNRELIABLE = const(0)
@@ -54,11 +55,10 @@ MEDIUM = const(2)
 HIGH = const(3)
 NAMES = ("unreliable", "low", "medium", "high")
 
-_GOOD_FIT_ERROR = const(500)  # hundredths of a percent: MotionCal's "good" fit error
 _HIGH_FIT_ERROR = const(350)  # NXP: a higher-order fit is trusted at <= 3.5 %
 MIN_COVERAGE = const(35)      # % of sphere regions: below, a fit saw too little of the sphere
 _HIGH_COVERAGE = const(60)   # % of sphere regions for "high"
-_BLACKOUT = "blackout zone"   # firmware.field's statuses (field is not imported here)
+_BLACKOUT = "blackout zone"   # firmware.field.wmm's statuses (field is not imported here)
 _CAUTION = "caution zone"
 # The table's conditions as the bits of one small int: the status line asks for the level at
 # every report, and MicroPython takes a call frame of more than 11 words (arguments, locals
@@ -114,7 +114,7 @@ def _table(model, fit_error, coverage, f):
         return UNRELIABLE, "blackout_zone"
     if model == "minmax":
         return LOW, "minmax"
-    if fit_error > _GOOD_FIT_ERROR and not (model == 4 and coverage == 0):
+    if fit_error > GOOD_FIT_ERROR and not (model == 4 and coverage == 0):
         return LOW, "fit_error_high"
     if f & _F_MISMATCH:
         return LOW, "field_mismatch"
@@ -141,7 +141,7 @@ def assess(app):
     """level() for a CompassApp's current state; allocates nothing (the status line calls it
     at every report)."""
     c = app.compass
-    if c is None:  # calibration mode, or the app did not fit (firmware/calmode.py)
+    if c is None:  # the app did not fit
         return UNRELIABLE, "no_heading"
     st = app.status
     if st is not None and st == app._axes_status:

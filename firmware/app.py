@@ -18,7 +18,7 @@ there is no good calibration yet, collect and solve one in the background.
 #            compared with ticks_diff; firmware.compat), the simulator's clock on the host (plain
 #            ints)
 #   mag_options  driver options for detect(), e.g. {"range": 8}
-#   fallback     try 4 elements when the model lacks samples (firmware.calibrator.Collector)
+#   fallback     try 4 elements when the model lacks samples (firmware.calibrate.calibrator.Collector)
 #   reinit_after failed reads in a row before the drivers are re-initialised
 #   learn    None: collect unless the stored calibration is of the configured model with a fit
 #            error <= 5 % (and whenever the one in force goes stale); True: always collect;
@@ -33,7 +33,7 @@ there is no good calibration yet, collect and solve one in the background.
 # Memory (docs/design.md#memory): this class is the core a calibrated board keeps. What it
 # needs once in a while is imported for that and dropped after it (firmware.compat.drop): its
 # construction (firmware/appsetup.py), the store's load and save (firmware/persist.py with
-# firmware/slots.py), the calibration session (firmware/session.py with the calibrator, the
+# firmware/slots.py), the calibration session (firmware/calibrate/session.py with the calibrator, the
 # sample buffer, the moment sums, the solver and the history), which ends once a good fit is
 # saved and the board brings no new direction, and the status line (firmware/status.py).
 # tests/test_layout.py checks which modules a board holds.
@@ -83,7 +83,7 @@ there is no good calibration yet, collect and solve one in the background.
 # Save on every accept; a failed save (OSError, StoreError, MemoryError) is counted in
 # .save_errors, never stops the loop, and is retried every _SAVE_RETRY_US.
 #
-# History (firmware.history, imported at the first accept): before an accepted calibration
+# History (firmware.calibrate.history, imported at the first accept): before an accepted calibration
 # replaces the one in force it is compared with the store's history of accepted calibrations.
 # Inside the limits, it is put in force, saved and, once saved, recorded. Outside, it is kept as evidence
 # (.pending, recorded as a pending entry) and NOT put in force: .status reads "hardware
@@ -94,8 +94,9 @@ there is no good calibration yet, collect and solve one in the background.
 # the same jump is flagged again. .date_s: None, or a function returning the date in seconds
 # when the board knows it (e.g. after NTP), written with each entry. History errors are
 # counted in .history_errors (the last one in .history_reason) and never stop the loop.
+from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S
 from firmware.compass import FLAG_NO_GRAVITY
-from firmware.compat import const, drop, ticks_diff
+from firmware.compat import const, drop, drop_part, free_bytes, ticks_diff
 from firmware.errors import SensorOverflow, DataReadyTimeout
 from firmware.health import SPELL_FIELD, SPELL_JUMP
 
@@ -118,20 +119,15 @@ STATUS_JUMP = "heading jumped"        # it moved > 4 deg since the last sample: 
 STATUS_NO_MEMORY = "out of memory"  # the heap cannot hold a job the board needs (.no_memory
 #                                       says which: "start", "load", "calibrate", "heading");
 #                                       it keeps running and tries again
-STATUS_CALIBRATING = "calibrating"    # calibration mode (firmware/calmode.py): no heading
 STATUS_GYRO_HELD = "gyro held"        # use_gyro(): the field is not used (interference), the
 #                                       gyroscope holds the heading and still vouches for it
-#                                       (firmware/attitude.py)
+#                                       (firmware/gyro/attitude.py)
 
 
 SOLVE_EVERY = const(25)       # kept samples between solves: ~1/9 of a full sphere (225 held)
 _REINIT_AFTER = const(5)     # failed reads in a row before the drivers are re-initialised
 _REINIT_MAX_SHIFT = const(4)  # failed re-inits back off to every 2**4 x _REINIT_AFTER reads
 _STALE_US = const(30000000)   # 30 s of interference: the calibration no longer fits the board
-_STALE_AGE_S = const(1200000)  # age that makes any fit error "worse" (> 16 doublings)
-_GOOD_FIT_ERROR = const(500)  # 5 %: a stored fit this good needs no collecting, and a
-#                               calibration session ends with one (MotionCal enables Send Cal
-#                               below 5 %)
 _SAVE_RETRY_US = const(60000000)  # a failed save is retried after 60 s
 _ERROR_BACKOFF_US = const(20000)  # after a bus error: do not hammer a dead bus
 _FIELD_TOL_PCT = const(10)    # interference window floor, % (firmware.compass's default)
@@ -142,7 +138,11 @@ _LOAD_NO_MEMORY = "no_memory"  # firmware.persist.LOAD_NO_MEMORY
 _LOAD_RETRY_US = const(5000000)  # a load (or the heading line) that found no room: again in 5 s
 _RETRY_PAUSE_US = const(5000)   # the pause of a step while the app itself does not fit
 _CAL_RETRY_US = const(60000000)  # a session that found no room: again in 60 s
-#                                  (firmware.calmode.RETRY_US)
+# free heap (bytes, after a collection) a calibration session needs beside the heading line:
+# below it, calibrating is the calibration program's job (firmware/calibrate/program.py, run
+# by boards/main.py after a restart). The session completes reliably from ~128 KB free after
+# boot (x86-32 build, boards/main.py; docs/benchmarks.md).
+SESSION_ROOM = const(128 * 1024)
 _GAP_CAP_US = const(0x10000000)  # the time since the last read stops counting at 268 s
 _ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
 _ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
@@ -204,7 +204,7 @@ def _status_of(e):
 
 def _collector_attr(name, default):
     # an app attribute that is the collector's; when not collecting, what the last session
-    # left (firmware/session.py ENDED), else `default`
+    # left (firmware/calibrate/session.py ENDED), else `default`
     return property(lambda self: getattr(self.collector, name) if self.collector is not None
                     else self._ended.get(name, default))
 
@@ -216,20 +216,19 @@ class CompassApp:
     # save_errors, load_reason, reinits, relearning, fast, pending, change, history_errors,
     # location, quick, accuracy, watch (firmware/health.py FieldWatch), dip (its DipCheck).
 
-    location = None  # a firmware.location.Location after set_location()
-    mode = "heading"  # "calibrating": calibration mode, one job in RAM (firmware/calmode.py)
+    location = None  # a firmware.field.location.Location after set_location()
     no_memory = None  # what the heap could not hold: "start", "load", "calibrate" (status line)
     _args = None     # the constructor's arguments while the heap could not hold the app
-    _calmode_due = False
     _saved_shown = 0  # app.stored when the status line last said "saved"
     _gyro_options = None  # use_gyro()'s options while it is in use
-    _relearn_due = False
     _retry_us = 0
     not_installed = None  # "calibrate": calibrate() found no calibration machinery
-    quick = None     # the firmware.quickcal.QuickCal of the last quick_calibrate()
-    attitude = None  # the firmware.attitude.Attitude of use_gyro()
+    relearn_due = False  # the iron changed and no session fits beside the heading: the
+    #                      calibration program should run (boards/main.py restarts into it)
+    quick = None     # the firmware.field.quickcal.QuickCal of the last quick_calibrate()
+    attitude = None  # the firmware.gyro.attitude.Attitude of use_gyro()
     mounting = None  # (verdict, MAG_AXES the data say) of the last mounting check
-    #                  (firmware/mountcheck.py), None before any
+    #                  (firmware/calibrate/mountcheck.py), None before any
     _axes_status = None  # the status while that check names another MAG_AXES
 
     def __init__(self, i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z",
@@ -306,9 +305,9 @@ class CompassApp:
     # --- calibration in force ---------------------------------------------------------
     def _good_enough(self, cal):
         """A loaded calibration that makes collecting unnecessary: the configured model, fit
-        within _GOOD_FIT_ERROR."""
+        within GOOD_FIT_ERROR."""
         m = self.model
-        return (cal.model is not None and cal.fit_error <= _GOOD_FIT_ERROR
+        return (cal.model is not None and cal.fit_error <= GOOD_FIT_ERROR
                 and (cal.model == m or m == "auto" and cal.model != "minmax"))
 
     def _use(self, cal):
@@ -316,8 +315,6 @@ class CompassApp:
         # averages and any spell start over (firmware/health.py FieldWatch.use)
         self.calibration = cal
         self._k = cal.k  # _heading's
-        if self.mode != "heading":
-            return  # calibration mode: the heading line takes it when it is made again
         self.watch.use(cal)
         tol = _FIT_SIGMAS * cal.fit_error // 100
         if tol < _FIELD_TOL_PCT:
@@ -337,34 +334,24 @@ class CompassApp:
 
     def use_calibration(self, cal, save=True):
         """Put `cal` (a Calibration made outside the app, e.g. from MotionCal's packet by
-        firmware/motioncal_mode.py) in force now, and save it to the store when `save`."""
+        firmware/motioncal/mode.py) in force now, and save it to the store when `save`."""
         self._use(cal)
         if save:
             self._save()
 
     def calibrate(self):
-        # Start collecting samples for a new calibration (imports the calibration machinery,
-        # firmware/session.py); the calibration in force stays until a better one is accepted.
-        # Returns the collector; None when the calibrate part is not installed (then
-        # .not_installed says so and the heading goes on with the calibration in force).
-        if self.collector is None and self.mode == "heading":
+        # Start collecting samples for a new calibration beside the heading line (imports the
+        # calibration machinery, firmware/calibrate/session.py); the calibration in force stays
+        # until a better one is accepted. Returns the collector; None when the calibrate part
+        # is not installed (.not_installed) or the heap has no room for a session beside the
+        # heading (.no_memory "calibrate": the calibration program does it alone,
+        # firmware/calibrate/program.py; boards/main.py restarts into it).
+        if self.collector is None:
+            f = free_bytes()
+            if f is not None and f < SESSION_ROOM:
+                return self._no_room()
             try:
-                from firmware import calmode  # the room a session needs beside the heading
-            except ImportError:  # package-calibrate.json not installed on this board
-                self.not_installed = "calibrate"
-                return None
-            except MemoryError:  # not even room to ask: said, and tried again later
-                self.no_memory = "calibrate"
-                self._retry_us = _CAL_RETRY_US
-                return None
-            if not calmode.room():
-                calmode = None
-                self._calmode_due = True  # the next step lets go of the heading line first
-                return None
-            calmode = None
-            drop("calmode")
-            try:
-                from firmware import session
+                from firmware.calibrate import session
                 self._session = session
                 self.collector = session.start(self)
             except ImportError:  # package-calibrate.json not installed on this board
@@ -372,45 +359,31 @@ class CompassApp:
                 return None
             except MemoryError:  # no room beside the heading line after all
                 self._session = self.collector = session = None
-                from firmware.calmode import MACHINERY
-                drop(*MACHINERY)
-                drop("calmode")
-                self._calmode_due = True
-                return None
+                drop_part("calibrate")
+                return self._no_room()
             self._locate()
         return self.collector
 
-    def _calmode(self):
-        # calibration mode (firmware/calmode.py): the heading line goes, the session comes
-        self._calmode_due = False
-        try:
-            from firmware import calmode
-            c = calmode.enter(self)
-        except ImportError:
-            self.not_installed = "calibrate"
-            return
-        except MemoryError:  # not even the mode's own code: say so, try again later
-            c = None
-            self.no_memory = "calibrate"
-        calmode = None
-        if c is None:
-            self._retry_us = _CAL_RETRY_US
-        elif self._relearn_due:
-            c.relearn(_STALE_AGE_S)
-        self._relearn_due = False
+    def _no_room(self):
+        self.no_memory = "calibrate"
+        self._retry_us = _CAL_RETRY_US
+        return None
 
-    # --- where the board is (firmware/location.py, firmware/quickcal.py) ----------------
+    # --- where the board is (firmware/field/location.py, firmware/field/quickcal.py) ----------------
     def set_location(self, lat_e7, lon_e7, year_e3=None, table=None):
         # The board's place (1e-7 deg, north and east positive) and date (decimal year *
-        # 1000, firmware.field.decimal_year_e3; None: unknown). With a usable field model the
+        # 1000, firmware.field.wmm.decimal_year_e3; None: unknown). With a usable field model the
         # declination becomes the model's, a new fit's B is checked against the model's |B|
         # (field_mismatch) and the interference window and dip come from the model
-        # (firmware/location.py). Returns the location's status: "ok", "no date", "caution
+        # (firmware/field/location.py). Returns the location's status: "ok", "no date", "caution
         # zone", "blackout zone", or why the model cannot be used ("no field model: ...",
         # "outside model validity") - then the declination given to the constructor stays.
         # TypeError / ValueError name a bad argument and its unit. `table`: the table file
-        # (None: wmm2025.bin next to firmware/field.py).
-        from firmware.location import Location
+        # (None: wmm2025.bin next to firmware/field/wmm.py).
+        try:
+            from firmware.field.location import Location
+        except ImportError:  # an optional part (docs/design.md, parts)
+            raise ImportError("set_location() needs the field part: install package-field.json")
         loc = Location(lat_e7, lon_e7, year_e3, table)
         prev = self.location
         loc.manual_declination_kang = (prev.manual_declination_kang if prev is not None
@@ -423,32 +396,38 @@ class CompassApp:
         if self.location is not None:
             self.location.apply(self)
             if self.collector is None:  # the model's figures are kept: its table code and
-                drop("field", "acceptance")  # the field check leave (docs/design.md)
+                drop("field.wmm", "calibrate.acceptance")  # the field check leave (docs/design.md)
 
     def quick_calibrate(self, true_heading_cdeg, refine=False, samples=32):
-        """Hard iron from this pose and its known true heading (firmware/quickcal.py
+        """Hard iron from this pose and its known true heading (firmware/field/quickcal.py
         quick_calibrate has the whole story): puts the result in force, saves it and returns
         it; raises CalibrationRejected with a reason and keeps the calibration in force.
         Needs set_location() first."""
-        from firmware.quickcal import quick_calibrate
+        try:
+            from firmware.field.quickcal import quick_calibrate
+        except ImportError:
+            raise ImportError("quick_calibrate() needs the field part: install "
+                              "package-field.json")
         return quick_calibrate(self, true_heading_cdeg, refine, samples)
 
-    # --- gyro-aided heading (firmware/attitude.py) ----------------------------------------
+    # --- gyro-aided heading (firmware/gyro/attitude.py) ----------------------------------------
     def use_gyro(self, **options):
         # Let the MPU6050's gyroscope hold the heading through magnets, motors and shaking
-        # (docs/gyro.md): loads firmware/attitude.py, reads the gyroscope with the accelerometer
+        # (docs/gyro.md): loads firmware/gyro/attitude.py, reads the gyroscope with the accelerometer
         # (one burst) and makes the filter's heading the app's, with the status "gyro held"
         # while it holds the heading without the field. `options` are Attitude's (gain,
         # mag_gain, bias_gain, accel_reject_cdeg, mag_reject_cdeg, recovery_us,
         # max_uncertainty_cdeg). Returns the Attitude (.attitude); ValueError when there is no
         # MPU6050.
-        from firmware.gyrosetup import attach
-        from firmware import attitude
+        try:
+            from firmware.gyro.gyrosetup import attach
+            from firmware.gyro import attitude
+        except ImportError:
+            raise ImportError("use_gyro() needs the gyro part: install package-gyro.json")
         attitude.use_kernels(None if self.fast else False)  # the app's kernel set
         a = attach(self, attitude.Attitude, options)
         attach = None
-        drop("gyrosetup")
-        # calibration mode lets the filter go, then remakes it (no options: nothing held)
+        drop("gyro.gyrosetup")
         self._gyro_options = options if options else ()
         return a
 
@@ -494,17 +473,10 @@ class CompassApp:
 
     def _step(self):
         self._ok = False
-        if self._calmode_due:
-            self._calmode()
-        elif self.mode != "heading" and self.collector is None and self.no_memory is None:
-            self._leave_calmode()  # the session has ended: this sample gets a heading
         self._clock()
         st = self._read()
         if st == STATUS_OK:
             st = self._vet()
-        if self.mode != "heading":
-            self._calibrating(st)
-            return
         if st == STATUS_OK:
             st = self._heading()
         if st != STATUS_OK:
@@ -532,30 +504,6 @@ class CompassApp:
             #                                  dip it swings is the interference's cause too)
         if self.no_memory is not None and self._ok:
             self.status = STATUS_NO_MEMORY  # a heading, but not the calibrated one it should be
-
-    def _calibrating(self, st):
-        # calibration mode's step (firmware/calmode.py): the sample checked, kept, solved
-        if st == STATUS_OK:
-            self._fails = 0
-            self._reinit_level = 0
-            self.status = STATUS_CALIBRATING if self.collector is not None else STATUS_NO_MEMORY
-            self._select()
-        else:
-            self._failed(st)
-        c = self.collector
-        if c is not None and (c.job is not None or c.due()):
-            self._solve()
-
-    def _leave_calmode(self):
-        try:
-            from firmware import calmode
-            calmode.leave(self)
-        except MemoryError:  # no room for the heading line yet: no heading, said, retried
-            self.mode = "calibrating"
-            self.no_memory = "heading"
-            self._retry_us = _LOAD_RETRY_US
-        calmode = None
-        drop("calmode")
 
     def _internal(self, e):
         self._ok = False
@@ -614,7 +562,7 @@ class CompassApp:
 
     def _retry(self, dt):
         # what the heap could not hold, tried again: the load every 5 s, a calibration
-        # session every calmode.RETRY_US
+        # session every _CAL_RETRY_US
         self._retry_us -= dt
         if self._retry_us > 0:
             return
@@ -630,11 +578,6 @@ class CompassApp:
             self._start_learning()
         elif what == "calibrate":
             self.calibrate()
-        elif what == "heading":
-            self._leave_calmode()
-            if self.mode == "heading" and not self._good_enough(self.calibration):
-                self.no_memory = "calibrate"  # the session that did not fit, again later
-                self._retry_us = _CAL_RETRY_US
 
     def _look_for_accel(self, dt):
         self._accel_wait_us += dt
@@ -785,13 +728,13 @@ class CompassApp:
         c = self.collector
         if c is not None:
             c.feed(self.raw)
-            if c.pairs is not None and self.tilt:  # the mounting check's (firmware/mounting.py)
+            if c.pairs is not None and self.tilt:  # the mounting check's (firmware/calibrate/mounting.py)
                 c.pairs.feed(self.raw, self._acc)
 
     def _failed(self, st):
         self._flag(st)
         w = self.watch
-        if w is not None:  # (none in calibration mode)
+        if w is not None:
             w.restart()
         if st == STATUS_STALE and w is not None:
             w.forget(self.health.same)  # a spell begun by this run of repeats: not a field
@@ -817,9 +760,9 @@ class CompassApp:
         self.dip.reset()  # the dip too is learned afresh
         c = self.calibrate()
         if c is not None:
-            c.relearn(_STALE_AGE_S)
-        elif self._calmode_due:
-            self._relearn_due = True  # calibration mode relearns once it has started
+            c.relearn(STALE_AGE_S)
+        else:
+            self.relearn_due = True  # no room: the calibration program's job (boards/main.py)
 
     def reinit(self):
         """Re-initialise the drivers (a sensor reset by a brown-out powers up in standby):
@@ -852,7 +795,7 @@ class CompassApp:
         drop("devinit")  # the drivers' start-up code and error texts
         return ok
 
-    # --- the calibration session (firmware/session.py, while collecting) ----------------
+    # --- the calibration session (firmware/calibrate/session.py, while collecting) ----------------
     def _solve(self):
         self._session.solve(self)
 
@@ -907,12 +850,13 @@ class CompassApp:
         return progress(self)
 
     def run(self, n=None, report=None, every=_REPORT_EVERY, every_us=None):
-        """step() n times (None: forever); report(app) every `every` steps, or every
-        `every_us` microseconds of the app's clock. Returns the steps with a heading."""
+        """step() n times (None: forever, or until .relearn_due: the calibration program is
+        needed); report(app) every `every` steps, or every `every_us` microseconds of the app's
+        clock. Returns the steps with a heading."""
         good = 0
         i = 0
         last = self._ticks()
-        while n is None or i < n:
+        while (n is None or i < n) and not self.relearn_due:
             if self.step():
                 good += 1
             i += 1

@@ -12,7 +12,7 @@ from firmware.fieldwatch import FieldWatch
 from firmware.health import Health
 from firmware.trig import cdeg_to_kang
 
-DEFAULT_CAPACITY = const(300)  # samples held while collecting (firmware.calibrator's default)
+DEFAULT_CAPACITY = const(300)  # samples held while collecting (firmware.calibrate.calibrator's default)
 _CONFIG_EVERY = const(1)     # samples between configuration read-backs (docs/faults.md)
 _EVIDENCE_PERIODS = const(4)  # a step counts as at most 4 sample periods of evidence
 _HMC_OVERFLOW = const(-4096)
@@ -82,15 +82,15 @@ def setup(app, i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, s
     app.change = None          # (parameter, value, low, high) of the jump
     app.history_errors = 0
     app.history_reason = None
-    app._hist = None           # firmware.history.History, from the first accept on
+    app._hist = None           # firmware.calibrate.history.History, from the first accept on
     app._hist_flags = 0        # flags of the history entry due once the save succeeds
 
     app.store = store
     heading_line(app, cdeg_to_kang(declination_cdeg))
     app._dip_unsaved = False   # this app saved the fit in force before its dip was known
     app.collector = None
-    app._session = None        # firmware.session while a calibration session runs
-    app._ended = {}            # the counters the last session left (firmware/session.py)
+    app._session = None        # firmware.calibrate.session while a calibration session runs
+    app._ended = {}            # the counters the last session left (firmware/calibrate/session.py)
     app.calibration = None
 
     app._slices_per_step = 1
@@ -110,8 +110,7 @@ def setup(app, i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, s
 
 def heading_line(app, declination_kang):
     """What showing a heading needs beside the drivers: the kernel set (firmware/fast.py where
-    the port has the emitter), the Compass and the field watch. Made here at construction and
-    again when a calibration mode ends (firmware/calmode.py releases them while it runs)."""
+    the port has the emitter), the Compass and the field watch."""
     fast = app._fast_opt
     kn = kernels() if fast is None or fast is True else None
     app.fast = kn is not None

@@ -6,7 +6,7 @@ boards/main.py calls it; the memory benchmarks boot through it the same way.
 """
 # start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_options)
 #   store_dir  the directory of the calibration store (firmware/store.py); None: no store
-#   cal_file   a calibration file to import once (firmware/calimport.py); None:
+#   cal_file   a calibration file to import once (firmware/calfile/calimport.py); None:
 #              store_dir + "/calibration.json"
 #   returns (CompassApp, note): note is None, or what the calibration import said
 # Exceptions: the drivers' OSError (SensorNotFound, BusError): wiring or power, the caller
@@ -27,13 +27,41 @@ def _exists(path):
 
 def _import(cal_file, store, mag):
     try:
-        from firmware.calimport import import_calibration
-    except ImportError:  # package-import.json not installed: the file waits for it
-        return "%s found, but firmware.calimport is not installed" % cal_file
+        from firmware.calfile.calimport import import_calibration
+    except ImportError:  # package-calfile.json not installed: the file waits for it
+        return "%s found, but firmware.calfile.calimport is not installed" % cal_file
     imported = import_calibration(cal_file, store, mag)  # never raises
     import_calibration = None
-    drop("calimport")
+    drop("calfile.calimport")
     return imported[1] if imported is not None else None
+
+
+def calibrated(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, model=10):
+    """True when the heading can start: a calibration file waits to be imported, or the store
+    holds a good-enough fit (the model asked for, fit error within 5 %) for the chip found;
+    False: boards/main.py runs the calibration program (firmware/calibrate/program.py)."""
+    from firmware import detect
+    from firmware.calibration import GOOD_FIT_ERROR, Calibration
+    from firmware.store import CalStore
+    opts = dict(mag_options or {})
+    if delay_us is not None:
+        opts["delay_us"] = delay_us
+    mag = detect.detect(i2c, **opts)
+    detect = None
+    drop("detect", "devinit")
+    if cal_file is None:
+        cal_file = store_dir.rstrip("/") + "/calibration.json"
+    if _exists(cal_file):
+        return True
+    st = CalStore(store_dir, sensor=mag.KIND, range_code=mag.range_code,
+                  validate=Calibration.from_bytes)
+    try:
+        cal = Calibration.from_bytes(st.load())
+    except Exception:  # noqa: BLE001 - none, torn, unreadable: not calibrated
+        return False
+    finally:
+        drop("slots")
+    return cal.model == model and cal.fit_error <= GOOD_FIT_ERROR
 
 
 def start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_options):

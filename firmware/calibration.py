@@ -47,6 +47,10 @@ _PAYLOAD = "<BBBBHH3i9hii"  # version, model, coverage, dip, fit_error, samples,
 _DIP_UNKNOWN = const(0)     # the dip byte: 0 not known, else whole degrees + 128 (38..218)
 _DIP_BIAS = const(128)
 PAYLOAD_SIZE = const(46)
+# a fit good enough to need no more collecting, in hundredths of a percent: a session and the
+# calibration program end with one, boot needs one to skip the program (MotionCal's "good")
+GOOD_FIT_ERROR = const(500)
+STALE_AGE_S = const(1200000)  # seconds of age that make any fit error "worse" (> 16 doublings)
 
 
 def correct(k, raw, out):

@@ -281,7 +281,7 @@ class Compass:
 
     def set_window(self, lo, hi):
         """Interference window on |b| given by its ends (b's units), e.g. one spanning the field
-        model's |B| and the calibration's (firmware/location.py); set_field() replaces it."""
+        model's |B| and the calibration's (firmware/field/location.py); set_field() replaces it."""
         if not 0 <= lo <= hi:
             raise ValueError("field window %d..%d: need 0 <= lo <= hi" % (lo, hi))
         self.st[_LO] = lo if lo < _NO_LIMIT else _NO_LIMIT

@@ -13,7 +13,7 @@
 #                   (its time.sleep takes float seconds); else a no-op (the simulator passes
 #                   its own).
 # wait_clock(delay_us)  (delay, measured) for a bounded wait (firmware/i2cdevice.py's data-ready
-#                   wait, firmware/busio_i2c.py's lock wait): None gives sleep_us, the wait
+#                   wait, firmware/circuitpython/busio_i2c.py's lock wait): None gives sleep_us, the wait
 #                   measured with ticks_us where the port has it; the simulator's delay_us gives
 #                   itself, the waited time then being the sum of the delays asked for.
 # wall_clock()      (now_us, diff) for measuring real time: ticks_us / ticks_diff on MicroPython,
@@ -29,11 +29,11 @@
 #                   when there is none (kn False or None): a module's use_kernels().
 # compiled_here(m)  True when MicroPython compiled module m from its .py source on this board
 #                   (not a .mpy file, nor frozen or ROMFS code): loading it again costs a
-#                   compile (firmware/calibrator.py keeps the solver then; boards/main.py
+#                   compile (firmware/calibrate/calibrator.py keeps the solver then; boards/main.py
 #                   says a board runs from sources).
 # free_bytes()      gc.mem_free() after a collection: the heap a job can have now; None where the
-#                   port does not tell (CPython). A board holds one job at a time when this is
-#                   short (firmware/calmode.py; docs/design.md, memory).
+#                   port does not tell (CPython): whether a calibration session fits beside the
+#                   heading (firmware/app.py SESSION_ROOM; docs/design.md, memory).
 # drop(*names)      forget the firmware modules `names` ("detect", "calibrator", ...): out of
 #                   sys.modules and off the firmware package, so their code and tables are
 #                   freed at the next collection once nothing else refers to them (a
@@ -136,12 +136,30 @@ def pick(kn, name, plain):
 
 
 def drop(*names):
-    """Forget the firmware modules `names` (see the module's opening comment)."""
-    pkg = sys.modules.get("firmware")
+    """Forget the firmware modules `names` ("detect", "calibrate.solve": below firmware); a
+    part's folder goes with the last of its modules."""
     for name in names:
         sys.modules.pop("firmware." + name, None)
-        if pkg is not None and name in pkg.__dict__:
-            delattr(pkg, name)
+        i = name.rfind(".")
+        pkg = sys.modules.get("firmware." + name[:i] if i > 0 else "firmware")
+        if pkg is not None and name[i + 1:] in pkg.__dict__:
+            delattr(pkg, name[i + 1:])
+        if i > 0:
+            prefix = "firmware." + name[:i + 1]
+            for k in sys.modules:
+                if k.startswith(prefix):
+                    break
+            else:
+                drop(name[:i])
+
+
+def drop_part(part, keep=()):
+    """Forget every loaded module of the part firmware/<part>/ but those named in `keep`."""
+    prefix = "firmware." + part + "."
+    for name in [n[9:] for n in sys.modules if n.startswith(prefix)]:
+        if name not in keep:
+            drop(name)
+    drop(*(() if keep else (part,)))
 
 
 def compiled_here(m):

@@ -18,7 +18,7 @@
 #                           -4096). Carries ``.address`` and ``.raw`` (the raw axis values).
 #                           Caller: drop the sample (a magnet is too close or the range too small).
 # CalibrationRejected(Exception) a new calibration failed an acceptance check. Carries
-#                           ``.reason`` (one of the REASON_* names in firmware.acceptance) and
+#                           ``.reason`` (one of the REASON_* names in firmware.calibrate.acceptance) and
 #                           ``.detail`` (a human-readable string with the numbers). Caller: keep
 #                           the current calibration; show the reason to the user.
 # StoreError(Exception)     a stored calibration record cannot be used. Carries ``.reason``, one

@@ -1,5 +1,5 @@
 """The heading line's field checks: the dip against the calibration's (DipCheck) and the spells
-of a field that moved (FieldWatch). Loaded with the heading line, let go in calibration mode."""
+of a field that moved (FieldWatch). Loaded with the heading line."""
 #     from firmware.fieldwatch import FieldWatch
 #     w = FieldWatch(compass, body)   # app.watch (firmware/appsetup.py); w.dip: its DipCheck
 #

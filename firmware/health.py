@@ -32,7 +32,7 @@
 #
 # - DipCheck and FieldWatch, the field checks of the heading line (the dip against the
 #   calibration's, the spells of a field that moved): firmware/fieldwatch.py, which the
-#   heading line loads and calibration mode lets go. Their shared constants are here:
+#   heading line loads and the calibration program does not. Their shared constants are here:
 #   DIP_TOL_KANG, and SPELL_* (the app reads them).
 #
 # Allocation-free (tests/scenarios/app_alloc.py): every method keeps its frame within the 11

@@ -7,7 +7,7 @@
 #
 # Device(i2c, address, period_us, delay_us=None, timeout_us=None)
 #   i2c         machine.I2C / SoftI2C, or anything with readfrom_mem_into / writeto_mem / scan
-#               (the simulator's bus, firmware.busio_i2c's adapter for CircuitPython).
+#               (the simulator's bus, firmware.circuitpython.busio_i2c's adapter for CircuitPython).
 #   period_us   the chip's output data period: sizes the default data-ready bound.
 #   delay_us    None on a board (time.sleep_us, waits measured with time.ticks_us); the
 #               simulator passes its bus.sleep_us, and the waited time is then the sum of the

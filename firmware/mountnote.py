@@ -1,9 +1,9 @@
-"""The mounting check's verdict (firmware/mountcheck.py) kept across a reboot, in a file beside
+"""The mounting check's verdict (firmware/calibrate/mountcheck.py) kept across a reboot, in a file beside
 the calibration store's slots. Loaded when there is something to keep or read, and dropped
 after (firmware.compat.drop): a board whose store holds no verdict never loads it.
 """
 #     from firmware import mountnote
-#     mountnote.save(app)        # after a check that said ok or wrong (firmware/session.py)
+#     mountnote.save(app)        # after a check that said ok or wrong (firmware/calibrate/session.py)
 #     mountnote.load(app, data)  # at boot, the file's bytes, once a record loaded (persist.py)
 #
 # (firmware/persist.py and session.py import it by a string, not by an import statement, so
@@ -43,17 +43,17 @@ from firmware.axes import AxisMap
 from firmware.compat import const
 
 NAME = "_mounting.txt"    # after the store's prefix (persist.py and session.py hold it too)
-_WRONG = "wrong"          # firmware.mountcheck.WRONG: the only verdict written
-_OK = "ok"                # firmware.mountcheck.OK
+_WRONG = "wrong"          # firmware.calibrate.mountcheck.WRONG: the only verdict written
+_OK = "ok"                # firmware.calibrate.mountcheck.OK
 _LINE_MAX = const(80)   # bytes read (persist.py too): a line has at most 59 (a 16-byte
 #                           KIND, MAG_AXES "-x,-y,-z"); as long or longer is no line
-_STATUS = 'check MAG_AXES: the data say "%s"'  # as firmware.mountcheck.judge says it
+_STATUS = 'check MAG_AXES: the data say "%s"'  # as firmware.calibrate.mountcheck.judge says it
 
 
 def save(app):
     """Keep the answer of the check just made (app.mounting: ("ok" or "wrong", MAG_AXES the
     data say)) for the next boot. Nothing without a CalStore. OSError and MemoryError go to
-    the caller (firmware/session.py mount_check tries again at the next check)."""
+    the caller (firmware/calibrate/session.py mount_check tries again at the next check)."""
     st = app.store
     prefix = getattr(st, "prefix", None)
     if prefix is None or getattr(st, "fs", None) is None:

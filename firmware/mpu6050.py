@@ -1,5 +1,5 @@
 """MPU6050 accelerometer and gyroscope (InvenSense), I2C address 0x68 (0x69 with AD0 high): tilt
-for the compass, rotation rate for the gyro-aided heading (firmware/attitude.py).
+for the compass, rotation rate for the gyro-aided heading (firmware/gyro/attitude.py).
 """
 #     from machine import I2C, Pin
 #     from firmware.mpu6050 import MPU6050

@@ -78,9 +78,8 @@ def save(app, dip_only):
         app._dip_unsaved = app.dip is not None and not app.dip.armed
         app._unsaved = False
         app.save_reason = None
-        if app._hist_flags and not dip_only and app.collector is not None:
-            from firmware import session  # the history follows the store
-            session.saved(app, app._hist_flags)
+        if app._hist_flags and not dip_only and app._session is not None:
+            app._session.saved(app, app._hist_flags)  # the history follows the store
             app._hist_flags = 0
     except StoreError as e:
         _failed(app, e.reason)
@@ -106,7 +105,7 @@ def _failed(app, reason):
 def _record(app):
     # the payload saved: the calibration in force with the dip it measures, when known
     c = app.calibration
-    d = app.dip  # None in calibration mode (firmware/calmode.py): not measured there
+    d = app.dip
     if d is not None and d.armed and c.model is not None and c.dip_kang != d.ref:
         c = c.with_dip(d.ref)
     return c.to_bytes()

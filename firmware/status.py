@@ -19,11 +19,12 @@ half second (boards/main.py), imported at the first report.
 #                docs/calibration.md explains every field.
 # line(app)      the same line as a str.
 from firmware.compat import const, free_bytes
+from firmware.hints import HINTS
 
 _QUIET_HINT_US = const(3000000)  # no new direction for 3 s before "planar"
 _STATUS_INTERFERENCE = "interference"  # firmware.app.STATUS_INTERFERENCE
 _LINE_MAX = const(400)  # bytes: the longest line (a jump, the location, a hint) fits
-_MODE_NEED_KB = const(140)  # firmware.calmode.MODE_NEED_KB (not imported: it is dropped)
+_PROGRAM_NEED_KB = const(96)  # the calibration program's smallest heap (docs/benchmarks.md)
 _buf = bytearray(_LINE_MAX)
 _mv = memoryview(_buf)
 _n = 0
@@ -108,7 +109,7 @@ def _fixed(v, div):
 
 
 def _deg(angle_kang, signed=False):
-    # the heading part's: calibration mode's line never loads trig and its tables
+    # loaded for a heading only: a line without one never loads trig and its tables
     import firmware.trig as trig
     _fixed(trig.kang_decideg(angle_kang, signed), 10)
 
@@ -116,19 +117,6 @@ def _deg(angle_kang, signed=False):
 def _pct(x100):
     _fixed(x100, 100)
     _put(" %")
-
-
-# what a refusal asks the user to do (status_line); a reason not here is shown as is
-_HINTS = {"planar": "rotate about another axis, not only around",
-          "too_few_samples": "keep turning",
-          "low_coverage": "turn through more directions",
-          "fit_error_high": "move slowly, away from metal",
-          "field_out_of_range": "field implausible: a magnet near, or the wrong range?",
-          "field_mismatch": "field differs from the model here: wrong range, or a magnet?",
-          "soft_iron_out_of_range": "strong soft iron: move away from steel",
-          "inconsistent_samples": "the field changed while collecting (a magnet, a motor?): "
-                                  "samples dropped, keep turning",
-          "no_memory": "out of memory while solving"}
 
 
 def _model_fit(c):
@@ -178,7 +166,7 @@ def _story(app):
         reason = "too_few_samples"
     if reason and reason != "not_better":
         _sep()
-        _put(_HINTS.get(reason, reason))
+        _put(HINTS.get(reason, reason))
 
 
 def _gyro(a):
@@ -214,17 +202,12 @@ def _no_memory(app):
         _put("stored calibration not loaded: out of memory, ")
         _free_kb()
         _put(" KB free (retrying)")
-    elif what == "heading":
-        _put("no room to show a heading again: ")
-        _free_kb()
-        _put(" KB free (retrying)")
     elif what == "calibrate":
-        _put("calibration needs ~")
-        _int(_MODE_NEED_KB)
-        _put(" KB, this board has ")
+        _put("no room to calibrate beside the heading (")
         _free_kb()
-        _put(" KB free: calibrate in the browser page (docs/web.md) or MotionCal mode, or "
-             "use a frozen or ROMFS build")
+        _put(" KB free): the calibration program does it alone, from ~")
+        _int(_PROGRAM_NEED_KB)
+        _put(" KB: calibrate() at the REPL, or reset (docs/calibration.md)")
     else:
         _put("out of memory (")
         _any(what)
@@ -235,16 +218,6 @@ def _save_failed(app):
     if app.save_reason is not None:  # the last save failed (a later one succeeded: None)
         _put(" | save failed: ")
         _put(app.save_reason)
-
-
-def _calibrating(app):
-    """Calibration mode (firmware/calmode.py): no heading; the session's progress."""
-    _put("calibration mode (no heading) | ")
-    _put(app.status)
-    _story(app)
-    _save_failed(app)
-    if app.no_memory is not None:
-        _no_memory(app)
 
 
 def _accuracy(app):
@@ -332,8 +305,6 @@ def view(app):
         _free_kb()
         _put(" KB free: a frozen or ROMFS build needs the least heap (docs/design.md, "
              "memory); retrying")
-    elif app.mode != "heading":
-        _calibrating(app)
     else:
         _heading_line(app)
     return _mv[:_n]

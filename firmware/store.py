@@ -73,7 +73,7 @@ class CalStore:
     # when the payload means nothing valid (the app sets Calibration.from_bytes). After load():
     # .seq and .path of the record returned, .last_skipped the list of (path, reason) for the
     # slot(s) not used (the spare only when it holds something). .prefix: the path of the
-    # slot files without their '_a.cal' ending (firmware.history names its files after it,
+    # slot files without their '_a.cal' ending (firmware.calibrate.history names its files after it,
     # and firmware.mountnote the mounting check's verdict).
 
     def __init__(self, directory="/", name="ecompass", sensor="qmc5883l", range_code=0, fs=None,

@@ -21,7 +21,7 @@ COMMANDS = (
               "docs/benchmarks.md"),
     ("quality", "the calibration quality database: ingest, check, export, plot, trend "
                 "(CPython)"),
-    ("wmm", "write the board's World Magnetic Model table, firmware/wmm2025.bin (make wmm)"),
+    ("wmm", "write the board's World Magnetic Model table, firmware/field/wmm2025.bin (make wmm)"),
     ("field", "the board's field model: declination, inclination, field at LAT,LON"),
     ("web", "serve the browser calibrator (docs/web.md); --vendor makes web/vendor"),
     ("soak", "a seeded fault campaign against the simulated board (make soak)"),

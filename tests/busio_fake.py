@@ -1,5 +1,5 @@
 # A busio.I2C look-alike over any machine.I2C-shaped bus (host_sim's SimI2C, or a replay bus),
-# so that firmware.busio_i2c runs on CPython and MicroPython as it would on CircuitPython.
+# so that firmware.circuitpython.busio_i2c runs on CPython and MicroPython as it would on CircuitPython.
 # Runs on both interpreters (the parity scenarios import it).
 #
 # The semantics follow CircuitPython's busio.I2C documentation:

@@ -1,7 +1,7 @@
 """Host-side re-implementation of what PJRC MotionCal does with the board's serial stream, for
 tests only (floats allowed): written from MotionCal's behaviour as its source implements it
 (serialdata.c ascii_parse(), rawdata.c send_calibration() / crc16() / cal1_data() /
-cal2_data() / is_float_ok()), independently of firmware/motioncal.py.
+cal2_data() / is_float_ok()), independently of firmware/motioncal/protocol.py.
 
     p = MotionCal()
     p.send(build_packet(V, B, invw))     # what Send Cal writes; arms the confirmation

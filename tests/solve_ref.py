@@ -1,8 +1,8 @@
-"""Test-only companions of firmware/solve.py and firmware/accum.py: the sliced solver steps
+"""Test-only companions of firmware/calibrate/solve.py and firmware/calibrate/accum.py: the sliced solver steps
 run to completion, and exact reference computations the tests compare the firmware with.
 The firmware itself runs only the *_steps generators (the app slices them)."""
-from firmware.accum import Moments, index, terms
-from firmware.solve import (Fit, _inv_q_steps, _sum_sq_steps, field_out_steps, field_q16_steps,
+from firmware.calibrate.accum import Moments, index, terms
+from firmware.calibrate.solve import (Fit, _inv_q_steps, _sum_sq_steps, field_out_steps, field_q16_steps,
                             fit_error_steps, fit_steps, invw_steps, minmax_steps, q15_steps,
                             sqrtm_steps)
 from firmware.fixedpoint import isqrt

@@ -2,8 +2,8 @@
 from hypothesis import given, strategies as st
 
 from tests import solve_ref
-from firmware import accum
-from firmware.samples import KEPT, REJECTED, REPLACED, SampleBuffer
+from firmware.calibrate import accum
+from firmware.calibrate.samples import KEPT, REJECTED, REPLACED, SampleBuffer
 
 i16 = st.integers(min_value=-32768, max_value=32767)
 points = st.tuples(i16, i16, i16)

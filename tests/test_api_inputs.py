@@ -2,7 +2,7 @@
 import pytest
 
 from firmware.app import CompassApp
-from firmware.calibrator import Calibrator
+from firmware.calibrate.calibrator import Calibrator
 from firmware.trig import KANG_PER_TURN, kang_to_str
 from tests import mp
 
@@ -45,7 +45,7 @@ def test_calibrator_add_rejects_values_outside_int16(x):
 
 
 def test_calibrator_add_errors_are_the_same_on_micropython():
-    code = ("from firmware.calibrator import Calibrator\n"
+    code = ("from firmware.calibrate.calibrator import Calibrator\n"
             "c = Calibrator(model=4)\n"
             "for a in ((1.5, 0, 0), (0, 'a', 0), (40000, 0, 0), (2 ** 40, 0, 0)):\n"
             "    try:\n"

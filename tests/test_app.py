@@ -193,7 +193,7 @@ def test_progress_reports_coverage_samples_model_fit_error_and_refusals(session)
 
 
 def test_the_calibration_session_ends_once_a_good_fit_is_saved_and_the_board_rests(session):
-    # the machinery leaves (firmware/session.py): nothing collects, the counters stay. While
+    # the machinery leaves (firmware/calibrate/session.py): nothing collects, the counters stay. While
     # the figure-8 goes on the session goes on (a later fit may be better)
     app = session.app
     assert session.final["collecting"]
@@ -312,16 +312,30 @@ def test_a_session_gives_the_same_calibration_bytes_and_headings_on_both_interpr
 
 def test_the_board_main_runs_on_the_simulated_board_and_boots_with_its_stored_calibration(
         tmp_path):
-    # one main.py for every board (boards/main.py); what differs lives in boards/<b>/board.py
-    out = mp.run(["tests/scenarios/app_main.py", "boards/main.py", str(tmp_path), "15"],
+    # one main.py for every board (boards/main.py); what differs lives in boards/<b>/board.py.
+    # No stored calibration: the calibration program alone, a progress line every 0.5 s, a
+    # restart once its fit is saved, then the heading from the store
+    out = mp.run(["tests/scenarios/app_main.py", "boards/main.py", str(tmp_path), "40"],
                  micro=False).splitlines()
-    assert out[0] == "eCompass: qmc5883l, accelerometer yes, stored calibration: missing"
-    status = [ln for ln in out if ln.startswith("heading ")]
-    assert 28 <= len(status) <= 31  # every 0.5 s
-    assert "uncalibrated" in status[0] and "model 10 fit" in status[-1]
-    assert out[-1] == "stopped at 15 s"
+    assert out[0].startswith("eCompass: calibrating (qmc5883l, accelerometer yes)")
+    i = [k for k, ln in enumerate(out) if ln.startswith("restarted at ")][0]
+    progress = [ln for ln in out[1:i] if ln.startswith("calibrating: ")]
+    t = int(out[i].split()[2])
+    assert len(progress) >= 2 * t - 2  # every 0.5 s
+    assert "saved and read back" in progress[-1] and "model 10 fit" in progress[-1]
+    assert out[i + 1] == "eCompass: qmc5883l, accelerometer yes, stored calibration: loaded"
+    status = [ln for ln in out[i + 2:] if ln.startswith("heading ")]
+    assert status and all("model 10 fit" in ln and "---.-" not in ln for ln in status)
+    assert out[-1] == "stopped at 40 s"
     # reboot, on MicroPython this time: the calibration comes from the store at once
     out = mp.run(["tests/scenarios/app_main.py", "boards/main.py", str(tmp_path), "2"],
                  micro=True).splitlines()
     assert out[0] == "eCompass: qmc5883l, accelerometer yes, stored calibration: loaded"
     assert "model 10 fit" in out[1]
+    # calibrate() at the REPL: the request runs the program once more, then the heading
+    (tmp_path / "calibrate.req").write_text("calibrate")
+    out = mp.run(["tests/scenarios/app_main.py", "boards/main.py", str(tmp_path), "40"],
+                 micro=True).splitlines()
+    assert out[0].startswith("eCompass: calibrating") and any(
+        ln.startswith("restarted at ") for ln in out)
+    assert not (tmp_path / "calibrate.req").exists()

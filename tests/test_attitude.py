@@ -1,4 +1,4 @@
-"""The attitude filter (firmware/attitude.py) on its own: accuracy on exact synthetic motion
+"""The attitude filter (firmware/gyro/attitude.py) on its own: accuracy on exact synthetic motion
 (floats make the truth, the filter sees int16 counts), the small-int bound over any input
 (hypothesis drives an instrumented copy), the same bits on MicroPython, and 0 B per update.
 The app with the simulated GY-87 is in tests/test_gyro.py."""
@@ -10,8 +10,8 @@ from hypothesis import given, settings, strategies as st
 
 from tests import intcheck, mp
 
-from firmware import attitude
-from firmware.attitude import ACC_OK, FIELD, MAG_OK, Attitude
+from firmware.gyro import attitude
+from firmware.gyro.attitude import ACC_OK, FIELD, MAG_OK, Attitude
 from firmware.compass import Compass
 
 CPS = 65.5          # counts per deg/s at +-500 deg/s (MPU6050 product spec table 6.1)
@@ -230,8 +230,8 @@ def test_options_out_of_range_name_the_argument(name, value):
 
 # ------------------------------------------------------------------ small-int bound
 
-CHECKED, STATS = intcheck.load("attitude")               # the class: orchestration, windows
-CHECKED_PLAIN, STATS_PLAIN = intcheck.load("attitude_plain")  # the per-sample steps
+CHECKED, STATS = intcheck.load("gyro.attitude")               # the class: orchestration, windows
+CHECKED_PLAIN, STATS_PLAIN = intcheck.load("gyro.attitude_plain")  # the per-sample steps
 CHECKED.use_kernels(CHECKED_PLAIN)
 i16 = st.integers(min_value=-32768, max_value=32767)
 vec = st.lists(i16, min_size=3, max_size=3)
@@ -297,7 +297,7 @@ def test_the_slot_numbers_agree_across_the_filters_modules():
     import re
 
     def slots(name):
-        with open("firmware/%s.py" % name) as f:
+        with open("firmware/gyro/%s.py" % name) as f:
             return dict(re.findall(r"^(_[A-Z_0-9]+) = const\((\d+)\)", f.read(), re.M))
     main = slots("attitude")
     for other in ("attitude_plain", "gyrosetup"):

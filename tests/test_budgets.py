@@ -37,7 +37,7 @@ def build(tmp_path_factory):
         out["rom_bytes"] = os.path.getsize(out["rom"])
     if WASM.available:
         out["bytecode"] = bench.build_mpy(os.path.join(d, "bytecode"), bench.MPY_CROSS,
-                                          "x64", skip=("fast.py", "attitude_fast.py"))
+                                          "x64", skip=("fast.py", "gyro/attitude_fast.py"))
     return out
 
 
@@ -80,7 +80,8 @@ def test_the_gyro_aided_heading_costs_within_its_budget_and_nothing_per_sample(p
     assert g["bytes_per_sample"] == BUDGETS["bytes_per_sample"]
     # the filter and the one kernel set in use stay (x86-32 has the emitter: the viper one),
     # its construction left
-    assert set(g["modules"]) - set(h["modules"]) == {"attitude", "attitude_fast"}
+    assert set(g["modules"]) - set(h["modules"]) == {"gyro", "gyro.attitude",
+                                                     "gyro.attitude_fast"}
 
 
 def test_a_calibrated_board_stays_within_its_heap_budget_from_romfs(profiles_romfs):
@@ -99,20 +100,21 @@ def test_the_calibration_machinery_leaves_when_the_session_ends(profiles_mpy):
     assert c["bytes_per_sample"] == BUDGETS["bytes_per_sample"]
 
 
-def test_calibration_mode_holds_only_the_calibrating_part_at_its_solving_peak(build):
-    # a board with little room (bench.MODE_PROFILE_KB) calibrates in calibration mode: at the
-    # solving peak it holds neither the heading line (compass, fast, trig, the status line's
-    # accuracy part) nor what only boot, a save or the history need, and the peak stays within
-    # its budget (make bench: docs/benchmarks.md, calibration mode)
+def test_the_calibration_program_holds_only_what_calibrating_needs_at_its_solving_peak(build):
+    # boards/main.py runs it alone on a board without a calibration: at the solving peak it
+    # holds neither the heading line (app, compass, fast, trig, the status line) nor what
+    # only boot, a save or the history need, and the peak stays within its budget (make
+    # bench: docs/benchmarks.md, calibration program)
     b = _x86(build)
-    r = bench.mode_profile(b["session"], b["mpy"])
+    r = bench.program_profile(b["session"], b["mpy"])
     assert "error" not in r and r["complete"], r
-    assert r["peak_mode"] == "calibrating", r["peak_mode"]
     held = set(r["peak_modules"])
-    assert not held & {"compass", "fast", "trig", "kang_tables", "accuracy", "detect",
-                       "appsetup", "devinit", "boot", "persist", "slots", "history"}, held
-    assert {"calibrator", "solve", "samples", "accum"} <= held, held
-    assert r["peak_solving"] <= BUDGETS["mode_peak_mpy"], r["peak_solving"]
+    assert not held & {"app", "appsetup", "compass", "fast", "trig", "kang_tables", "status",
+                       "accuracy", "fieldwatch", "detect", "devinit", "boot", "persist",
+                       "slots", "calibrate.history", "calibrate.session"}, held
+    assert {"calibrate.calibrator", "calibrate.samples", "calibrate.accum",
+            "calibrate.program"} <= held, held
+    assert r["peak_solving"] <= BUDGETS["program_peak_mpy"], r["peak_solving"]
 
 
 @pytest.mark.parametrize("kind", ["mpy", "romfs"])
@@ -125,7 +127,7 @@ def test_a_first_calibration_completes_within_its_smallest_heap_budget(build, ki
     extra = [b["rom"], "--romfs"] if kind == "romfs" else []
     with bench.ProfileRun(b["mpy"] if kind == "mpy" else None, extra) as pr:
         for kb in range((heap + KB - 1) // KB, (heap + KB - 1) // KB + 8):
-            r = pr.run(b["session"], "calibrate", heap="%dk" % kb, flags=["--min"],
+            r = pr.run(b["session"], "program", heap="%dk" % kb, flags=["--min"],
                        fresh_store=True)
             assert r.get("complete") is True, (kb, r)
 

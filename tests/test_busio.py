@@ -1,4 +1,4 @@
-"""firmware/busio_i2c.py: the drivers over CircuitPython's busio.I2C, through a busio-shaped fake
+"""firmware/circuitpython/busio_i2c.py: the drivers over CircuitPython's busio.I2C, through a busio-shaped fake
 of the simulated bus (tests/busio_fake.py). No CircuitPython interpreter runs here: busio's
 semantics (lock before every transfer, RuntimeError without it, OSError on a NACK) come from
 its documentation and are what the fake enforces.
@@ -11,7 +11,7 @@ import types
 import pytest
 
 from firmware.app import CompassApp
-from firmware.busio_i2c import BusioI2C
+from firmware.circuitpython.busio_i2c import BusioI2C
 from firmware.detect import detect, detect_accel
 from firmware.errors import BusError
 from firmware.hmc5883l import HMC5883L
@@ -24,7 +24,7 @@ from tests import mp
 from tests.busio_fake import FakeBusioI2C
 from tests.scenarios import app_world as W
 
-POLL_US = 100   # the adapter's try_lock() poll interval (firmware/busio_i2c.py _LOCK_POLL_US)
+POLL_US = 100   # the adapter's try_lock() poll interval (firmware/circuitpython/busio_i2c.py _LOCK_POLL_US)
 BOARDS = [("qmc5883l", True), ("hmc5883l", True), ("qmc5883p", None), ("gy87", None),
           ("gy87-qmc", None)]
 

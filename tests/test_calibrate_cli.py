@@ -261,7 +261,7 @@ def test_a_loggers_line_naming_a_range_the_chip_lacks_is_refused_in_one_line(tmp
 
 
 def test_capacity_is_bounded_by_what_the_calibrator_holds(tmp_path):
-    from firmware.samples import MAX_CAPACITY
+    from firmware.calibrate.samples import MAX_CAPACITY
     p = qmc_log(tmp_path)
     rc, out, err = cli_run("calibrate", p, "--capacity", MAX_CAPACITY + 1)
     line = one_error_line(err)

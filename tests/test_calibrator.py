@@ -11,10 +11,13 @@ import pytest
 from hypothesis import find, given, strategies as st
 
 from tests import solve_ref
-from firmware import acceptance, accum, calibration, calibrator
+from firmware import calibration
+from firmware.calibrate import acceptance
+from firmware.calibrate import accum
+from firmware.calibrate import calibrator
 from firmware.errors import CalibrationRejected
 from firmware.calibration import UNCALIBRATED, Calibration
-from firmware.calibrator import Calibrator
+from firmware.calibrate.calibrator import Calibrator
 from tests import intcheck, mp
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "scenarios"))
@@ -542,7 +545,7 @@ def test_samples_at_a_chips_rails_never_enter_the_fit_and_are_counted():
     assert c.add(-4096, 900, 900)  # a plain reading on a QMC chip
     h = Calibrator(model=10, counts_per_gauss=1090, overflow=-4096)
     assert not h.add(-4096, 12, 13) and h.railed == 1 and h.count == 0
-    from firmware.calibrator import Collector
+    from firmware.calibrate.calibrator import Collector
     col = Collector(counts_per_gauss=1090, overflow=-4096)
     col.feed([-4096, -4096, -4096])
     assert col.calibrator.railed == 1 and col.calibrator.count == 0

@@ -1,5 +1,5 @@
 """From a log to a board: examples/log_csv.py logs on a simulated board, the desktop CLI fits
-it, the board imports the file at boot (firmware/calimport.py via boards/main.py) and its
+it, the board imports the file at boot (firmware/calfile/calimport.py via boards/main.py) and its
 heading is calibrated."""
 import json
 import math
@@ -11,7 +11,7 @@ import sys
 import pytest
 
 from firmware.calibration import Calibration
-from firmware.calimport import import_calibration
+from firmware.calfile.calimport import import_calibration
 from firmware.store import CalStore
 from tests import mp
 
@@ -59,7 +59,7 @@ def test_import_stores_the_file_and_renames_it_once(fitted, tmp_path):
     ({"field_out_counts": 0}, "field"),
     ({"coverage_percent": 101}, "coverage"),
     (None, "not a JSON"),
-    # valid on the wire, absurd on a board (the board's own bar, firmware/acceptance.py)
+    # valid on the wire, absurd on a board (the board's own bar, firmware/calibrate/acceptance.py)
     ({"invw_q15": [0] * 9}, "soft_iron_out_of_range"),            # every heading fails
     ({"invw_q15": [-32767, 0, 0, 0, -32767, 0, 0, 0, -32767]},     # turns it by 180 deg
      "soft_iron_out_of_range"),

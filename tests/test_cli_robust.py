@@ -267,7 +267,7 @@ def test_rows_outside_the_sensors_output_are_corrupt(tmp_path, capsys):
     rows[5] = ["-4096", "12", "7"]
     r, err = fit(capsys, write(tmp_path / "b.csv", ["mx", "my", "mz"], rows),
                  "--sensor", "hmc5883l", "--range", "0.88")
-    # the overflow marker is dropped and counted, not a corrupt row (firmware.calibrator)
+    # the overflow marker is dropped and counted, not a corrupt row (firmware.calibrate.calibrator)
     assert r["skipped_rows"] == 0 and r["rail_samples"] == 1
     assert "1 sample(s) at the sensor's rails dropped" in err
 

@@ -1,4 +1,4 @@
-"""Samples that disagree (firmware/acceptance.py inconsistent_samples): a 10-element fit over
+"""Samples that disagree (firmware/calibrate/acceptance.py inconsistent_samples): a 10-element fit over
 samples of two hard-iron states - a magnet near the sensor for part of the collection, a
 relay or motor switching, a drifting offset - is refused with its reason, the collector drops
 the mixed samples, and the fit made once the field holds still is accepted. A clean
@@ -8,10 +8,10 @@ import pytest
 from tests.scenarios import app_world as W
 from tests.test_slices import ellipsoid_points, filled
 
-from firmware import acceptance
+from firmware.calibrate import acceptance
 from firmware.app import status_line
 from firmware.calibration import Calibration
-from firmware.calibrator import Calibrator
+from firmware.calibrate.calibrator import Calibrator
 from firmware.errors import CalibrationRejected
 from firmware.store import CalStore
 
@@ -27,7 +27,7 @@ def session(setup, world_hook, seconds):
     fs = W.MemFs()
     app = W.make_app(b, store=CalStore("/", fs=fs))
     reasons, lines, fits = [], [], []
-    use = app._use  # every accepted fit is put in force through it (firmware/session.py)
+    use = app._use  # every accepted fit is put in force through it (firmware/calibrate/session.py)
 
     def spy(cal):
         if cal.model == 10:
@@ -96,7 +96,7 @@ def test_a_drifting_hard_iron_is_refused_until_it_holds(setup):
     assert INCONSISTENT in reasons
     assert not [c for t, c in fits if t < 40.0]
     # the fit made once it holds (pending when it jumped from the rough first fit: the
-    # history's "hardware changed?", firmware/history.py)
+    # history's "hardware changed?", firmware/calibrate/history.py)
     c = app.pending or app.calibration
     end = tuple(W.HARD_IRON_UT[i] + rate[i] * 40.0 for i in range(3))
     assert c.model == 10 and true_iron(app, c, end)
@@ -146,7 +146,7 @@ def test_noise_alone_never_refuses_even_when_the_halves_differ_by_more():
 
 
 def test_the_collector_drops_mixed_samples_after_the_refusal():
-    from firmware.calibrator import Collector
+    from firmware.calibrate.calibrator import Collector
     col = Collector(model=10, capacity=300, current=None, fallback=False)
     for p in two_states((900, -600, 300)):
         col.feed(p)

@@ -22,7 +22,7 @@ from contextlib import redirect_stdout
 import numpy as np
 import pytest
 
-from firmware.calibrator import Calibrator
+from firmware.calibrate.calibrator import Calibrator
 from firmware.errors import CalibrationRejected
 from host_sim.cli import calibrate
 from host_sim.cli.benchmarks import accuracy
@@ -67,7 +67,7 @@ def test_default_command_fits_as_well_as_a_float64_fit_of_every_row(name):
 def test_the_inconsistent_log_is_inconsistent_in_float64_too():
     # its first and second halves, each fitted in float64, put the hard iron more than the
     # firmware's limit (acceptance.CONSISTENCY_PCT) of B apart
-    from firmware.acceptance import CONSISTENCY_PCT
+    from firmware.calibrate.acceptance import CONSISTENCY_PCT
     name = "icm20948_ak09916_jremington"
     need(name)
     f = np.genfromtxt(log_path(name), delimiter=",", skip_header=1)
@@ -173,9 +173,9 @@ def test_ten_element_centre_agrees_with_the_authors_published_calibration(name):
 
 def _consistency(name, *extra):
     """(percent of B between the halves' centres, lag-1 correlation of the residuals, refusal
-    or None) of the calibrate command's 10-element fit: what firmware/acceptance.py's
+    or None) of the calibrate command's 10-element fit: what firmware/calibrate/acceptance.py's
     check_consistency was given (docs/faults.md quotes these)."""
-    from firmware import acceptance
+    from firmware.calibrate import acceptance
     seen = []
     orig = acceptance.check_consistency
 

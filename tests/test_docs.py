@@ -331,8 +331,8 @@ def test_the_firmware_name_check_finds_a_wrong_module_and_a_wrong_attribute():
     assert unresolved_firmware_name("firmware/*.py") is None
     assert unresolved_firmware_name("firmware.x") is None          # a placeholder
     assert unresolved_firmware_name("firmware.fast.isqrt") is None  # imports only on MicroPython
-    assert unresolved_firmware_name("firmware.calibrator.Calibrator.solve") is None
-    assert unresolved_firmware_name("firmware.calibrator.Calibrator.nothing") is not None
+    assert unresolved_firmware_name("firmware.calibrate.calibrator.Calibrator.solve") is None
+    assert unresolved_firmware_name("firmware.calibrate.calibrator.Calibrator.nothing") is not None
 
 
 def test_the_firmware_name_check_follows_modules_into_sub_packages(tmp_path):

@@ -1,4 +1,4 @@
-"""firmware/field.py against the full float World Magnetic Model (pygeomag), plus its inputs,
+"""firmware/field/wmm.py against the full float World Magnetic Model (pygeomag), plus its inputs,
 validity window, table checks, heap and MicroPython parity, and the `field` / `wmm` commands.
 
 Goals (docs/field_model.md): at |lat| <= 60 deg over 2025.0-2030.0, declination RMS <= 0.1 deg
@@ -14,8 +14,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from firmware import field
-from firmware.field import FieldModel, FieldTableError, decimal_year_e3
+from firmware.field import wmm as field
+from firmware.field.wmm import FieldModel, FieldTableError, decimal_year_e3
 from host_sim.cli import wmm
 from host_sim.cli.benchmarks import fieldacc
 from tests import intcheck, mp
@@ -23,7 +23,7 @@ from tests import intcheck, mp
 pygeomag = pytest.importorskip("pygeomag", reason="pygeomag not installed (requirements.txt: "
                                "make venv)")
 ROOT = mp.ROOT
-TABLE = os.path.join(ROOT, "firmware", "wmm2025.bin")
+TABLE = os.path.join(ROOT, "firmware", "field", "wmm2025.bin")
 
 DECL_RMS_DEG = fieldacc.GOALS["decl_rms_deg"]
 DECL_MAX_DEG = fieldacc.GOALS["decl_max_deg"]
@@ -156,7 +156,7 @@ def test_weights_are_the_cubic_lagrange_weights_and_sum_to_one():
 def test_committed_table_is_what_make_wmm_writes():
     with open(TABLE, "rb") as f:
         committed = f.read()
-    assert committed == wmm.build(), "firmware/wmm2025.bin is stale: run `make wmm`"
+    assert committed == wmm.build(), "firmware/field/wmm2025.bin is stale: run `make wmm`"
     assert len(committed) <= 16 * 1024
 
 
@@ -211,7 +211,7 @@ def test_crc_without_binascii_gives_the_same_check(monkeypatch, tmp_path):
 
 # -- integers, heap, MicroPython ----------------------------------------------------------
 
-CHECKED, STATS = intcheck.load("field")
+CHECKED, STATS = intcheck.load("field.wmm")
 _CHECKED_MODEL = CHECKED.FieldModel(TABLE)
 
 

@@ -1,4 +1,4 @@
-"""Gyro-aided heading in the app (CompassApp.use_gyro, firmware/attitude.py) on the simulated
+"""Gyro-aided heading in the app (CompassApp.use_gyro, firmware/gyro/attitude.py) on the simulated
 GY-87: the scenarios of docs/gyro.md (host_sim/cli/benchmarks/gyroacc.py, whose figures make
 bench prints) with their stated tolerances, each beside the magnetometer-only app where that
 is the point."""

@@ -1,4 +1,4 @@
-"""firmware/history.py: the board's short history of accepted calibrations and the check of
+"""firmware/calibrate/history.py: the board's short history of accepted calibrations and the check of
 each new one against it. Limits as arithmetic (wide before MIN_STATS entries, mean +- k sigma
 after, floors, one-sided fit error, models compared only where they mean the same), the ring
 on a filesystem (bounded, monotonic counts, power cuts at every byte), and scenarios through
@@ -10,7 +10,7 @@ import sys
 import pytest
 
 from firmware.calibration import Calibration
-from firmware.history import (ENTRIES, FLAG_ACCEPTED, FLAG_BASELINE, FLAG_PENDING, History,
+from firmware.calibrate.history import (ENTRIES, FLAG_ACCEPTED, FLAG_BASELINE, FLAG_PENDING, History,
                               jump, limits)
 from firmware.store import CalStore
 
@@ -317,11 +317,11 @@ def test_a_failing_history_never_stops_the_app_nor_blocks_a_calibration(monkeypa
     assert app.calibration.model == 10 and app.stored >= 1 and app.pending is None
     assert app.history_errors >= 1 and app.history_reason.endswith(" 21")  # EISDIR
     # a bug in the check itself (any exception) is counted, not raised out of step()
-    import firmware.history
+    import firmware.calibrate.history
 
     def broken(self, c, current=None):
         raise TypeError("a bug")
-    monkeypatch.setattr(firmware.history.History, "check", broken)
+    monkeypatch.setattr(firmware.calibrate.history.History, "check", broken)
     _, app = session(W.MemFs(), world(), seed=71)
     assert app.calibration.model == 10 and app.stored >= 1
     assert app.history_errors >= 1 and "TypeError" in app.history_reason

@@ -12,17 +12,19 @@ from tests import mp
 ROOT = mp.ROOT
 FW = os.path.join(ROOT, "firmware")
 PIPELINE = ["compat", "errors", "fixedpoint", "i2cdevice", "detect", "qmc5883l", "hmc5883l",
-            "qmc5883p", "mpu6050", "axes", "samples", "accum", "solve", "calibration",
-            "acceptance", "calibrator", "kang_tables", "trig", "compass", "store", "slots",
-            "history", "health", "fieldwatch", "app", "fast",
+            "qmc5883p", "mpu6050", "axes", "calibrate.samples", "calibrate.accum",
+            "calibrate.solve", "calibration", "calibrate.acceptance", "calibrate.calibrator",
+            "kang_tables", "trig", "compass", "store", "slots", "calibrate.history", "health",
+            "fieldwatch", "app", "fast",
             # the app's capabilities, each loaded for its job and dropped after it (boot,
             # construction, the drivers' start-up and error texts, the store's load and save,
             # the calibration session, calibration mode where the heap holds one job at a
             # time, the status line)
-            "boot", "appsetup", "devinit", "persist", "session", "calmode", "status"]
-CALIBRATION_MACHINERY = {"firmware.calibrator", "firmware.solve", "firmware.accum",
-                         "firmware.samples", "firmware.acceptance", "firmware.session",
-                         "firmware.history"}
+            "boot", "appsetup", "devinit", "persist", "calibrate.session", "calibrate.calmode",
+            "status"]
+CALIBRATION_MACHINERY = {"firmware.calibrate.calibrator", "firmware.calibrate.solve", "firmware.calibrate.accum",
+                         "firmware.calibrate.samples", "firmware.calibrate.acceptance", "firmware.calibrate.session",
+                         "firmware.calibrate.history"}
 # what a board booted from a stored calibration holds while it shows headings (docs/design.md)
 CORE = {"firmware." + m for m in ("app", "axes", "calibration", "compass", "compat", "errors",
                                   "fieldwatch", "fixedpoint", "health", "i2cdevice", "kang_tables",
@@ -30,7 +32,18 @@ CORE = {"firmware." + m for m in ("app", "axes", "calibration", "compass", "comp
 
 
 def _modules(folder):
-    return sorted(f[:-3] for f in os.listdir(folder) if f.endswith(".py") and f != "__init__.py")
+    """Every module below `folder`, as dotted names relative to it ("app", "calibrate.solve")."""
+    out = []
+    for d, dirs, files in os.walk(folder):
+        dirs[:] = [x for x in dirs if not x.startswith((".", "__"))]
+        rel = os.path.relpath(d, folder)
+        pre = "" if rel == "." else rel.replace(os.sep, ".") + "."
+        out += [pre + f[:-3] for f in files if f.endswith(".py") and f != "__init__.py"]
+    return sorted(out)
+
+
+def _path(m):
+    return os.path.join(FW, *m.split(".")) + ".py"
 
 
 def _imports(path, package, lazy=True):
@@ -53,8 +66,8 @@ def _imports(path, package, lazy=True):
             out.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom) and node.module:
             out.add(node.module)
-            if node.module == package:
-                out.update(package + "." + a.name for a in node.names)
+            if node.module.split(".")[0] == package:  # from firmware.calibrate import solve
+                out.update(node.module + "." + a.name for a in node.names)
         elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
               and node.func.id == "__import__" and node.args
               and isinstance(node.args[0], ast.BinOp)):
@@ -64,10 +77,11 @@ def _imports(path, package, lazy=True):
 
 def _graph(lazy=True):
     g = {}
-    for m in _modules(FW):
-        deps = _imports(os.path.join(FW, m + ".py"), "firmware", lazy)
+    mods = set(_modules(FW))
+    for m in mods:
+        deps = _imports(_path(m), "firmware", lazy)
         g[m] = sorted(d.split(".", 1)[1] for d in deps
-                      if d.startswith("firmware.") and d != "firmware.*")
+                      if d.startswith("firmware.") and d.split(".", 1)[1] in mods)
     return g
 
 
@@ -76,10 +90,11 @@ def test_firmware_reads_as_the_pipeline_one_module_per_job():
     # the accuracy level, the MotionCal codec and mode, importing a calibration file at boot,
     # CircuitPython's bus adapter, the gyro-aided heading's attitude filter, the mounting check
     # and its verdict kept across a reboot
-    assert set(_modules(FW)) - {"field", "motioncal", "motioncal_mode", "location", "quickcal",
-                                "accuracy", "calimport", "busio_i2c",
-                                "attitude", "attitude_plain", "attitude_fast",
-                                "gyrosetup", "mounting", "mountcheck",
+    assert set(_modules(FW)) - {"field.wmm", "motioncal.protocol", "motioncal.mode",
+                                "field.location", "field.quickcal", "accuracy",
+                                "calfile.calimport", "circuitpython.busio_i2c",
+                                "gyro.attitude", "gyro.attitude_plain", "gyro.attitude_fast",
+                                "gyro.gyrosetup", "calibrate.mounting", "calibrate.mountcheck",
                                 "mountnote"} == set(PIPELINE)
 
 
@@ -131,51 +146,51 @@ def test_a_board_booted_from_a_stored_calibration_loads_no_calibration_machinery
     # collecting imports the machinery, lazily, and the heading goes on
     assert second[3] and second[2] == 100
     # (the solver comes with the first solve, the history with the first accepted fit)
-    assert CALIBRATION_MACHINERY - {"firmware.history", "firmware.solve"} <= set(second[1])
+    assert CALIBRATION_MACHINERY - {"firmware.calibrate.history", "firmware.calibrate.solve"} <= set(second[1])
     # the board rests: a solve on what was kept, nothing new for 3 s, and the good
     # calibration in force stays: the session ends and its modules leave
     assert third[0] == "ended" and not third[3] and third[2] == third[4]
     assert set(third[1]) == CORE, sorted(set(third[1]) ^ CORE)
-    # a location: its figures stay (firmware/location.py), the model's table code leaves
+    # a location: its figures stay (firmware/field/location.py), the model's table code leaves
     assert fourth[0] == "located" and fourth[4] == "ok" and fourth[2] == 100
-    assert set(fourth[1]) == CORE | {"firmware.location"}, sorted(set(fourth[1]) ^ CORE)
+    assert set(fourth[1]) == CORE | {"firmware.field", "firmware.field.location"}, sorted(set(fourth[1]) ^ CORE)
 
 
 def test_the_field_model_is_imported_by_set_location_only():
     g = _graph(lazy=False)
     seen = set()
-    todo = ["app", "compass", "calibration", "store", "calibrator", "accuracy"]
+    todo = ["app", "compass", "calibration", "store", "calibrate.calibrator", "accuracy"]
     while todo:
         m = todo.pop()
         if m not in seen:
             seen.add(m)
             todo.extend(g[m])
-    assert not seen & {"field", "location", "quickcal"}, sorted(seen)
+    assert not seen & {"field.wmm", "field.location", "field.quickcal"}, sorted(seen)
     lazy = _graph(lazy=True)
-    assert "location" in lazy["app"] and "field" in lazy["location"]
+    assert "field.location" in lazy["app"] and "field.wmm" in lazy["field.location"]
 
 
 def _code_lines(path):
     return [ln for ln in open(path).read().splitlines() if not ln.lstrip().startswith("#")]
 
 
-NATIVE = ("fast", "attitude_fast")  # the viper mirrors: imported only inside try/except
+NATIVE = ("fast", "gyro.attitude_fast")  # the viper mirrors: imported only inside try/except
 
 
 def test_no_plain_module_carries_an_emitter_decorator():
     for m in _modules(FW):
         if m in NATIVE:
             continue
-        src = "\n".join(_code_lines(os.path.join(FW, m + ".py")))
+        src = "\n".join(_code_lines(_path(m)))
         assert not re.search(r"@micropython\.(native|viper)", src), m
     # and each native module is imported in one place only, inside try/except (compat for
     # the compass's, attitude for the filter's; the filter's own mirrors call fast's atan2)
     for m in _modules(FW):
-        deps = _imports(os.path.join(FW, m + ".py"), "firmware")
-        if m not in ("compat", "attitude_fast"):
+        deps = _imports(_path(m), "firmware")
+        if m not in ("compat", "gyro.attitude_fast"):
             assert "firmware.fast" not in deps, m
-        if m != "attitude":
-            assert "firmware.attitude_fast" not in deps, m
+        if m != "gyro.attitude":
+            assert "firmware.gyro.attitude_fast" not in deps, m
 
 
 def test_portability_shims_have_one_home():
@@ -183,7 +198,7 @@ def test_portability_shims_have_one_home():
     for m in _modules(FW):
         if m in ("compat",) + NATIVE:
             continue
-        path = os.path.join(FW, m + ".py")
+        path = _path(m)
         deps = _imports(path, "firmware")
         assert not deps & {"micropython", "time", "utime"}, (m, deps)
         for node in ast.walk(ast.parse(open(path).read())):
@@ -193,7 +208,8 @@ def test_portability_shims_have_one_home():
 
 def test_test_only_reference_code_lives_under_tests():
     # the solver steps run to completion and the exact references are tests' business
-    from firmware import accum, solve
+    from firmware.calibrate import accum
+    from firmware.calibrate import solve
     for name in ("fit", "invw_from_a2", "q15_from_invw", "field_q16", "minmax_fit",
                  "sqrtm_sym3", "back_substitute", "fit_error_x100", "_run"):
         assert not hasattr(solve, name), name
@@ -264,7 +280,7 @@ DOCSTRING_MAX = 300
 def test_firmware_docstrings_are_short_longer_text_is_comments():
     long_ = []
     for m in _modules(FW):
-        path = os.path.join(FW, m + ".py")
+        path = _path(m)
         for n in ast.walk(ast.parse(open(path).read(), path)):
             if isinstance(n, (ast.Module, ast.ClassDef, ast.FunctionDef)):
                 d = ast.get_docstring(n, clean=False)

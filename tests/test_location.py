@@ -1,4 +1,4 @@
-"""CompassApp.set_location and firmware/location.py: automatic declination, the field-strength
+"""CompassApp.set_location and firmware/field/location.py: automatic declination, the field-strength
 check of a new fit (field_mismatch), the interference window and dip from the model, and bad
 input (floats, ranges, a missing or corrupt table, a date outside the model)."""
 import os
@@ -7,19 +7,19 @@ import types
 
 import pytest
 
-from firmware import acceptance
-from firmware.acceptance import FIELD_MATCH_PCT, REASON_FIELD_MISMATCH
+from firmware.calibrate import acceptance
+from firmware.calibrate.acceptance import FIELD_MATCH_PCT, REASON_FIELD_MISMATCH
 from firmware.calibration import Calibration
-from firmware.calibrator import Calibrator
+from firmware.calibrate.calibrator import Calibrator
 from firmware.compass import Compass
 from firmware.errors import CalibrationRejected
-from firmware.field import FieldModel
-from firmware.location import Location
+from firmware.field.wmm import FieldModel
+from firmware.field.location import Location
 from firmware.trig import cdeg_to_kang
 from tests import location_world as L
 from tests.location_world import W
 
-TABLE = os.path.join(os.path.dirname(__file__), "..", "firmware", "wmm2025.bin")
+TABLE = os.path.join(os.path.dirname(__file__), "..", "firmware", "field", "wmm2025.bin")
 
 
 def _app(place=L.ZURICH, accel=True, **kw):

@@ -1,4 +1,4 @@
-"""firmware/motioncal.py against a host re-implementation of MotionCal (tests/motioncal_ref.py)
+"""firmware/motioncal/protocol.py against a host re-implementation of MotionCal (tests/motioncal_ref.py)
 and against CPython's own float32 decoding (struct), exact rational arithmetic (fractions)
 and float64 linear algebra (numpy)."""
 import math
@@ -11,7 +11,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from firmware import motioncal as mc
+from firmware.motioncal import protocol as mc
 from firmware.errors import CalibrationRejected
 from firmware.calibration import Calibration
 from tests import motioncal_ref as ref
@@ -351,7 +351,7 @@ def test_random_packets_are_accepted_exactly_when_a_float_check_says_so(seed, cp
     assume(all(abs(abs(o) - 32767.5) > 0.01 for o in off))
     # the output field: InvW is scaled to Q15 so that its largest row sum is 32767
     # (solve.q15_steps), so the corrected field is B x 32767 / 32768 / that row sum (counts);
-    # firmware/acceptance.py check_output_field wants it within B / 8 .. 2 B and >= 16 counts
+    # firmware/calibrate/acceptance.py check_output_field wants it within B / 8 .. 2 B and >= 16 counts
     s = 32767 / 32768 / max(sum(abs(x) for x in row) for row in m)
     fo = Bf * k * s
     assume(abs(fo - 16) > 0.6 and abs(s - 0.125) > 1e-3 and abs(s - 2) > 1e-3)

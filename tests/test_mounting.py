@@ -1,4 +1,4 @@
-"""The mounting check (firmware/mounting.py's pairs, firmware/mountcheck.py's verdict): a wrong
+"""The mounting check (firmware/calibrate/mounting.py's pairs, firmware/calibrate/mountcheck.py's verdict): a wrong
 MAG_AXES is found and the right one named after a calibration dance, a right one never raises
 it, the integer bounds hold, the same verdicts on CPython and MicroPython, its heap.
 
@@ -18,10 +18,10 @@ from array import array
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from firmware import mountcheck
+from firmware.calibrate import mountcheck
 from firmware.axes import AxisMap
 from firmware.calibration import Calibration
-from firmware.mounting import BINS, WIDTH, Pairs, _bin
+from firmware.calibrate.mounting import BINS, WIDTH, Pairs, _bin
 from host_sim import motion
 from host_sim.cli import bench, mounting as M
 from tests import intcheck, mp
@@ -208,7 +208,7 @@ def _checked():
     # the two modules instrumented once (the stats keep the largest magnitude seen over all
     # examples)
     if not _CHECKED:
-        _CHECKED.extend((intcheck.load("mounting"), intcheck.load("mountcheck")))
+        _CHECKED.extend((intcheck.load("calibrate.mounting"), intcheck.load("calibrate.mountcheck")))
     return _CHECKED
 
 
@@ -305,7 +305,7 @@ def test_the_heading_path_never_loads_the_check():
         for node in ast.walk(ast.parse(src)):
             if isinstance(node, ast.ImportFrom) and node.module:
                 names = [node.module] + [node.module + "." + a.name for a in node.names]
-                assert not any(n.startswith(("firmware.mounting", "firmware.mountcheck"))
+                assert not any(n.startswith(("firmware.calibrate.mounting", "firmware.calibrate.mountcheck"))
                                for n in names), (name, node.lineno)
 
 
@@ -431,7 +431,7 @@ def test_on_the_board_a_wrong_setting_is_said_and_the_heading_not_presented_as_g
     for _ in range(50 * 20):
         app.step()
     assert app.collector is None
-    assert "firmware.mounting" not in sys.modules and "firmware.mountcheck" not in sys.modules
+    assert "firmware.calibrate.mounting" not in sys.modules and "firmware.calibrate.mountcheck" not in sys.modules
     assert app.status == note and app.accuracy_reason() == "mag_axes"
 
 

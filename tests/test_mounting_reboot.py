@@ -347,13 +347,13 @@ def test_a_board_without_a_verdict_file_loads_nothing_for_it(danced):
 def test_the_boot_and_the_session_name_the_verdicts_code_by_strings_only():
     """MicroPython interns (for good: qstrs are never freed) the names of a module's import
     statements when the module loads; firmware/persist.py loads at every boot and
-    firmware/session.py at every calibration, so they name firmware/mountnote.py and its
+    firmware/calibrate/session.py at every calibration, so they name firmware/mountnote.py and its
     file by strings of more than 10 characters, which stay strings. A calibrated board's heap
     after boot is then the same to the byte (tests/test_budgets.py), and no name is added to
     a qstr pool that a session leaves nearly full in a fragmented heap."""
     import ast
     from firmware import mountnote
-    for name in ("persist", "session"):
+    for name in ("persist", "calibrate/session"):
         src = open(os.path.join(mp.ROOT, "firmware", name + ".py")).read()
         strings = []
         for node in ast.walk(ast.parse(src)):

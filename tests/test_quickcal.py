@@ -1,4 +1,4 @@
-"""Quick calibration (firmware/quickcal.py, CompassApp.quick_calibrate): the expected field
+"""Quick calibration (firmware/field/quickcal.py, CompassApp.quick_calibrate): the expected field
 vector against the simulator, the heading accuracy it reaches (docs/quick_calibration.md; the
 full measurement is in `make bench`: host_sim/cli/benchmarks/quickcal.py), the limit no
 one-pose method can pass, and its refusals."""
@@ -10,8 +10,8 @@ import pytest
 from firmware.axes import AxisMap
 from firmware.calibration import Calibration
 from firmware.errors import CalibrationRejected
-from firmware.location import Location
-from firmware.quickcal import QuickCal
+from firmware.field.location import Location
+from firmware.field.quickcal import QuickCal
 from firmware.store import CalStore
 from firmware.trig import cdeg_to_kang
 from tests import location_world as L

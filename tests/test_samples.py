@@ -1,4 +1,4 @@
-"""firmware/samples.py: distance-separated sample buffer and sphere coverage.
+"""firmware/calibrate/samples.py: distance-separated sample buffer and sphere coverage.
 
 The reference for every decision is a brute-force model written here from the rule itself
 (keep a sample only if its cell of side s is empty and no held sample is closer than s; FIFO
@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from firmware import samples
-from firmware.samples import (KEPT, MAX_SEPARATION, N_REGIONS, REJECTED, REPLACED, SampleBuffer,
+from firmware.calibrate import samples
+from firmware.calibrate.samples import (KEPT, MAX_SEPARATION, N_REGIONS, REJECTED, REPLACED, SampleBuffer,
                               region, separation_for)
 from tests import intcheck, mp
 
@@ -423,7 +423,7 @@ def test_coverage_of_empty_buffer_is_zero_with_all_gaps():
        st.lists(st.tuples(int16, int16, int16), min_size=1, max_size=40),
        st.tuples(int16, int16, int16))
 def test_offer_and_coverage_never_leave_small_int_range(s, capacity, pts, centre):
-    mod, stats = intcheck.load("samples")
+    mod, stats = intcheck.load("calibrate.samples")
     buf = mod.SampleBuffer(capacity=capacity, separation=s)
     # clustered copies force the near/far distance arithmetic, extremes the cell arithmetic
     extra = [(max(-32768, min(32767, x + s - 1)), y, max(-32768, min(32767, z - s + 1)))
@@ -437,7 +437,7 @@ def test_offer_and_coverage_never_leave_small_int_range(s, capacity, pts, centre
 
 @given(st.integers(-65535, 65535), st.integers(-65535, 65535), st.integers(-65535, 65535))
 def test_region_never_leaves_small_int_range(dx, dy, dz):
-    mod, stats = intcheck.load("samples")
+    mod, stats = intcheck.load("calibrate.samples")
     mod.region(dx, dy, dz)
     assert stats.max_abs < 1 << 30
 

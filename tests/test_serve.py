@@ -1,4 +1,4 @@
-"""MotionCal mode (firmware/motioncal_mode.py) on the simulated board (host_sim/cli/serve.py):
+"""MotionCal mode (firmware/motioncal/mode.py) on the simulated board (host_sim/cli/serve.py):
 the full loop as MotionCal runs it, bad packets, Ctrl-C, the rate, and the command itself.
 
 The loop: the board streams Raw lines -> tests/motioncal_ref.py parses them in 256-byte reads
@@ -171,7 +171,7 @@ def _bad_crc():
      "rejected", "soft_iron_out_of_range"),
     ("NaN", _packet(V=(float("nan"), 0.0, 0.0)), "rejected", "not_a_number"),
     # a correct CRC and a diagonal of 1e30: scaled to the identity in Q15, the output field
-    # would be 0 and the interference check off (firmware/acceptance.py check_calibration)
+    # would be 0 and the interference check off (firmware/calibrate/acceptance.py check_calibration)
     ("diagonal 1e30", _packet(W=((1e30, 0, 0), (0, 1e30, 0), (0, 0, 1e30))), "rejected",
      "field_out_of_range"),
 ])
@@ -213,7 +213,7 @@ def test_a_bad_crc_then_a_good_packet_in_one_read():
 
 def test_ctrl_c_bytes_inside_a_packet_do_not_interrupt_a_lone_one_does():
     calls = []
-    from firmware.motioncal_mode import MotionCalMode
+    from firmware.motioncal.mode import MotionCalMode
     s, line = _session("gy87", 1)
     mode = MotionCalMode(s.app, write=line.out.extend, poll=line.poll,
                          ticks_us=s.setup.board.clock.ticks_us, kbd_intr=calls.append)
@@ -234,7 +234,7 @@ def test_ctrl_c_bytes_inside_a_packet_do_not_interrupt_a_lone_one_does():
 
 
 def test_rate_out_of_range_is_refused_naming_the_unit():
-    from firmware.motioncal_mode import MotionCalMode
+    from firmware.motioncal.mode import MotionCalMode
     s, line = _session("gy87", 1)
     with pytest.raises(ValueError, match="rate_hz=0.*per second"):
         MotionCalMode(s.app, write=line.out.extend, poll=line.poll, rate_hz=0,
@@ -314,7 +314,7 @@ def test_with_an_mpu6050_the_raw_lines_carry_the_gyroscope_in_motioncal_units():
     # body here), like the accelerometer's: (0.5, -0.4, -36 + 0.6) x 16
     from host_sim import motion
     from host_sim.cli.benchmarks import gyroworld as G
-    from firmware.motioncal_mode import MotionCalMode
+    from firmware.motioncal.mode import MotionCalMode
     b = G.board(motion.flat_spin(period_s=10), gyro={"gyro_bias_dps": (0.5, -0.4, 0.6)})
     app = G.app(b, gyro=False)
     line = Line()
@@ -335,7 +335,7 @@ def test_with_an_mpu6050_the_raw_lines_carry_the_gyroscope_in_motioncal_units():
 def test_without_a_gyroscope_the_raw_lines_carry_zeros():
     from host_sim.boards import make_board
     from firmware.app import CompassApp
-    from firmware.motioncal_mode import MotionCalMode
+    from firmware.motioncal.mode import MotionCalMode
     b = make_board("gy271")  # the magnetometer alone
     app = CompassApp(b.bus, delay_us=b.sleep_us, ticks_us=b.clock.ticks_us, learn=False)
     line = Line()

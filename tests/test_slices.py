@@ -15,9 +15,13 @@ import pytest
 from hypothesis import given, strategies as st
 
 from tests import solve_ref
-from firmware import accum, calibrator, fixedpoint, samples, solve
+from firmware import fixedpoint
+from firmware.calibrate import accum
+from firmware.calibrate import calibrator
+from firmware.calibrate import samples
+from firmware.calibrate import solve
 from firmware.errors import CalibrationRejected
-from firmware.calibrator import Calibrator
+from firmware.calibrate.calibrator import Calibrator
 from host_sim.cli.benchmarks import intcount
 
 MODELS = ("minmax", 4, 7, 10)

@@ -8,7 +8,8 @@ import pytest
 from hypothesis import given, strategies as st
 
 from tests import solve_ref
-from firmware import accum, solve
+from firmware.calibrate import accum
+from firmware.calibrate import solve
 
 # AN4246 Rev 4, worked example 1 (section 6), in 0.1 uT counts
 AN4246_SAMPLES = [(1674, -2424, 917), (1403, -2219, 868), (1524, -2304, -6),

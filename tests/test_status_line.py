@@ -62,7 +62,7 @@ def test_the_status_line_a_board_prints_allocates_64_bytes_at_most_in_every_stat
     # boards/main.py writes status_view(app): the line in firmware/status.py's own buffer,
     # in each state tests/scenarios/status_alloc.py builds (collecting, solving, calibrated,
     # interference, no_memory, the app that did not fit, a jump, a location, the gyro on the
-    # field and holding, calibration mode). A call allocates the memoryview (16 bytes on the
+    # field and holding). A call allocates the memoryview (16 bytes on the
     # 32-bit build); one call frame over 11 words, which MicroPython takes from the heap
     # (py/objfun.c VM_MAX_STATE_ON_STACK), is 68 bytes or more and fails the bound. It was
     # ~2 KB when the line was joined from strings and app.__dict__ was copied, then 320 B
@@ -79,11 +79,11 @@ def test_the_status_line_a_board_prints_allocates_64_bytes_at_most_in_every_stat
     # each state is the one named (a line that changed shape would measure another)
     marks = {"collecting": "; collecting ", "solving": " | solving ",
              "calibrated": "calibrated: model 10", "no_memory_load": "not loaded: out of memory",
-             "no_memory_calibrate": "calibration needs ~", "jump": " | jump: field ",
+             "no_memory_calibrate": "no room to calibrate beside the heading",
+             "jump": " | jump: field ",
              "app_did_not_fit": "the app did not fit", "location": " deg (model)",
              "location_no_date": "location: no date", "gyro_on_field": "gyro: on field",
-             "gyro_held": "| gyro held |", "gyro_held_too_long": "(too long)",
-             "calibration_mode": "calibration mode (no heading)"}
+             "gyro_held": "| gyro held |", "gyro_held_too_long": "(too long)"}
     assert set(view) == set(marks) and all(b <= 64 for b in view.values()), view
     for state, mark in marks.items():
         assert mark in lines[state], (state, lines[state])

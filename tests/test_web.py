@@ -6,7 +6,7 @@ web/index.html straight from the disk (file://, through web/vendor/bundle.js), e
 the same: the page loads the MicroPython WebAssembly port and firmware/, the simulated board
 streams, MotionCal's Send Cal rule is reached, Send Cal goes out and the board's echo confirms
 it. The page exposes what it fed and what came out (window.webcal); this test replays the
-same samples through firmware.calibrator on CPython and asks for the same integers, and
+same samples through firmware.calibrate.calibrator on CPython and asks for the same integers, and
 rebuilds the packet with tests/motioncal_ref.build_packet. Skipped, with the reason, when
 node, chromium or the npm packages are missing (`make test` installs them; as root it
 installs chromium).
@@ -22,7 +22,7 @@ import threading
 
 import pytest
 
-from firmware.calibrator import SOLVE_EVERY, Calibrator
+from firmware.calibrate.calibrator import SOLVE_EVERY, Calibrator
 from firmware.errors import CalibrationRejected
 from host_sim.cli import web as webcli
 from host_sim.cli.args import UsageError
@@ -233,7 +233,7 @@ def test_server_serves_web_and_firmware_only():
     try:
         with urllib.request.urlopen(base + "/") as r:       # redirected to the page
             assert r.url.endswith("/web/") and b"app.js" in r.read()
-        with urllib.request.urlopen(base + "/firmware/calibrator.py") as r:
+        with urllib.request.urlopen(base + "/firmware/calibrate/calibrator.py") as r:
             assert b"class Calibrator" in r.read()
         with urllib.request.urlopen(base + "/web/app.js") as r:
             assert r.headers["Content-Type"].startswith("text/javascript")

@@ -36,7 +36,7 @@ OUTSIDE = [
     "/web/dotlink.txt",
     "/README.md", "/Makefile", "/tests/test_web.py", "/webx/secret.txt", "/web.md",
     "/web/vendor/", "/web/vendor", "/firmware/", "/firmware", "/web/index.html/",
-    "/firmware/calibrator.py/", "/web/missing.html",
+    "/firmware/calibrate/calibrator.py/", "/web/missing.html",
     "http://127.0.0.1/README.md", "*",
 ]
 
@@ -137,8 +137,8 @@ def test_the_page_and_the_firmware_are_served_with_their_types(repo):
               ("/web/app.js", "text/javascript", "web/app.js"),
               ("/web/style.css", "text/css", "web/style.css"),
               ("/web/webcal.py", "text/plain; charset=utf-8", "web/webcal.py"),
-              ("/firmware/calibrator.py", "text/plain; charset=utf-8", "firmware/calibrator.py"),
-              ("/firmware/wmm2025.bin", "application/octet-stream", "firmware/wmm2025.bin")]
+              ("/firmware/calibrate/calibrator.py", "text/plain; charset=utf-8", "firmware/calibrate/calibrator.py"),
+              ("/firmware/field/wmm2025.bin", "application/octet-stream", "firmware/field/wmm2025.bin")]
     for target, ctype, rel in checks:
         status, headers, body = repo.raw(target)
         with open(os.path.join(ROOT, rel), "rb") as f:
@@ -237,7 +237,7 @@ def test_goal_figures(repo, fake):
                 outside += 1
                 answered += _answered_with_file(status, body)
     foreign = foreign_answered = 0
-    for target in ("/", "/web/", "/web/index.html", "/firmware/calibrator.py", "/README.md"):
+    for target in ("/", "/web/", "/web/index.html", "/firmware/calibrate/calibrator.py", "/README.md"):
         for host in _foreign_hosts(repo.port):
             for method in ("GET", "HEAD"):
                 foreign += 1

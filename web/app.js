@@ -1,6 +1,6 @@
 // The browser calibrator (docs/web.md). Reads MotionCal `Raw:` lines from a board over Web
 // Serial (or from the simulated board below), runs the repository's integer calibrator
-// (firmware/calibrator.py) in the MicroPython WebAssembly port through web/webcal.py, draws
+// (firmware/calibrate/calibrator.py) in the MicroPython WebAssembly port through web/webcal.py, draws
 // the samples, computes MotionCal's quality figures and sends the result back as MotionCal's
 // 68-byte packet, confirmed by the board's Cal1/Cal2 echo. Protocol facts: the MotionCal
 // notes (../shared/notes/motioncal.md in the project's reference material), sections 1, 3-5.
@@ -122,7 +122,12 @@ async function boot() {
     }
     mp = got.port;
     mp.FS.mkdir("/firmware");
-    for (const [f, text] of got.texts.firmware) mp.FS.writeFile("/firmware/" + f, text);
+    for (const [f, text] of got.texts.firmware) {
+        // a part's folder (firmware/calibrate/...) before its first file
+        const dir = f.includes("/") ? "/firmware/" + f.slice(0, f.lastIndexOf("/")) : null;
+        if (dir && !mp.FS.analyzePath(dir).exists) mp.FS.mkdir(dir);
+        mp.FS.writeFile("/firmware/" + f, text);
+    }
     mp.FS.writeFile("/webcal.py", got.texts.glue);
     mp.runPython("import webcal");
     W.readyMs = performance.now();   // since navigation start

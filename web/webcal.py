@@ -1,6 +1,6 @@
 """The browser calibrator's Python side (docs/web.md): runs on the MicroPython WebAssembly
 port in the page, next to the repository's firmware/ files, and drives OUR integer
-calibrator (firmware/calibrator.py) and heading (firmware/compass.py) on the samples the page
+calibrator (firmware/calibrate/calibrator.py) and heading (firmware/compass.py) on the samples the page
 reads from a board's `Raw:` lines.
 
 Units: the page feeds the magnetometer in MotionCal's 0.1 uT counts (notes: MotionCal
@@ -8,10 +8,10 @@ protocol, section 1), so the calibrator runs with counts_per_gauss = 1000 (1 G =
 its offset V and field B come out in 0.1 uT.
 
 Solve policy (the same as a replay on CPython, tests/test_web.py): a solve after every
-SOLVE_EVERY samples the buffer KEPT (firmware/calibrator.py's SOLVE_EVERY); each solve is
+SOLVE_EVERY samples the buffer KEPT (firmware/calibrate/calibrator.py's SOLVE_EVERY); each solve is
 logged with the number of samples fed before it and its result (a calibration's integers) or
 its refusal reason. An accepted solve becomes the calibrator's current calibration, which the
-next ones must beat (firmware/acceptance.py check_better).
+next ones must beat (firmware/calibrate/acceptance.py check_better).
 
 The page calls these with JSON text in and reads JSON text back through the port's globals:
     reset()          forget everything
@@ -22,7 +22,7 @@ The page calls these with JSON text in and reads JSON text back through the port
 """
 import json
 
-from firmware.calibrator import SOLVE_EVERY, Calibrator
+from firmware.calibrate.calibrator import SOLVE_EVERY, Calibrator
 from firmware.compass import heading
 from firmware.errors import CalibrationRejected
 

@@ -1,7 +1,7 @@
 """eCompass on CircuitPython: runs at boot (code.py), the same app as boards/main.py.
 
 Prints a status line every 0.5 s; calibrates as you move (turn the board through a figure-8).
-The drivers reach busio.I2C through firmware/busio_i2c.py; the clock and the drivers' sleeps
+The drivers reach busio.I2C through firmware/circuitpython/busio_i2c.py; the clock and the drivers' sleeps
 come from firmware/compat.py (CircuitPython has neither machine nor time.ticks_us). An accepted
 calibration is saved to CIRCUITPY when boot.py made it writable for code (see boot.py);
 otherwise it is used until the next reset and the status line counts the failed saves.

@@ -11,7 +11,7 @@ SCL_PIN/SDA_PIN when the board has them, else its SCL/SDA.
 SCL_PIN = "GP5"             # the Pico's I2C0 pins; a Feather has none, so SCL/SDA are used
 SDA_PIN = "GP4"
 I2C_FREQ = 400000           # Hz; QMC5883L, HMC5883L and MPU6050 are all 400 kHz parts
-LOCK_TIMEOUT_US = 50000     # the longest wait for the bus lock (firmware/busio_i2c.py)
+LOCK_TIMEOUT_US = 50000     # the longest wait for the bus lock (firmware/circuitpython/busio_i2c.py)
 MAG_AXES = "x,-y,-z"        # sensor -> body: a GY-271/273/87 flat, X arrow forward (another
 ACCEL_AXES = "-x,y,z"       # mounting: boards/breakouts.py); a GY-521 MPU6050 lying the same way
 DECLINATION_CDEG = 0        # local magnetic declination, centidegrees east-positive (NOAA/WMM)
@@ -29,6 +29,6 @@ def pins(board):
 def make_i2c():
     import board
     import busio
-    from firmware.busio_i2c import BusioI2C
+    from firmware.circuitpython.busio_i2c import BusioI2C
     scl, sda = pins(board)
     return BusioI2C(busio.I2C(scl, sda, frequency=I2C_FREQ), lock_timeout_us=LOCK_TIMEOUT_US)

@@ -1,6 +1,6 @@
 """`python -m host_sim calibrate FILE.csv [options]`: calibrate a logged magnetometer file offline.
 
-Runs the firmware's own Calibrator (firmware/calibrator.py) over the file, so the result is
+Runs the firmware's own Calibrator (firmware/calibrate/calibrator.py) over the file, so the result is
 the one a board would compute from the same samples, and prints it, or writes the calibration
 file a board loads (--out, host_sim/cli/calfile.py).
 Also runs under `micropython -m host_sim calibrate ...` (no argparse: host_sim/cli/args.py).
@@ -21,7 +21,7 @@ from host_sim.cli.args import (STATUS_OK, STATUS_REFUSED, Parser, UsageError, de
 from host_sim.cli.args import parse_decimal  # noqa: F401  (its earlier home; tests use it)
 
 # The desktop holds every distinct sample of a log, up to the most a Calibrator holds
-# (firmware/samples.py MAX_CAPACITY); a board holds 300 (firmware/calibrator.py
+# (firmware/calibrate/samples.py MAX_CAPACITY); a board holds 300 (firmware/calibrate/calibrator.py
 # DEFAULT_CAPACITY) kept apart by its separation rule (--board-like)
 DESKTOP_CAPACITY = 16383
 BOARD_CAPACITY = 300
@@ -269,8 +269,8 @@ def run(opts):
     """Read, convert, calibrate. Returns (calibration or None, rejection or None, info);
     UsageError for unusable input."""
     from firmware.errors import CalibrationRejected
-    from firmware.acceptance import DEFAULT_MAX_FIT_ERROR
-    from firmware.calibrator import Calibrator
+    from firmware.calibrate.acceptance import DEFAULT_MAX_FIT_ERROR
+    from firmware.calibrate.calibrator import Calibrator
 
     path = opts["file"]
     opts, board_note = logged_board(opts, path)

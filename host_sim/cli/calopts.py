@@ -10,7 +10,7 @@ not fit the options given.
 Each refusal raises ValueError with one line saying what to give instead (args.py turns it into
 `host_sim calibrate: error: --sensor X: ...`, exit 2). Also runs under MicroPython.
 """
-from firmware.samples import MAX_CAPACITY  # noqa: F401  (--capacity's bound: the Calibrator's)
+from firmware.calibrate.samples import MAX_CAPACITY  # noqa: F401  (--capacity's bound: the Calibrator's)
 from host_sim.cli import calfile
 from host_sim.cli.args import parse_decimal
 

@@ -329,7 +329,7 @@ def run_session(setup, seconds, quiet=False):
     min/max Calibrator too."""
     from firmware.app import CompassApp
     from firmware.calibration import MINMAX
-    from firmware.calibrator import Calibrator
+    from firmware.calibrate.calibrator import Calibrator
 
     b = setup.board
     app = CompassApp(b.bus, mag=setup.mag, accel=setup.accel, mag_axes=setup.mag_axes,

@@ -1,7 +1,7 @@
 """`python -m host_sim field [--date YYYY-MM-DD] [--json] [LAT,LON ...]`: the board's field model.
 
 Computes declination, inclination and total field with the firmware's own integer code and
-table (firmware/field.py, firmware/wmm2025.bin), not with a float model, so the figures are the
+table (firmware/field/wmm.py, firmware/field/wmm2025.bin), not with a float model, so the figures are the
 ones a board prints for the same place and date. Points come as LAT,LON arguments (decimal
 degrees, north and east positive: -33.9,151.2 is Sydney; a leading '-' is a point, not an
 option) or, with none given, as LAT,LON lines on stdin. Also runs under `micropython -m host_sim`.
@@ -44,7 +44,7 @@ def parse_date(text):
 
 def parser():
     p = Parser(COMMAND, "[--date YYYY-MM-DD] [--json] [--table FILE] [LAT,LON ...]",
-               "The World Magnetic Model 2025 as the board computes it (firmware/field.py,\n"
+               "The World Magnetic Model 2025 as the board computes it (firmware/field/wmm.py,\n"
                "integer-only). LAT,LON in decimal degrees (north, east positive), e.g. 51.5,-0.13\n"
                "or -33.9,151.2; without arguments, one LAT,LON per line on stdin (blank lines and\n"
                "lines starting with # are skipped).")
@@ -55,7 +55,7 @@ def parser():
     p.option("--json", "flag", help="print a JSON list: lat, lon, declination_deg (east\n"
              "positive), inclination_deg (down positive), field_nt,\nhorizontal_nt, status")
     p.option("--table", "path", metavar="FILE",
-             help="the table file (default firmware/wmm2025.bin)")
+             help="the table file (default firmware/field/wmm2025.bin)")
     p.epilog = ("exit status: 0 done; 1 the date is outside the model's validity; 2 bad usage "
                 "or input.")
     return p
@@ -73,7 +73,7 @@ def stdin_points():
 
 
 def run(opts):
-    from firmware.field import STATUS_OUTSIDE, FieldModel, FieldTableError, decimal_year_e3
+    from firmware.field.wmm import STATUS_OUTSIDE, FieldModel, FieldTableError, decimal_year_e3
     if opts["date"] is None:
         import time
         t = time.localtime()

@@ -1,4 +1,4 @@
-"""The mounting check (firmware/mounting.py, firmware/mountcheck.py) on the desktop: the offline
+"""The mounting check (firmware/calibrate/mounting.py, firmware/calibrate/mountcheck.py) on the desktop: the offline
 check of a log with accelerometer columns, simulated calibration sessions, and the
 no-false-alarm soak.
 
@@ -9,7 +9,7 @@ Offline (offline(), called by the calibrate command after a fit): the accelerome
 are found by their header names (ACCEL_PREFIXES: ax, ay, az / accX.. / acc_x.. / accel_x..),
 scaled so that the median row reads 1 g (any units: counts, g, m/s^2), and each row with its
 magnetometer row, both converted as the fit converted them, is offered to a
-firmware.mounting.Pairs; firmware.mountcheck.check() then judges the fit's calibration with
+firmware.calibrate.mounting.Pairs; firmware.calibrate.mountcheck.check() then judges the fit's calibration with
 the MAG_AXES / ACCEL_AXES given (--mag-axes, --accel-axes; default the breakouts' usual
 "x,-y,-z" / "-x,y,z", boards/breakouts.py). The log's sample rate is not known: the pairs
 take moves up to the slowest rate's (10 Hz), and each bin keeps the stillest row anyway.
@@ -18,7 +18,7 @@ Simulated sessions (session()): a board of host_sim.boards (QMC5883L, HMC5883L, 
 an MPU6050 module, the GY-87 and its QMC5883L clone) with its chips mounted as asked, iron,
 a figure-8 calibration dance (host_sim.motion.figure8) through CompassApp with the MAG_AXES /
 ACCEL_AXES given. Every step with a plausible accelerometer offers (mag raw, accel raw) to a
-firmware.mounting.Pairs, and each calibration the app accepts is checked as the board checks
+firmware.calibrate.mounting.Pairs, and each calibration the app accepts is checked as the board checks
 it: the verdicts in order, with the time of each.
 
 The soak (soak(), the command above; make soak runs 600 sessions): seeded sessions, each a
@@ -27,7 +27,7 @@ dance (period 24-36 s, pitch amplitude 60-85 deg, roll 120-180 deg, any start he
 random one of the 24 mountings of each chip WITH its right MAG_AXES / ACCEL_AXES, and what a
 real board and hand add (random_session's rough: accelerometer offsets, the chips 0-3 deg
 apart, the hand's accelerations): a verdict "wrong" in any check of any session is a false
-alarm, and so is the app's own check (firmware/session.py) saying "wrong". Printed: sessions,
+alarm, and so is the app's own check (firmware/calibrate/session.py) saying "wrong". Printed: sessions,
 checks, false alarms, the verdicts of the last check of each session and of the app's own,
 the largest spread (sigma) of a right setting.
 """
@@ -36,7 +36,8 @@ import sys
 
 from host_sim.world import World, mount_inverse
 
-from firmware import mountcheck, mounting
+from firmware.calibrate import mountcheck
+from firmware.calibrate import mounting
 
 BOARDS = (("qmc5883l", True), ("hmc5883l", True), ("qmc5883p", True), ("gy87", None),
           ("gy87-qmc", None))
@@ -81,7 +82,7 @@ class Session:
     .checks: (t_s, verdict, axes, sigma, best, bins) after each accepted calibration, and
     once more at the end when the last said nothing (spread or unsteady);
     .app, .pairs, .board; .rows with record=True, .statuses with statuses=True (the app
-    runs the check itself too, firmware/session.py: .app.mounting)."""
+    runs the check itself too, firmware/calibrate/session.py: .app.mounting)."""
 
     def __init__(self, chip="qmc5883l", accel=True, mount=MOUNT, accel_mount=MOUNT,
                  mag_axes=MAG_AXES, accel_axes=ACCEL_AXES, world=None, seed=3,
@@ -217,7 +218,7 @@ def soak(sessions=60, seed=1, seconds=SECONDS):
                 out["worst_sigma_q10"] = c[3]
         last = s.verdict[0] or "no fit"
         out["last"][last] = out["last"].get(last, 0) + 1
-        board = s.app.mounting  # the app's own check (firmware/session.py)
+        board = s.app.mounting  # the app's own check (firmware/calibrate/session.py)
         out["board"][board[0] if board else "none"] = out["board"].get(
             board[0] if board else "none", 0) + 1
         if board is not None and board[0] == mountcheck.WRONG:

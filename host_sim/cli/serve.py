@@ -1,7 +1,7 @@
 """`python -m host_sim serve --protocol motioncal --chip gy87 --seed 1`: the simulated board
 as MotionCal sees a real one. The firmware's CompassApp runs on the simulated chips (the
 demo's world: strong iron from the seed, a figure-8 by default) in MotionCal mode
-(firmware/motioncal_mode.py) and speaks the protocol on stdin/stdout, the board's USB serial:
+(firmware/motioncal/mode.py) and speaks the protocol on stdin/stdout, the board's USB serial:
 Raw: lines out, the 68-byte Send Cal packet in, the Cal1/Cal2 echo out.
 
     python -m host_sim serve --fast --seconds 60 > stream.txt      # a minute of Raw lines
@@ -63,13 +63,13 @@ def parser():
 class Session:
     """The simulated board in MotionCal mode: .setup (demo.Setup: board, world, drivers,
     the figure-8 stage), .app (firmware.app.CompassApp, learn=False), .mode
-    (firmware.motioncal_mode.MotionCalMode), .store. write(bytes) and poll() -> bytes are
+    (firmware.motioncal.mode.MotionCalMode), .store. write(bytes) and poll() -> bytes are
     the serial line's two ends (module docstring)."""
 
     def __init__(self, write, poll, chip=DEFAULT_CHIP, seed=1, rate_hz=DEFAULT_RATE_HZ,
                  period_s=demo.SESSION_S, store_dir=None, viewer=False):
         from firmware.app import CompassApp
-        from firmware.motioncal_mode import MotionCalMode
+        from firmware.motioncal.mode import MotionCalMode
         from firmware.store import CalStore
 
         self.setup = s = demo.Setup(chip, seed, period_s)

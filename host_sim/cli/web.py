@@ -49,9 +49,10 @@ MIME = {".mjs": "text/javascript", ".js": "text/javascript", ".wasm": "applicati
 
 
 def firmware_files(root=ROOT):
-    """The firmware/*.py names the page loads (sorted)."""
-    d = os.path.join(root, "firmware")
-    return sorted(f for f in os.listdir(d) if f.endswith(".py"))
+    """The firmware's .py files the page loads, as paths below firmware/ (sorted)."""
+    from host_sim.cli import packaging
+    return [f for f in packaging.firmware_files(os.path.join(root, "firmware"))
+            if f.endswith(".py")]
 
 
 def write_manifest(root=ROOT):

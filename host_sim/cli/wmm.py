@@ -2,8 +2,8 @@
 
 `make wmm` runs it. It evaluates the official WMM2025 spherical-harmonic model (the coefficient
 file WMM_2025.COF and the float implementation shipped by the PyPI package pygeomag, pinned in
-requirements.txt) on a latitude/longitude grid at sea level, and writes firmware/wmm2025.bin,
-which firmware/field.py reads a few records at a time. Host only: the board never sees pygeomag.
+requirements.txt) on a latitude/longitude grid at sea level, and writes firmware/field/wmm2025.bin,
+which firmware/field/wmm.py reads a few records at a time. Host only: the board never sees pygeomag.
 
 What each grid node holds (docs/field_model.md has the measurements behind the choices):
   X0, Y0, Z0     north, east, down components at the epoch 2025.0, int16 in units of 4 nT
@@ -43,7 +43,7 @@ from host_sim.cli.args import Parser, UsageError, decimal_text
 
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-DEFAULT_OUT = os.path.join(ROOT, "firmware", "wmm2025.bin")
+DEFAULT_OUT = os.path.join(ROOT, "firmware", "field", "wmm2025.bin")
 DEFAULT_STEP_E7 = 75000000  # 7.5 deg: docs/field_model.md compares 10, 9, 7.5 and 5 deg grids
 COF = "wmm/WMM_2025.COF"  # inside the pygeomag package
 EPOCH = 2025.0
@@ -105,11 +105,11 @@ def build(step_e7=DEFAULT_STEP_E7):
 
 def parser():
     p = Parser("wmm", "[--step DEG] [--out FILE]",
-               "Write the World Magnetic Model table the board's firmware/field.py reads.")
+               "Write the World Magnetic Model table the board's firmware/field/wmm.py reads.")
     p.option("--step", "decimal", default=(DEFAULT_STEP_E7, 7), lo="0.1", hi="180",
              metavar="DEG", help="grid step in degrees, dividing 180 (default 7.5)")
     p.option("--out", "path", default=DEFAULT_OUT, metavar="FILE",
-             help="output file (default firmware/wmm2025.bin)")
+             help="output file (default firmware/field/wmm2025.bin)")
     p.epilog = "exit status: 0 written; 2 bad usage or pygeomag missing."
     return p
 

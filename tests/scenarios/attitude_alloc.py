@@ -1,4 +1,4 @@
-# MicroPython only: what one Attitude.update() allocates (firmware/attitude.py), over the
+# MicroPython only: what one Attitude.update() allocates (firmware/gyro/attitude.py), over the
 # integer inputs of attitude_inputs (every path: corrections, rejections, recovery, still
 # windows, a slow loop's chunks). Prints one JSON object: bytes (micropython.mem_total delta
 # over all the updates, call frames on the heap included) and locked (updates run under
@@ -8,7 +8,7 @@ from array import array
 
 import micropython
 
-from firmware import attitude
+from firmware.gyro import attitude
 from tests.scenarios import attitude_inputs as I
 
 N = 1500

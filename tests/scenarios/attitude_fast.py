@@ -1,13 +1,13 @@
-# Native tiers only: every viper mirror of the attitude filter (firmware/attitude_fast.py)
-# against its plain original (firmware/attitude_plain.py) on the same state, over the integer inputs of
+# Native tiers only: every viper mirror of the attitude filter (firmware/gyro/attitude_fast.py)
+# against its plain original (firmware/gyro/attitude_plain.py) on the same state, over the integer inputs of
 # attitude_inputs (the filter's own states along the way). Prints one JSON object: the first
 # mismatch per function (none: {}) and how many comparisons ran.
 import json
 from array import array
 
-from firmware import attitude
-from firmware import attitude_fast as F
-from firmware import attitude_plain as A
+from firmware.gyro import attitude
+from firmware.gyro import attitude_fast as F
+from firmware.gyro import attitude_plain as A
 from tests.scenarios import attitude_inputs as I
 
 attitude.use_kernels(False)

@@ -48,8 +48,8 @@ def flags(i):
 
 def filter():
     """(attitude, gyro, grav, field, compass) for sample 0: the arrays are the filter's inputs
-    (firmware.attitude is imported here: a scenario may pick its kernels first)."""
-    from firmware.attitude import Attitude
+    (firmware.gyro.attitude is imported here: a scenario may pick its kernels first)."""
+    from firmware.gyro.attitude import Attitude
     from firmware.compass import Compass
     gyro = array("h", (0, 0, 0))
     grav = array("h", (0, 0, 0))

@@ -1,4 +1,4 @@
-# The attitude filter (firmware/attitude.py) over integer inputs (attitude_inputs): the
+# The attitude filter (firmware/gyro/attitude.py) over integer inputs (attitude_inputs): the
 # heading, tilt, bias, source, how well the bias is known and the filter's gravity every 50
 # samples; every tier prints the same JSON lines.
 import json
@@ -7,7 +7,7 @@ from tests.scenarios import attitude_inputs as I
 
 from array import array
 
-from firmware import attitude
+from firmware.gyro import attitude
 
 a, gyro, grav, field, c = I.filter()
 own = array("h", (0, 0, 0))

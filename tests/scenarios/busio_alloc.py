@@ -1,4 +1,4 @@
-# MicroPython only: a driver read through firmware.busio_i2c.BusioI2C allocates nothing,
+# MicroPython only: a driver read through firmware.circuitpython.busio_i2c.BusioI2C allocates nothing,
 # frames included.
 #
 # As in drivers_alloc.py the chips are register images (ReplayBusio below allocates nothing),
@@ -14,7 +14,7 @@ import gc
 import json
 import micropython
 
-from firmware.busio_i2c import BusioI2C
+from firmware.circuitpython.busio_i2c import BusioI2C
 from firmware.hmc5883l import HMC5883L
 from firmware.mpu6050 import MPU6050
 from firmware.qmc5883l import QMC5883L

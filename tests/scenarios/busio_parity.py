@@ -1,4 +1,4 @@
-# Parity: the drivers and the app through firmware.busio_i2c over a busio.I2C look-alike
+# Parity: the drivers and the app through firmware.circuitpython.busio_i2c over a busio.I2C look-alike
 # (tests/busio_fake.py) of the simulated bus, against the same simulation read directly. Run on
 # CPython and the MicroPython tiers (the WebAssembly one has no native emitter, as
 # CircuitPython has none): every line is ints, bools and strings.
@@ -19,7 +19,7 @@ from app_world import ACCEL_AXES, DECLINATION_CDEG, MAG_AXES, make_sim  # noqa: 
 
 from host_sim.boards import make_board  # noqa: E402
 from firmware.app import CompassApp  # noqa: E402
-from firmware.busio_i2c import BusioI2C  # noqa: E402
+from firmware.circuitpython.busio_i2c import BusioI2C  # noqa: E402
 from firmware.detect import detect, detect_accel  # noqa: E402
 from firmware.errors import BusError  # noqa: E402
 from tests.busio_fake import FakeBusioI2C  # noqa: E402

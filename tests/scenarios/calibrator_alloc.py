@@ -8,7 +8,7 @@ from array import array
 import micropython
 
 from firmware.calibration import UNCALIBRATED, Calibration
-from firmware.calibrator import Calibrator
+from firmware.calibrate.calibrator import Calibrator
 
 cal = Calibration(model=10, offset=(14398, -9596, 4803),
                   invw=(25173, -1154, 768, -1154, 30077, -1237, 768, -1237, 27945),

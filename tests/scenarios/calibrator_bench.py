@@ -12,7 +12,7 @@ import time
 sys.path.append("tests/scenarios")
 from calibrator_parity import CPG, sim_raw  # noqa: E402
 
-from firmware.calibrator import Calibrator  # noqa: E402
+from firmware.calibrate.calibrator import Calibrator  # noqa: E402
 
 try:
     ticks = time.ticks_us

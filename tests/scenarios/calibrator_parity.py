@@ -8,7 +8,7 @@ import json
 import struct
 from array import array
 
-from firmware.calibrator import Calibrator
+from firmware.calibrate.calibrator import Calibrator
 from firmware.errors import CalibrationRejected
 
 CPG = 12000                      # QMC5883L counts/G at +-2 G

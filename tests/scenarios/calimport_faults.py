@@ -7,7 +7,7 @@ import json
 import os
 import sys
 
-from firmware import calimport
+from firmware.calfile import calimport
 from firmware.calibration import Calibration
 from firmware.store import CalStore
 

@@ -1,4 +1,4 @@
-"""Which modules this interpreter compiled from their .py source (firmware.calibrator's
+"""Which modules this interpreter compiled from their .py source (firmware.calibrate.calibrator's
 compat.compiled_here), and whether calibration mode's release_solver() then keeps the solver: the
 solver from the folder given (the repository's sources, or .mpy files), and a module frozen
 into the port (asyncio on the unix ports), whose __file__ names a source not on the disk."""
@@ -6,7 +6,8 @@ import json
 import sys
 
 sys.path.insert(0, sys.argv[1])
-from firmware import calibrator, compat  # noqa: E402
+from firmware import compat  # noqa: E402
+from firmware.calibrate import calibrator
 
 try:
     import asyncio
@@ -17,4 +18,4 @@ solve = calibrator.solve
 calibrator.release_solver()
 print(json.dumps({"solve": compat.compiled_here(solve),
                   "frozen": compat.compiled_here(asyncio) if asyncio else None,
-                  "kept": "firmware.solve" in sys.modules}))
+                  "kept": "firmware.calibrate.solve" in sys.modules}))

@@ -15,7 +15,8 @@
 import json
 from array import array
 
-from firmware import axes, calibration, compass, fixedpoint, i2cdevice, samples, trig
+from firmware import axes, calibration, compass, fixedpoint, i2cdevice, trig
+from firmware.calibrate import samples
 from firmware.calibration import Calibration
 from firmware.compat import kernels
 

@@ -2,7 +2,7 @@
 # dates from an integer generator (no float, no random module: identical on both).
 import json
 
-from firmware.field import FieldModel, decimal_year_e3
+from firmware.field.wmm import FieldModel, decimal_year_e3
 
 model = FieldModel()
 x = 12345

@@ -1,4 +1,4 @@
-# Parity: MotionCal mode (firmware/motioncal_mode.py) on the simulated GY-87, on CPython and
+# Parity: MotionCal mode (firmware/motioncal/mode.py) on the simulated GY-87, on CPython and
 # MicroPython alike: 3 s of Raw lines with packets arriving on the way (garbage, a good one, a
 # damaged one, one whose first float holds 0x03, a lone Ctrl-C). Packets are built from
 # float32 bit patterns, so no float is involved. Prints one JSON list per event (tenths of a
@@ -12,8 +12,8 @@ import sys
 sys.path.append("tests/scenarios")
 from app_world import MemFs, make_app, make_sim  # noqa: E402
 
-from firmware import motioncal as mc  # noqa: E402
-from firmware.motioncal_mode import MotionCalMode  # noqa: E402
+from firmware.motioncal import protocol as mc  # noqa: E402
+from firmware.motioncal.mode import MotionCalMode  # noqa: E402
 from firmware.store import CalStore  # noqa: E402
 
 ONE = 0x3F800000

@@ -1,4 +1,4 @@
-# firmware.motioncal on both interpreters: Raw lines, float32 decoding, the packet reader,
+# firmware.motioncal.protocol on both interpreters: Raw lines, float32 decoding, the packet reader,
 # packet -> calibration fields and the Cal1/Cal2 echo, for a fixed set of inputs (an LCG, the
 # same on both). Packets are built here from exact float32 bit patterns (k * 2**-shift with
 # |k| < 2**24), so no float is involved. Prints one JSON object per case.
@@ -19,17 +19,17 @@ if mode == "import":
     import firmware.fixedpoint  # noqa: F401
     gc.collect()
     a1 = gc.mem_alloc()
-    import firmware.motioncal  # noqa: F401
+    import firmware.motioncal.protocol  # noqa: F401
     gc.collect()
     a2 = gc.mem_alloc()
-    import firmware.acceptance  # noqa: F401  (calibration_fields() imports them on first packet)
-    import firmware.solve  # noqa: F401
+    import firmware.calibrate.acceptance  # noqa: F401  (calibration_fields() imports them on first packet)
+    import firmware.calibrate.solve  # noqa: F401
     gc.collect()
     a3 = gc.mem_alloc()
     print(json.dumps({"deps": a1 - a0, "motioncal": a2 - a1, "acceptance_and_solve": a3 - a2}))
     sys.exit(0)
 
-from firmware import motioncal as mc  # noqa: E402
+from firmware.motioncal import protocol as mc  # noqa: E402
 from firmware.fixedpoint import bit_length  # noqa: E402
 
 import sys  # noqa: E402

@@ -1,7 +1,7 @@
 # MicroPython only: what the mounting check costs in heap, and that Pairs.feed allocates
 # nothing. The core modules it uses are imported first (a board in a calibration session holds
-# them already); then, after gc.collect() each: firmware/mounting.py (the session holds it),
-# a Pairs with all 24 bins filled, firmware/mountcheck.py (loaded for a check), check()'s
+# them already); then, after gc.collect() each: firmware/calibrate/mounting.py (the session holds it),
+# a Pairs with all 24 bins filled, firmware/calibrate/mountcheck.py (loaded for a check), check()'s
 # transient allocations (gc.mem_alloc() right after it, nothing collected: an upper bound of
 # its peak) and what stays after it. Prints one JSON object.
 import gc
@@ -47,7 +47,7 @@ def live():
 
 
 m0 = live()
-from firmware import mounting  # noqa: E402
+from firmware.calibrate import mounting  # noqa: E402
 m1 = live()
 p = mounting.Pairs(16384, 20000)
 m2 = live()
@@ -64,7 +64,7 @@ for d in dirs:
         micropython.heap_unlock()
         calls += 1
 m3 = live()
-from firmware import mountcheck  # noqa: E402
+from firmware.calibrate import mountcheck  # noqa: E402
 m4 = live()
 v = mountcheck.check(p, cal, mm, am)
 m5 = gc.mem_alloc()

@@ -1,4 +1,4 @@
-# Parity: the mounting check (firmware/mounting.py) on one simulated session, run on CPython and
+# Parity: the mounting check (firmware/calibrate/mounting.py) on one simulated session, run on CPython and
 # on MicroPython, must print the same lines. A GY-87 whose HMC5883L sits turned against the
 # MPU6050 (x and y swapped, z flipped: mounting (2, 1, -3)) with the boards' usual MAG_AXES;
 # a 40 s figure-8. Prints each check after an accepted fit (time, verdict, axes, sigma, best,
@@ -9,7 +9,7 @@ import sys
 
 sys.path.append("tests/scenarios")
 from host_sim.cli import mounting as M  # noqa: E402
-from firmware import mountcheck  # noqa: E402
+from firmware.calibrate import mountcheck  # noqa: E402
 
 s = M.Session("gy87", None, mount=(2, 1, -3))
 for c in s.checks:

@@ -7,7 +7,7 @@ import json
 
 import micropython
 
-from firmware.samples import KEPT, REJECTED, REPLACED, SampleBuffer
+from firmware.calibrate.samples import KEPT, REJECTED, REPLACED, SampleBuffer
 
 S = 100
 buf = SampleBuffer(capacity=8, separation=S)

@@ -5,7 +5,7 @@
 import json
 
 from firmware.fixedpoint import isqrt
-from firmware.samples import SampleBuffer, separation_for
+from firmware.calibrate.samples import SampleBuffer, separation_for
 
 try:
     import micropython

@@ -4,7 +4,7 @@
 import json
 
 from firmware.fixedpoint import isqrt
-from firmware.samples import REPLACED, SampleBuffer, region, separation_for
+from firmware.calibrate.samples import REPLACED, SampleBuffer, region, separation_for
 
 import sys  # noqa: E402
 sys.path.append("tests/scenarios")  # smallrand, also when the script arrives on stdin (qemu)

@@ -8,9 +8,7 @@
 # States: a GY-271 + GY-521 collecting through a figure-8 and solving; a stored calibration
 # (the hand-made record is off this world's field: interference); what the heap could not
 # hold (no_memory), the app that did not fit, a jump, a location with and without a date;
-# the GY-87 with use_gyro() on the field, held through a magnet and held too long;
-# calibration mode (no room for a session beside the heading line, as tests/test_calmode.py
-# forces it).
+# the GY-87 with use_gyro() on the field, held through a magnet and held too long.
 import json
 import sys
 
@@ -87,11 +85,4 @@ measure("gyro_held", app3)
 G.run(app3, b3, 27)
 measure("gyro_held_too_long", app3)
 
-room = compat.free_bytes
-compat.free_bytes = lambda: 1024  # no room for a session beside the heading line
-b4 = W.make_sim("gy271", m=motion.figure8(), seed=3)
-app4 = W.make_app(b4, store=CalStore("/", fs=W.MemFs()))
-W.run_until(app4, b4, 3.0)
-measure("calibration_mode", app4)
-compat.free_bytes = room
 print(json.dumps(out))

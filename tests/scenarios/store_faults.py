@@ -1,7 +1,7 @@
 # Store faults and the history check, through app_world's in-memory filesystem: an
 # unreadable newest slot, a directory in slot b (saves go to the spare), a CRC-valid record
 # that means nothing valid, an app booting on it, a MemoryError during the app's save, and a
-# hard-iron jump judged by firmware.history. Prints JSON lines of ints and strings only, so
+# hard-iron jump judged by firmware.calibrate.history. Prints JSON lines of ints and strings only, so
 # CPython and MicroPython print the same (tests/test_store_faults.py compares them).
 import json
 import struct
@@ -12,7 +12,7 @@ import app_world as W  # noqa: E402
 
 from firmware.calibration import Calibration  # noqa: E402
 from firmware.errors import StoreError  # noqa: E402
-from firmware.history import FLAG_ACCEPTED, History  # noqa: E402
+from firmware.calibrate.history import FLAG_ACCEPTED, History  # noqa: E402
 from firmware.store import CalStore  # noqa: E402
 
 

@@ -147,7 +147,7 @@ def headings(smoke):
 
     from firmware.axes import AxisMap
     from firmware.compass import Compass
-    from firmware.calibrator import Calibrator
+    from firmware.calibrate.calibrator import Calibrator
     mmap = AxisMap("x,-y,-z")
     amap = AxisMap("-x,y,z")
     res = {}

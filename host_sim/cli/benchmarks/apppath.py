@@ -8,7 +8,7 @@ ours    CompassApp.step() on a calibrated board: QMC5883L + MPU6050 reads over a
         learn=True keeps it): the whole step, with no solve starting during the timed runs.
         Once with the fast path where the port has the native emitter (the app picks it by
         itself) and once with fast=False (the plain functions).
-core    the same board once its calibration session has ended (firmware/session.py): the
+core    the same board once its calibration session has ended (firmware/calibrate/session.py): the
         step without the collector, what a calibrated board runs every sample.
 float   the heading guide's float path over the same bytes: hand decode of both sensors,
         its min/max collector (collect), ((float)raw - offset) * scale, the float tilt
@@ -80,7 +80,8 @@ def main():
         app, clock = make_app(b, fast, learn=False)  # no session: the calibrated board's step
         app.use_calibration(apps[of][0].calibration, save=False)
         apps[name] = (app, clock, app.calibration.model, b)
-    from firmware import compass, i2cdevice, samples
+    from firmware import compass, i2cdevice
+    from firmware.calibrate import samples
 
     def stepper(name):
         app, clock, _, b = apps[name]

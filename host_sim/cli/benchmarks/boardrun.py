@@ -1,6 +1,6 @@
 """MicroPython only: boards/main.py itself, run as a board runs it, over a recorded session.
 
-    micropython -X heapsize=N boardrun.py SESSION.bin STOREDIR DANCE_S END_S [gyro]
+    micropython -X heapsize=N boardrun.py SESSION.bin STOREDIR DANCE_S END_S [START_US]
 
 The current directory holds the install (firmware/ as .py or .mpy files, main.py copied from
 boards/main.py). A `board` module is made here: a QMC5883L (0x0D) and an MPU6050 (0x68) whose
@@ -11,8 +11,10 @@ recording's figure-8, lap after lap; then the board is put down (it jitters amon
 50 samples, directions it has seen); at END_S the clock raises SystemExit, which is how this
 script stops main.py's endless loop (no firmware code catches it: step() keeps only
 Exception). main.py prints what a board prints (its status line every 0.5 s); this script
-then prints one last line, "boardrun: model M stored S collecting C mode X", from the app
-main.py made. Any other exception leaves main.py as a traceback on stderr: the heap sweep
+then prints one last line, "boardrun: model M stored S collecting C", from the app
+main.py made. board.restart() (main.py's restart into the heading after the calibration
+program) ends the process as a reset ends a board's: "boardrun: restart at T" is the last
+line, and the caller starts the next process at board time T (START_US) with the same store. Any other exception leaves main.py as a traceback on stderr: the heap sweep
 (host_sim/cli/bench.py board_sweep, tests/test_heap_sweep.py) counts those.
 """
 import sys
@@ -20,6 +22,7 @@ import sys
 _SESSION, _STORE = sys.argv[1], sys.argv[2]
 _DANCE_US = int(sys.argv[3]) * 1000000
 _END_US = int(sys.argv[4]) * 1000000
+_START_US = int(sys.argv[5]) if len(sys.argv) > 5 else 0
 _PERIOD_US = 5000
 _REST = 50
 
@@ -35,8 +38,8 @@ class _Bus:
         self.qmc[0x06] = 0x01  # DRDY, never OVL/DOR
         self.mpu = bytearray(256)
         self.mpu[0x75] = 0x68  # WHO_AM_I
-        self.i = -1
-        self.now = 0
+        self.now = _START_US
+        self.i = (_START_US // _PERIOD_US - 1) % self.n if _START_US else -1
 
     def scan(self):
         return [0x0D, 0x68]
@@ -99,21 +102,34 @@ class _Board:
     def ticks_us(self):
         return self.bus.now
 
+    def restart(self):  # a reset: this process ends, the next one boots at this board time
+        raise _Restart
+
+
+class _Restart(BaseException):
+    pass
+
 
 _bus = _Bus(open(_SESSION, "rb"))
 sys.modules["board"] = _Board(_bus)
 _g = {"__name__": "__main__"}
 with open("main.py") as _f:  # compiled as a board compiles its main.py, the source let go
     _code = compile(_f.read(), "main.py", "exec")
+_restarted = False
 try:
     exec(_code, _g)
 except SystemExit:
     pass
+except _Restart:
+    print("boardrun: restart at %d" % _bus.now)
+    _restarted = True
 _app = _g.get("app")
-if _app is None:
+if _restarted:
+    pass
+elif _app is None:
     print("boardrun: no app")
 else:
     _c = getattr(_app, "calibration", None)  # None: the app itself never fitted
-    print("boardrun: model %s stored %d collecting %d mode %s" % (
+    print("boardrun: model %s stored %d collecting %d" % (
         _c.model if _c is not None else None, getattr(_app, "stored", 0),
-        getattr(_app, "collector", None) is not None, _app.mode))
+        getattr(_app, "collector", None) is not None))

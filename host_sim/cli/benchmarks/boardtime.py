@@ -93,7 +93,7 @@ def _never():
 
 
 def solve(mag):
-    from firmware.calibrator import Calibrator
+    from firmware.calibrate.calibrator import Calibrator
     c = Calibrator(model=10, capacity=300, counts_per_gauss=common.QMC_CPG)
     v = [0, 0, 0]
     from firmware.i2cdevice import int16x3_into

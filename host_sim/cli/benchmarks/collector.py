@@ -22,7 +22,7 @@ from array import array
 from host_sim.cli.benchmarks import common
 from host_sim.cli.benchmarks.common import IS_MP
 
-from firmware.calibrator import Calibrator
+from firmware.calibrate.calibrator import Calibrator
 
 SMOKE = common.smoke()
 N = 1500 if SMOKE else 6000

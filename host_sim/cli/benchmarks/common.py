@@ -166,6 +166,10 @@ class ReplayBus:
         img = self.images[addr]
         for i in range(len(buf)):
             img[reg + i] = buf[i]
+        if addr == QMC_ADDR and reg == 0x0A and buf[0] & 0x80:
+            # QMC5883L SOFT_RST (control register 2, bit 7): its registers back to their
+            # defaults (0: standby), as the chip's datasheet says
+            img[0x09] = img[0x0A] = img[0x0B] = 0
 
     def readfrom_mem(self, addr, reg, n):
         b = bytearray(n)

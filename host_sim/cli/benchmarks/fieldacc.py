@@ -1,4 +1,4 @@
-"""The board's field model (firmware/field.py and its table firmware/wmm2025.bin) against the
+"""The board's field model (firmware/field/wmm.py and its table firmware/field/wmm2025.bin) against the
 full float World Magnetic Model 2025 (pygeomag, host only), as docs/field_model.md states it.
 
 Points are area-uniform on the sphere, dates uniform over the model's life 2025.0-2030.0:
@@ -62,14 +62,14 @@ def summary(errs):
 
 
 def measure(n_mid=10000, n_polar=3000):
-    from firmware.field import FieldModel
+    from firmware.field.wmm import FieldModel
     ref = reference()
     with FieldModel() as model:
         mid = errors(model, ref, points(random.Random(2025), n_mid, 0, 60))
         polar = errors(model, ref, points(random.Random(2030), n_polar, 60, 90))
     trusted = [e for e in polar if e[3] >= H_TRUSTED_NT]
     res = {"mid": summary(mid), "polar": summary(polar), "polar_trusted": summary(trusted)}
-    from firmware import field
+    from firmware.field import wmm as field
     res["table_bytes"] = os.path.getsize(os.path.join(os.path.dirname(field.__file__),
                                                       field.TABLE_NAME))
     return res

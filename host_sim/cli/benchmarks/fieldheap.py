@@ -1,7 +1,7 @@
 # MicroPython only: what the field model costs on the heap (docs/field_model.md, `make bench`,
 # tests/test_field.py). python -m host_sim.cli.benchmarks.fieldheap (one JSON line)
 #
-# import_bytes     live heap after `import firmware.field` (its bytecode and constants; the
+# import_bytes     live heap after `import firmware.field.wmm` (its bytecode and constants; the
 #                  modules it imports, firmware.trig and firmware.fixedpoint, imported first)
 # model_bytes      live heap held by one FieldModel (open file, 12-byte record buffer, weights)
 # first_bytes      micropython.mem_total() (every byte allocated, freed or not) across the
@@ -19,7 +19,7 @@ import firmware.trig  # noqa: F401
 mt = micropython.mem_total
 gc.collect()
 a0 = gc.mem_alloc()
-from firmware.field import FieldModel  # noqa: E402
+from firmware.field.wmm import FieldModel  # noqa: E402
 
 gc.collect()
 a1 = gc.mem_alloc()

@@ -1,4 +1,4 @@
-"""The gyro-aided heading's per-sample cost (firmware/attitude.py, CompassApp.use_gyro).
+"""The gyro-aided heading's per-sample cost (firmware/gyro/attitude.py, CompassApp.use_gyro).
 
     micropython -m host_sim.cli.benchmarks.gyrobench SESSION.gyro [--smoke]
 
@@ -43,7 +43,8 @@ def main():
             a.use_gyro()._use(20)  # the bias known (0.2 deg/s, as after the integral's
             #                        evidence): the filter's whole path, its heading the app's
         apps[name] = (a, clock, bus)
-    from firmware import attitude, compass, i2cdevice
+    from firmware import compass, i2cdevice
+    from firmware.gyro import attitude
 
     def stepper(name):
         a, clock, bus = apps[name]

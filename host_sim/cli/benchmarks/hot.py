@@ -26,7 +26,7 @@ from firmware import compass as compass_mod
 from firmware.axes import AxisMap
 from firmware.compass import Compass
 from firmware.compat import kernels
-from firmware.calibrator import Calibrator
+from firmware.calibrate.calibrator import Calibrator
 from firmware.mpu6050 import MPU6050
 from firmware.qmc5883l import QMC5883L
 

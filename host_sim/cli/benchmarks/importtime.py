@@ -2,7 +2,7 @@
 it (.py sources: compiled here; .mpy files: loaded). Calibration mode lets the solver go
 between solves where loading it again is cheap (firmware.compat.compiled_here).
 
-    micropython -m host_sim.cli.benchmarks.importtime [MODULE ...]   (default: solve)
+    micropython -m host_sim.cli.benchmarks.importtime [MODULE ...]   (default: calibrate.solve)
 
 Each module imported REPEATS times, dropped in between (firmware.compat.drop): the median, in
 microseconds, and where it came from.
@@ -20,7 +20,7 @@ def main():
         return
     import time
     from firmware.compat import drop
-    names = [a for a in sys.argv[1:] if not a.startswith("-")] or ["solve"]
+    names = [a for a in sys.argv[1:] if not a.startswith("-")] or ["calibrate.solve"]
     out = {}
     for name in names:
         us = []

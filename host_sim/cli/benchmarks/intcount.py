@@ -114,7 +114,7 @@ def instrument(cal):
 
 def main():
     from host_sim.cli.benchmarks import solver
-    from firmware.calibrator import Calibrator
+    from firmware.calibrate.calibrator import Calibrator
     smoke = common.smoke()
     res = {"interpreter": common.interpreter()}
     # the solve on the buffer solver.py times (same session, same Calibrator)

@@ -15,7 +15,7 @@ not count). Steps, each after gc.collect() (gc.mem_alloc = live heap):
   peak       the largest live heap seen while solves run in the first lap of the session
              (gc.collect() after every step that ran a solver slice)
   running    after a second lap: the calibration session has ended once its fit was
-             saved and the replay brought no new direction (firmware/session.py), and its
+             saved and the replay brought no new direction (firmware/calibrate/session.py), and its
              machinery has left; "session_ended" says whether it had
   fast       + firmware.fast (the viper kernels and their tables)
 Also: bytes allocated per sample in the steady state (micropython.mem_total over 1000 steps
@@ -99,7 +99,7 @@ def main():
     import firmware.mpu6050  # noqa: F401
     import firmware.qmc5883l  # noqa: F401
     m["heading_only"] = live()
-    import firmware.calibrator  # noqa: F401
+    import firmware.calibrate.calibrator  # noqa: F401
     import firmware.hmc5883l  # noqa: F401
     import firmware.qmc5883p  # noqa: F401
     m["imported"] = live()

@@ -16,10 +16,12 @@ from host_sim.cli.benchmarks import common
 HEADING = ("compat", "errors", "fixedpoint", "i2cdevice", "trig", "kang_tables", "axes",
            "calibration", "compass", "health", "fieldwatch", "store", "mpu6050", "qmc5883l", "app")
 REPORT = ("status", "accuracy")
-MACHINERY = ("boot", "detect", "appsetup", "persist", "slots", "session", "history", "samples",
-             "accum", "solve", "acceptance", "calibrator", "hmc5883l", "qmc5883p", "location",
-             "field", "quickcal", "motioncal", "motioncal_mode", "calimport", "gyrosetup",
-             "attitude", "mounting", "mountcheck", "mountnote")
+MACHINERY = ("boot", "detect", "appsetup", "persist", "slots", "calibrate.session",
+             "calibrate.history", "calibrate.samples", "calibrate.accum", "calibrate.solve",
+             "calibrate.acceptance", "calibrate.calibrator", "hmc5883l", "qmc5883p",
+             "field.location", "field.wmm", "field.quickcal", "motioncal.protocol",
+             "motioncal.mode", "calfile.calimport", "gyro.gyrosetup", "gyro.attitude",
+             "calibrate.mounting", "calibrate.mountcheck", "mountnote")
 
 
 def live():

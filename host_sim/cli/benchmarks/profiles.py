@@ -8,10 +8,14 @@ replayed by an allocation-free bus, so host_sim's simulator is never imported he
 the board's filesystem directory for the calibration store. Every figure is after
 gc.collect(), minus the heap before the first firmware import (the interpreter, this script
 and the session bytes). PROFILE:
+  program    the calibration program alone (firmware/calibrate/program.py, as boards/main.py
+             runs it on a board without a calibration): "peak_solving", the largest live heap
+             after a step that ran a solve, "peak_modules" the firmware modules loaded then,
+             "saved" when it is done, "model"; leaves the record in STOREDIR.
   calibrate  a board with an empty store: it collects, solves, accepts and saves a 10-element
-             calibration ("saved": the live heap then, the session still running; "peak_solving":
-             the largest live heap after a step that ran solver slices, "peak_mode" and
-             "peak_modules": app.mode and the firmware modules loaded then); then the
+             calibration in a session beside the heading line ("saved": the live heap then,
+             the session still running; "peak_solving": the largest live heap after a step
+             that ran solver slices, "peak_modules": the firmware modules loaded then); then the
              board is put down (it jitters about directions the buffer holds) until the
              session ends ("ended"), then 1000 headings ("after"), and the firmware modules
              still loaded; leaves the record in STOREDIR.
@@ -85,6 +89,8 @@ def main():
     clock = common.Clock()
     base = live()
     res = {"interpreter": common.interpreter(), "profile": profile}
+    if profile == "program":
+        return program(bus, store_dir, clock, base, res, n)
     app = boot(bus, store_dir, clock)
     res["boot"] = live() - base
     if profile == "gyro":
@@ -92,24 +98,24 @@ def main():
         res["gyro_attached"] = live() - base
     if profile == "calibrate":
         peak = 0
-        peak_at = (None, None)
+        peak_at = None
         track = "--min" not in sys.argv
         for _ in range(3 * n):
             clock.now += PERIOD_US
             app.step()
             if track and app.solving:  # the live heap while a solve runs (slow: collects)
                 a = live() - base
-                if a > peak:  # and what the board held then (calibration mode or not)
+                if a > peak:  # and what the board held then
                     peak = a
-                    peak_at = (app.mode, firmware_modules())
+                    peak_at = firmware_modules()
             if app.calibration.model == 10 and app.stored and not app.solving:
                 break
         res["peak_solving"] = peak
-        res["peak_mode"], res["peak_modules"] = peak_at
+        res["peak_modules"] = peak_at
         res["saved"] = live() - base
         res["model"] = app.calibration.model
         # the board put down: it jitters about the directions of the first 50 samples, which
-        # the buffer holds already, so the session ends (firmware/session.py)
+        # the buffer holds already, so the session ends (firmware/calibrate/session.py)
         k = 0
         while app.collector is not None and k < 12000:  # 60 s at the most
             if k % 50 == 0:
@@ -137,6 +143,40 @@ def main():
     qstr_info = getattr(common.micropython, "qstr_info", None)
     if qstr_info is not None:
         qstr_info()  # one line on stdout: the pool of interned names (bench.py reads it)
+    common.emit(res)
+
+
+def program(bus, store_dir, clock, base, res, n):
+    from firmware import compat
+    compat.FAST = False  # as boards/main.py runs it: the plain kernels
+    from firmware.calibrate.program import Program
+    p = Program(bus, store_dir, mag_options={"odr": 200}, ticks_us_=clock.ticks,
+                report=lambda s: None)
+    res["constructed"] = live() - base
+    c = p.collector
+    peak = 0
+    peak_at = None
+    track = "--min" not in sys.argv
+    for _ in range(3 * n):
+        if p.done() or p.short >= 3:
+            break
+        clock.now += PERIOD_US
+        k = c.solves
+        p.step()
+        if track and c.solves != k:  # a solve ran in this step: what it held at its end
+            a = live() - base
+            if a > peak:
+                peak = a
+                peak_at = firmware_modules()
+    res["complete"] = p.done()
+    res["model"] = p.saved.model if p.saved is not None else None
+    if "--min" in sys.argv:
+        common.emit({"complete": res["complete"]})
+        return
+    res["peak_solving"] = peak
+    res["peak_modules"] = peak_at
+    res["saved"] = live() - base
+    res["solves"] = c.solves
     common.emit(res)
 
 

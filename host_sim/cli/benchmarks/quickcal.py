@@ -1,4 +1,4 @@
-"""Quick calibration (firmware/quickcal.py, CompassApp.quick_calibrate) in the simulator: the
+"""Quick calibration (firmware/field/quickcal.py, CompassApp.quick_calibrate) in the simulator: the
 heading error at other headings after a calibration from one pose (or two opposite poses) and
 a known true heading, over many seeds (docs/quick_calibration.md).
 
@@ -56,7 +56,7 @@ def soft_iron(rng, dev):
 def world_at(place, hard_iron_ut=(0.0, 0.0, 0.0), soft=None, year_e3=YEAR_E3, scale=1.0):
     """A still World with the field model's field at `place` (times `scale`: a sensor whose
     gain is off by that factor senses the same)."""
-    from firmware.location import Location
+    from firmware.field.location import Location
     loc = Location(place[0], place[1], year_e3)
     kw = {} if soft is None else {"soft_iron": soft}
     return World(field_ut=loc.field_nt / 1000 * scale, inclination_deg=loc.inclination_cdeg / 100,

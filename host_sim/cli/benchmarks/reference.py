@@ -10,7 +10,7 @@ import os
 
 import numpy as np
 
-from firmware.calibrator import Calibrator
+from firmware.calibrate.calibrator import Calibrator
 from host_sim.cli.calibrate import choose_scale, desktop_plan, scaled_rows
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(

@@ -13,7 +13,7 @@ import gc
 
 from host_sim.cli.benchmarks import common
 
-from firmware.calibrator import Calibrator
+from firmware.calibrate.calibrator import Calibrator
 
 SMOKE = common.smoke()
 RUNS = 1 if SMOKE else 5
