@@ -27,8 +27,9 @@ $(STAMP): requirements.txt
 run: $(STAMP)  ## the compass on the simulated board; writes build/calibration.png and docs/design.md's excerpt of it
 	$(PY) -m host_sim run --update-doc
 
+# -rs: one line per skip reason (each says what to run or install to run those tests too)
 test: $(STAMP) wasm web tiers postgres  ## the whole test suite on CPython and MicroPython
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -rs
 
 # --- 32-bit test tiers (tests/mp.py) -------------------------------------------------------
 # wasm: the MicroPython WebAssembly port from npm (tests/wasm/package.json), installed into
@@ -39,8 +40,8 @@ NPM_DIR    := build/npm
 WASM_STAMP := $(NPM_DIR)/node_modules/.installed-$(shell cksum < $(WASM_DIR)/package-lock.json | cut -d' ' -f1)
 
 wasm:  ## install the WebAssembly test tier from npm (skips without node)
-	@if ! command -v node >/dev/null 2>&1; then echo "wasm tier skipped: node not found on PATH"; \
-	elif ! command -v npm >/dev/null 2>&1; then echo "wasm tier skipped: npm not found on PATH"; \
+	@if ! command -v node >/dev/null 2>&1; then echo "wasm tier skipped: node not found on PATH (install Node.js and npm, then make wasm)"; \
+	elif ! command -v npm >/dev/null 2>&1; then echo "wasm tier skipped: npm not found on PATH (install npm, then make wasm)"; \
 	elif [ ! -f $(WASM_STAMP) ]; then \
 	  mkdir -p $(NPM_DIR) && cp $(WASM_DIR)/package.json $(WASM_DIR)/package-lock.json $(NPM_DIR)/ && \
 	  if npm ci --prefix $(NPM_DIR) --no-audit --no-fund --loglevel=error; then touch $(WASM_STAMP); \

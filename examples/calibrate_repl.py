@@ -1,6 +1,6 @@
 """Calibrate at the REPL: collect samples while you turn the board, then solve.
 
-    python examples/calibrate_repl.py [SECONDS]                 # on the host: a figure-8
+    python3 examples/calibrate_repl.py [SECONDS]                # on the host: a figure-8
     from examples.calibrate_repl import calibrate; calibrate()  # on a board: turn it 30 s
 
 Every raw sample goes to a Calibrator (firmware/calibrate/calibrator.py), which keeps the ones that are

@@ -1,6 +1,6 @@
 """Check the axis settings: lay the board flat, tip the nose down, roll it right.
 
-    python examples/check_axes.py                     # on the host: the simulated board
+    python3 examples/check_axes.py                    # on the host: the simulated board
     from examples.check_axes import check; check()    # on a board: follow the prompts
 
 With ACCEL_AXES right, the pitch reads negative with the nose down and the roll positive with

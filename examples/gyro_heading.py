@@ -1,6 +1,6 @@
 """Gyro-aided heading: the MPU6050's gyroscope holds the heading while a magnet passes.
 
-    python examples/gyro_heading.py [SECONDS]     # on the host: the simulated board
+    python3 examples/gyro_heading.py [SECONDS]    # on the host: the simulated board
     from examples.gyro_heading import run; run()  # on a board: forever
 
 On a board this is the heading loop with app.use_gyro() (docs/gyro.md): bring a magnet or a

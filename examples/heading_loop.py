@@ -1,6 +1,6 @@
 """A heading loop: the app with its status line (calibrates itself while you turn the board).
 
-    python examples/heading_loop.py [SECONDS]     # on the host: a simulated figure-8
+    python3 examples/heading_loop.py [SECONDS]    # on the host: a simulated figure-8
     from examples.heading_loop import run; run()  # on a board: forever
 
 firmware/app.py does everything: it finds the chips, loads the stored calibration (none

@@ -1,12 +1,14 @@
 """Load a calibration file (the desktop tool's --out) into the board's store, once.
 
-    python -m host_sim calibrate mag_log.csv --sensor qmc5883l --out calibration.json
+    python3 -m host_sim calibrate mag_log.csv --out calibration.json  # the log names its chip
     mpremote cp calibration.json :calibration.json        # then, on the board:
     from examples.load_calibration import load; load()
 
-    python examples/load_calibration.py FILE [STORE_DIR]  # on the host (simulated board)
+    python3 examples/load_calibration.py FILE [STORE_DIR]  # on the host (simulated board)
 
 STORE_DIR (default /, the board's root) is made when it does not exist (one level).
+Exit status as a script: 0 imported; 1 refused (or the store could not save it); 2 no file
+at FILE, or no folder for the store. What went wrong is printed on stderr.
 
 firmware/calfile/calimport.py checks the file against the chip found (sensor kind, range) and the
 record's meaning, stores it, and renames the file to FILE.imported (FILE.rejected when it is
@@ -42,21 +44,32 @@ def _store_folder(d):
 
 
 def load(path="calibration.json", store_dir="/", seed=1):
+    """None (no file), (True, 'imported ...') or (False, 'rejected ...' / 'not imported ...'),
+    as firmware.calimport.import_calibration; the message is printed as it comes."""
     why = _store_folder(store_dir)
     if why is not None:
-        print("not imported: %s" % why)
+        print("not imported: %s" % why, file=sys.stderr)
         return False, why
     i2c, delay_us = get_bus(seed)
     mag = detect(i2c, delay_us=delay_us) if delay_us else detect(i2c)
     store = CalStore(store_dir, sensor=mag.KIND, range_code=mag.range_code)
     r = import_calibration(path, store, mag)
     if r is None:
-        print("no calibration file at %s" % path)
+        print("no calibration file at %s" % path, file=sys.stderr)
     else:
-        print("%s: %s" % ("imported" if r[0] else "refused", r[1]))
+        print(r[1], file=sys.stdout if r[0] else sys.stderr)
     return r
+
+
+def status(r):
+    """The script's exit status for load()'s result (the module docstring)."""
+    if r is not None and r[0]:
+        return 0
+    if r is not None and r[1].startswith(("rejected ", "not imported ")):
+        return 1          # firmware.calimport's refusal, or a save that failed
+    return 2              # no file, or no folder for the store
 
 
 if __name__ == "__main__":
     a = sys.argv[1:]
-    load(a[0] if a else "calibration.json", a[1] if len(a) > 1 else "/")
+    sys.exit(status(load(a[0] if a else "calibration.json", a[1] if len(a) > 1 else "/")))

@@ -1,11 +1,12 @@
 """Log raw magnetometer samples to a CSV file on the board's flash, bounded in size.
 
-    python examples/log_csv.py [PATH] [MAX_BYTES]     # on the host (simulated board)
+    python3 examples/log_csv.py [PATH] [MAX_BYTES]    # on the host (simulated board)
     from examples.log_csv import log; log()           # on a board: writes /mag_log.csv
 
 Turn the board through figure-8s while it logs; copy the file to the desktop
 (`mpremote cp :mag_log.csv .`) and fit it there:
-`python -m host_sim calibrate mag_log.csv --sensor qmc5883l --out calibration.json`.
+`python3 -m host_sim calibrate mag_log.csv --out calibration.json` (the file's first line
+names the chip and its range, which calibrate reads).
 Stops when the next row would pass MAX_BYTES (default 16 KB, about 900 rows).
 """
 import sys

@@ -1,6 +1,6 @@
 """Read raw samples: find the compass chip and print what it measures.
 
-    python examples/read_raw.py [N]               # on the host (simulated GY-271 + GY-521)
+    python3 examples/read_raw.py [N]              # on the host (simulated GY-271 + GY-521)
     from examples.read_raw import read; read()    # on a board
 
 Raw int16 counts in the chip's own axes; counts_per_gauss says the scale (1 G = 100 uT).

@@ -33,7 +33,7 @@ STATUS_INTERNAL = 3
 
 
 def help_text():
-    lines = ["usage: python -m host_sim COMMAND [options]   (COMMAND --help: its options)",
+    lines = ["usage: python3 -m host_sim COMMAND [options]   (COMMAND --help: its options)",
              "", "commands:"]
     for name, text in COMMANDS:
         lines.append("  %-10s %s" % (name, text))
@@ -54,7 +54,7 @@ def main(argv):
         return 0
     cmd = argv[0] if argv else None
     if cmd not in _COMMANDS:
-        print("host_sim: error: %s; expected one of %s (python -m host_sim --help says what each "
+        print("host_sim: error: %s; expected one of %s (python3 -m host_sim --help says what each "
               "does)" % ("unknown command %r" % cmd if argv else "no command",
                          ", ".join(_COMMANDS)), file=sys.stderr)
         return STATUS_USAGE

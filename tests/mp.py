@@ -74,17 +74,22 @@ QEMU_RUN = os.path.join(ROOT, "tools", "run-qemu-mps2.sh")
 def _wasm_reason():
     # the same words as `make wasm` prints ("wasm tier skipped: <why>")
     if not shutil.which("node"):
-        return "node not found on PATH"
+        return "node not found on PATH (install Node.js and npm, then make wasm)"
     if not shutil.which("npm"):
-        return "npm not found on PATH"
+        return "npm not found on PATH (install npm, then make wasm)"
     if not os.path.exists(WASM_PKG):
         return "build/npm/node_modules not installed (make wasm)"
     return None
 
 
 def _x86_reason():
+    # short: `make test` prints it once per skipping test file (-rs); `make tiers` prints the
+    # commands of BUILD_HINT
     if not os.access(X86_32, os.X_OK):
-        return "no 32-bit unix port at %s: %s" % (X86_32, BUILD_HINT)
+        return ("no 32-bit unix port at %s: `make tiers` prints the three commands that build "
+                "it from MicroPython %s (gcc-multilib; about 2 min)"
+                % (os.path.relpath(X86_32, ROOT) if X86_32.startswith(ROOT + os.sep) else X86_32,
+                   MICROPYTHON_TAG))
     return None
 
 

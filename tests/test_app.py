@@ -84,17 +84,48 @@ def still_errors(app, b, pose, n=16):
 
 
 def test_board_axis_constants_match_the_breakout_derivation():
-    from boards.breakouts import breakout
+    # every breakout the board files name (GY-271, GY-273, GY-87) lying flat, X forward;
+    # no accelerometer on a GY-271/273: the GY-521 module lying the same way, as GY-87's
+    from boards.breakouts import BREAKOUTS, breakout
     from boards.esp32 import board as esp32
+    from boards.host import board as host
     from boards.rp2040 import board as rp2040
-    for board in (esp32, rp2040):
-        spec = breakout(board.BREAKOUT)
-        assert board.MAG_AXES == spec["mag"]
-        # no accelerometer on a GY-271/273: the GY-521 module lying the same way, as GY-87's
-        assert board.ACCEL_AXES == spec.get("accel", breakout("gy87")["accel"])
-    host = pytest.importorskip("boards.host.board")
-    assert host.MAG_AXES == breakout(host.BREAKOUT)["mag"]
-    assert host.ACCEL_AXES == breakout("gy87")["accel"]
+    for board in (esp32, rp2040, host):
+        assert {spec["mag"] for spec in BREAKOUTS.values()} == {board.MAG_AXES}
+        assert board.ACCEL_AXES == breakout("gy87")["accel"]
+
+
+def test_every_setting_of_a_board_file_is_read_by_the_code_that_runs_on_it():
+    # a setting nothing reads (the BREAKOUT these files once had) misleads whoever edits it:
+    # each upper-case name a board file assigns is read by boards/main.py, the CircuitPython
+    # code.py / boot.py, host_sim (the simulated board) or the board file itself, as a name,
+    # an attribute or a getattr string; tests do not count
+    import ast
+    import glob
+    ROOT = mp.ROOT
+    files = sorted(glob.glob(os.path.join(ROOT, "boards", "*", "board.py"))) + [
+        os.path.join(ROOT, "boards", "circuitpython", "wiring.py")]
+    readers = files + [os.path.join(ROOT, "boards", "main.py")] + sorted(
+        glob.glob(os.path.join(ROOT, "boards", "circuitpython", "*.py"))) + sorted(
+        glob.glob(os.path.join(ROOT, "host_sim", "**", "*.py"), recursive=True))
+    read = set()
+    for f in readers:
+        for node in ast.walk(ast.parse(open(f).read())):
+            if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Load):
+                read.add(node.id)
+            elif isinstance(node, ast.Attribute):
+                read.add(node.attr)
+            elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+                read.add(node.value)
+    assert len(files) == 4
+    unread = []
+    for f in files:
+        for node in ast.parse(open(f).read()).body:
+            if isinstance(node, ast.Assign):
+                for t in node.targets:
+                    if isinstance(t, ast.Name) and t.id.isupper() and t.id not in read:
+                        unread.append("%s: %s" % (os.path.relpath(f, ROOT), t.id))
+    assert unread == []
 
 
 def test_the_app_detects_the_magnetometer_and_the_accelerometer(session):

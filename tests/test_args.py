@@ -75,7 +75,7 @@ def test_help_is_generated_from_the_declarations(capsys):
     p = parser()
     assert p.main(["--help"], lambda o: 1 / 0) == 0
     out = capsys.readouterr().out
-    assert out.startswith("usage: python -m host_sim demo [options] WHERE\n")
+    assert out.startswith("usage: python3 -m host_sim demo [options] WHERE\n")
     for word in ("--count COUNT", "how many", "--declination CDEG", "a, b", "--fast",
                  "LAT,LON", "-h, --help", "exit status: 0 done"):
         assert word in out, word

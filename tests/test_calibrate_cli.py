@@ -96,7 +96,11 @@ def test_refusal_exits_1_with_the_reason_and_what_to_try(tmp_path, capsys):
     assert r["rejected"] == "planar" and r["detail"] and "--force" in r["hint"]
     assert cap.err.count("\n") == 1 and "refused (planar)" in cap.err
     assert cli.main([p]) == 1
-    assert "refused: planar" in capsys.readouterr().out
+    # without --json: the refusal once, on stderr, with what to try; nothing on stdout
+    cap = capsys.readouterr()
+    assert cap.out == "" and cap.err.count("\n") == 1 and cap.err.count("planar") == 1
+    assert cap.err.startswith("host_sim calibrate: calibration refused (planar): ")
+    assert "try: " in cap.err and "--force" in cap.err
 
 
 def test_bad_usage_exits_2(tmp_path, capsys):
@@ -207,6 +211,55 @@ def qmc_log(tmp_path, n=600, name="qmc.csv", comment=True):
     return str(p)
 
 
+def test_the_loggers_sensor_line_states_the_board(tmp_path, capsys):
+    # examples/log_csv.py writes '# qmc5883l range_code 0 counts_per_gauss 12000' above the
+    # header: calibrate --out needs no --sensor then, and the field check is on
+    from host_sim.cli import calfile
+    p = qmc_log(tmp_path)
+    out = str(tmp_path / "cal.json")
+    assert cli.main([p, "--out", out, "--json"]) == 0
+    cap = capsys.readouterr()
+    r = json.loads(cap.out)
+    assert cap.err == "" and r["sensor"] == "qmc5883l" and r["range_code"] == 0
+    assert abs(r["field_ut"] - 50) < 0.5 and calfile.read(out)["counts_per_gauss"] == 12000
+    # the same counts logged at 8 G (range code 1): 3000 counts/G, 6000 counts is 200 uT
+    text = open(p).read().replace("range_code 0 counts_per_gauss 12000",
+                                  "range_code 1 counts_per_gauss 3000")
+    p8 = tmp_path / "q8.csv"
+    p8.write_text(text)
+    assert cli.main([str(p8), "--json"]) == 1
+    r = json.loads(capsys.readouterr().out)
+    assert r["rejected"] == "field_out_of_range" and "3000 counts/G" in r["detail"]
+    # a bare log fits in its own counts, without the board's field check
+    assert cli.main([qmc_log(tmp_path, name="bare.csv", comment=False), "--json"]) == 0
+    assert "field_ut" not in json.loads(capsys.readouterr().out)
+
+
+@pytest.mark.parametrize("argv, said", [
+    (["--range", "8"], "--range 8 differs"),
+    (["--sensor", "qmc5883l", "--range", "8"], "--sensor qmc5883l --range 8 differs"),
+    (["--counts-per-gauss", "3000"], "--counts-per-gauss 3000 differs"),
+    (["--units", "uT"], "--units uT differs"),
+])
+def test_options_that_differ_from_the_loggers_line_win_with_one_warning(tmp_path, capsys,
+                                                                         argv, said):
+    p = qmc_log(tmp_path)
+    cli.main([p, "--json", "--force"] + argv)
+    cap = capsys.readouterr()
+    lines = [ln for ln in cap.err.splitlines() if "the log's line" in ln]
+    assert len(lines) == 1 and said in lines[0] and "(the options win)" in lines[0], cap.err
+    assert lines[0].startswith("host_sim calibrate: warning: ")
+    assert any(said in w for w in json.loads(cap.out)["warnings"])
+
+
+def test_a_loggers_line_naming_a_range_the_chip_lacks_is_refused_in_one_line(tmp_path):
+    p = tmp_path / "bad.csv"
+    p.write_text(open(qmc_log(tmp_path)).read().replace("range_code 0", "range_code 7"))
+    rc, out, err = cli_run("calibrate", p)
+    line = one_error_line(err)
+    assert rc == 2 and out == "" and "qmc5883l has no range code 7" in line and "1: 8 G" in line
+
+
 def test_capacity_is_bounded_by_what_the_calibrator_holds(tmp_path):
     from firmware.calibrate.samples import MAX_CAPACITY
     p = qmc_log(tmp_path)
@@ -227,7 +280,7 @@ def test_a_log_of_another_chip_is_counted_once_and_the_warning_says_which(tmp_pa
     assert "log more samples" not in r["hint"] and "--sensor" in r["hint"]
     assert "outside hmc5883l's output" in err and "refused" in err.splitlines()[-1]
     rc, out, err = cli_run("calibrate", p, "--sensor", "hmc5883l")
-    assert rc == 1 and "  600 rows (%d skipped)" % r["skipped_rows"] in out
+    assert rc == 1 and out == "" and "(600 rows, %d skipped;" % r["skipped_rows"] in err
     # no comment naming the chip: the int16 counts still point at the QMC chips
     p = qmc_log(tmp_path, name="bare.csv", comment=False)
     rc, out, _ = cli_run("calibrate", p, "--sensor", "hmc5883l", "--json")

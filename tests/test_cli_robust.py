@@ -10,7 +10,8 @@ import pytest
 
 from host_sim.cli import calfile
 from host_sim.cli import calibrate as cli
-from host_sim.cli.benchmarks.reference import ALL_LOGS, log_path, meta, missing_reason
+from host_sim.cli.benchmarks.reference import (ALL_LOGS, MISSING, log_path, meta,
+                                               missing_reason)
 from tests import mp
 
 # AN4246 Rev 4, worked example 1 (section 6), 0.1 uT counts; tests/test_solve.py checks the
@@ -101,18 +102,61 @@ def test_separators_line_ends_and_bom_give_the_same_fit(tmp_path, capsys, refere
     assert same_fit(r, reference) and r["skipped_rows"] == 0 and err == ""
 
 
-@pytest.mark.parametrize("header, cols, enc", [
-    (["x", "y", "z"], None, "ascii"),
-    (["magX", "magY", "magZ"], None, "ascii"),
-    (["Mag_X (uT)", "Mag_Y (uT)", "Mag_Z (uT)"], None, "ascii"),
-    (['"mx"', '"my"', '"mz"'], None, "ascii"),
-    (["mx (\u00b5T)", "my (\u00b5T)", "mz (\u00b5T)"], None, "latin-1"),   # latin-1 micro sign
-    (["mx [\u00b0]", "my", "mz"], None, "utf-8"),
+@pytest.mark.parametrize("header, extra, enc", [
+    (["x", "y", "z"], [], "ascii"),
+    (["magX", "magY", "magZ"], [], "ascii"),
+    # ROWS are a 3000-unit sphere: as uT (what these headers say) the field check refuses
+    # them, so --scale 1 (one count per file unit) keeps this to the columns
+    (["Mag_X (uT)", "Mag_Y (uT)", "Mag_Z (uT)"], ["--scale", "1"], "ascii"),
+    (['"mx"', '"my"', '"mz"'], [], "ascii"),
+    (["mx (\u00b5T)", "my (\u00b5T)", "mz (\u00b5T)"], ["--scale", "1"], "latin-1"),  # micro sign
+    (["mx [\u00b0]", "my", "mz"], [], "utf-8"),
 ])
-def test_header_names_pick_the_columns(tmp_path, capsys, reference, header, cols, enc):
+def test_header_names_pick_the_columns(tmp_path, capsys, reference, header, extra, enc):
     p = write(tmp_path / "h.csv", header, ROWS, enc=enc)
-    r, _ = fit(capsys, p)
-    assert same_fit(r, reference)
+    r, err = fit(capsys, p, *extra)
+    assert same_fit(r, reference) and err == ""
+
+
+# the same field (48 uT around (20, -35.5, 12.25) uT) logged in the units each header names
+UT_ROWS = sphere(centre=(20.0, -35.5, 12.25), radius=48.0)
+
+
+@pytest.mark.parametrize("header, per_ut, fmt, enc, units", [
+    (["Mag_X (uT)", "Mag_Y (uT)", "Mag_Z (uT)"], 1, "%.2f", "ascii", "uT"),
+    (["mx_mG", "my_mG", "mz_mG"], 10, "%.1f", "ascii", "mG"),
+    (["x [G]", "y [G]", "z [G]"], 0.01, "%.4f", "ascii", "G"),
+    (["mx_nT", "my_nT", "mz_nT"], 1000, "%.0f", "ascii", "nT"),
+    (["mx (\u00b5T)", "my (\u00b5T)", "mz (\u00b5T)"], 1, "%.2f", "latin-1", "uT"),
+    (["t", "mx (\u03bcT)", "my (\u03bcT)", "mz (\u03bcT)"], 1, "%.2f", "utf-8", "uT"),
+    (["mx [raw]", "my [raw]", "mz [raw]"], 10.9, "%.0f", "ascii", "counts"),  # 1090 counts/G
+])
+def test_the_units_a_header_names_are_read(tmp_path, capsys, header, per_ut, fmt, enc, units):
+    rows = text_rows(UT_ROWS * per_ut, fmt)
+    if header[0] == "t":
+        rows = [["%d" % k] + r for k, r in enumerate(rows)]
+    p = write(tmp_path / "u.csv", header, rows, enc=enc)
+    r, err = fit(capsys, p, "--sensor", "hmc5883l", "--range", "1.3")
+    assert err == "" and r["units"] == units
+    # converted into the board's counts: 48 uT at 1090 counts/G = 523 counts, the field check on
+    assert abs(r["field_ut"] - 48.0) < 0.3 and abs(r["field_counts"] - 523) <= 3
+    assert [round(v / 10.9) for v in r["offset_counts"]] == [20, -36, 12]
+
+
+def test_units_that_differ_from_the_header_win_with_one_warning(tmp_path, capsys):
+    p = write(tmp_path / "mg.csv", ["mx_mG", "my_mG", "mz_mG"], text_rows(UT_ROWS * 10, "%.1f"))
+    rc, out, err = call(capsys, p, "--units", "uT", "--json")
+    warning = [ln for ln in err.splitlines() if "warning" in ln]
+    assert len(warning) == 1 and "--units uT" in warning[0] and "mG" in warning[0]
+    assert "mx_mG" in warning[0]
+    r = json.loads(out)                     # read as uT: a 480 "uT" field, refused
+    assert rc == 1 and r["rejected"] == "field_out_of_range"
+    assert [w for w in r["warnings"] if w in warning[0]] == [r["warnings"][-1]]
+    # the same units as the header's, or --scale (counts per file unit): nothing to warn of
+    r, err = fit(capsys, p, "--units", "mG")
+    assert err == "" and r["units"] == "mG" and abs(r["field"] - 480) < 3
+    r, err = fit(capsys, p, "--scale", "1")
+    assert err == "" and r["units"] is None
 
 
 def test_extra_columns_by_header_and_by_number(tmp_path, capsys, reference):
@@ -423,7 +467,7 @@ def test_sensor_tables_agree_with_the_drivers():
 
 def need(name):
     if log_path(name) is None:
-        pytest.skip(missing_reason([name]))
+        pytest.skip(missing_reason(MISSING))   # one reason for all: one line under -rs
     return log_path(name)
 
 

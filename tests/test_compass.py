@@ -364,8 +364,8 @@ def test_bad_reference_field_or_tolerance_is_rejected_with_the_value():
 
 
 def test_a_magnet_brought_near_the_simulated_board_raises_interference():
-    world_mod = pytest.importorskip("host_sim.world")
-    motion = pytest.importorskip("host_sim.motion")
+    from host_sim import motion
+    from host_sim import world as world_mod
     # 50 uT, QMC5883L at +-2 G: 120 counts/uT -> |B| = 6000 counts; MPU6050 16384 counts/g
     w = world_mod.World(field_ut=50.0, inclination_deg=60.0,
                         motion=motion.figure8(period_s=12, lobes=2, yaw_turns=1,

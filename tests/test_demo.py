@@ -79,9 +79,10 @@ def test_largest_reading_bounds_every_field_direction_and_is_reached(v, wf):
 
 @given(st.floats(1, 900))
 def test_range_is_the_most_sensitive_one_that_holds_the_field(need_ut):
-    for kind, table in (("qmc5883l", demo.QMC_RANGES_G), ("hmc5883l", demo.HMC_RANGES_G)):
+    for kind, table in (("qmc5883l", demo.QMC_RANGES_G), ("qmc5883p", demo.QMCP_RANGES_G),
+                        ("hmc5883l", demo.HMC_RANGES_G)):
         opt, code, fs = demo.pick_range(kind, need_ut)
-        assert opt == ("range" if kind == "qmc5883l" else "gain")
+        assert opt == ("gain" if kind == "hmc5883l" else "range")
         i = list(table).index(fs)
         need_g = need_ut * demo.RANGE_MARGIN / 100
         if need_g <= table[-1]:
@@ -176,6 +177,16 @@ def test_accepted_calibration_finds_the_worlds_iron(chip):
     assert abs(c["field"] * 100 / c["counts_per_gauss"] - demo.FIELD_UT * s) < 0.3
 
 
+def test_every_chip_the_simulator_models_is_a_demo_choice():
+    # host_sim/boards.py's magnetometers, each by its chip's name (the GY-271 / GY-87 are
+    # breakouts of those chips, gy87 the demo's one-board choice)
+    from host_sim.boards import CHIPS
+    assert {c for c in CHIPS if c[:2] in ("qm", "hm")} <= set(demo.CHIP_CHOICES)
+    r = demo_json("qmc5883p")
+    assert r["chip"] == "qmc5883p" and r["calibration"]["counts_per_gauss"] in (
+        1000, 2500, 3750, 15000)                       # the QMC5883P's, not the QMC5883L's
+
+
 def test_the_same_seed_repeats_and_another_seed_differs():
     a = demo_json("qmc5883l", 1)
     rc, out = run_demo("--chip", "qmc5883l", "--seed", "1", "--json")
@@ -221,7 +232,8 @@ def test_run_exits_0_and_tells_the_story():
 
 
 def test_plot_is_written_when_matplotlib_is_present(tmp_path):
-    pytest.importorskip("matplotlib")
+    pytest.importorskip("matplotlib", reason="matplotlib not installed (requirements.txt: make "
+                        "venv)")
     path = tmp_path / "sub" / "cal.png"
     rc, out = run_demo("--chip", "qmc5883l", "--seed", "1", "--plot", str(path))
     assert rc == 0

@@ -180,3 +180,280 @@ def test_the_tier_messages_name_the_tag_the_build_script_pins():
     assert re.search(r"^MICROPYTHON_TAG := (\S+)$", make, re.M).group(1) == tag
     assert mp.MICROPYTHON_TAG == tag and "--branch %s " % tag in mp.BUILD_HINT
     assert "MICROPYTHON_SRC=build/micropython make tiers" in mp.BUILD_HINT
+    assert "git clone --depth 1 --branch $(MICROPYTHON_TAG) " in make  # what make tiers prints
+
+
+# ---- `make test` says why each skipped test skipped, and what runs it ------------------------
+
+def _skip_calls():
+    """(file:line, literal text or None) of every skip in tests/*.py: pytest.skip(...),
+    pytest.importorskip(..., reason=...), @pytest.mark.skipif(..., reason=...); None when the
+    text is computed (a tier's reason, missing_reason(), ...)."""
+    import ast
+    out = []
+    for path in sorted(glob.glob(os.path.join(ROOT, "tests", "*.py"))):
+        for node in ast.walk(ast.parse(open(path).read())):
+            if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)):
+                continue
+            name = node.func.attr
+            if name == "skip" and node.args:
+                arg = node.args[0]
+            elif name in ("importorskip", "skipif"):
+                arg = dict((k.arg, k.value) for k in node.keywords).get("reason")
+            else:
+                continue
+            where = "%s:%d" % (os.path.relpath(path, ROOT), node.lineno)
+            if arg is None:                      # importorskip's own text names no command
+                out.append((where, ""))
+                continue
+            texts = [n.value for n in ast.walk(arg)
+                     if isinstance(n, ast.Constant) and isinstance(n.value, str)]
+            computed = any(isinstance(n, (ast.Call, ast.Attribute, ast.Name))
+                           for n in ast.walk(arg))
+            out.append((where, None if computed else "".join(texts)))
+    return out
+
+
+# skips no command can lift: what the platform lacks
+PLATFORM = ("os.openpty",)
+
+
+def test_every_literal_skip_reason_says_what_to_run_or_install():
+    calls = _skip_calls()
+    assert len(calls) >= 15
+    vague = [(w, t) for w, t in calls if t is not None and not re.search(
+        r"\bmake [a-z]|apt-get install|requirements\.txt", t) and not any(
+        p in t for p in PLATFORM)]
+    assert vague == []
+
+
+def test_computed_skip_reasons_name_what_to_run(monkeypatch):
+    # the reasons the tiers, the fetched logs and the browser tier give when they are missing
+    import shutil
+    from host_sim.cli.benchmarks.reference import missing_reason
+    from tests import mp
+    from tests import test_web
+    monkeypatch.setattr(shutil, "which", lambda name: None)
+    assert "make wasm" in mp._wasm_reason()
+    monkeypatch.setattr(mp, "X86_32", os.path.join(ROOT, "build", "no-such-tool"))
+    assert "make tiers" in mp._x86_reason() and mp.MICROPYTHON_TAG in mp._x86_reason()
+    monkeypatch.setenv("ARM_TIER", "0")
+    assert "make test-arm" in mp._arm_reason()
+    assert "make datasets" in missing_reason(["a"]) and "make datasets" in missing_reason(
+        ["a", "b", "c"])
+    assert "make web" in test_web._why_skip()
+
+
+def test_make_test_prints_the_skip_reasons():
+    # -rs: a line per reason (pytest groups the skips that share one) after the dots
+    make = open(os.path.join(ROOT, "Makefile")).read()
+    recipe = re.search(r"^test:.*\n((?:\t.*\n)+)", make, re.M).group(1)
+    assert re.search(r"-m pytest\b.*\s-rs\b", recipe), recipe
+
+
+# ---- every firmware name README and docs quote exists ----------------------------------------
+# `firmware.mod.attr` (a module, then attributes: imported and looked up) and `firmware/mod.py`
+# (a file or folder; a glob must match one), resolved against the tree as it is, so a module
+# moved into a sub-package must be quoted by its new name. `x` / `y` are placeholders
+# (`from firmware.x import y`); `/firmware/...` after a slash is a URL path, not a name.
+
+_FW_NAME = re.compile(r"(?<![\w/.-])firmware((?:\.[A-Za-z_]\w*)+|/[\w*./-]*)")
+PLACEHOLDERS = ("x", "y")
+
+
+def _defined(body):
+    """{name: node} of what a module or class body defines (def, class, assignment, import,
+    and the same inside its try / if blocks)."""
+    import ast
+    out = {}
+    for node in body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            out[node.name] = node
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            for t in (node.targets if isinstance(node, ast.Assign) else [node.target]):
+                for n in ast.walk(t):
+                    if isinstance(n, ast.Name):
+                        out[n.id] = node
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            for a in node.names:
+                out[(a.asname or a.name).split(".")[0]] = node
+        elif isinstance(node, (ast.Try, ast.If, ast.With)):
+            for block in ([node.body, node.orelse] + [h.body for h in getattr(
+                    node, "handlers", [])] + [getattr(node, "finalbody", [])]):
+                out.update(_defined(block))
+    return out
+
+
+def unresolved_firmware_name(name, root=ROOT):
+    """None when `name` ('firmware.trig.atan2', 'firmware/store.py') exists, else why not.
+    Read from the sources (not imported: some modules import only on MicroPython)."""
+    import ast
+    if "/" in name or name == "firmware":
+        path = name.rstrip(".")
+        if "..." in path or any(p in PLACEHOLDERS for p in re.split(r"[/.]", path)):
+            return None
+        full = os.path.join(root, path)
+        if "*" in path:
+            return None if glob.glob(full) else "no file matches"
+        if os.path.exists(full) or os.path.exists(full + ".py"):
+            return None
+        return "no such file or folder"
+    parts = name.split(".")
+    if any(p in PLACEHOLDERS for p in parts[1:2]):
+        return None
+    k = len(parts)        # the longest prefix that is a module: a .py or a package folder
+    while k > 1 and not (os.path.isfile(os.path.join(root, *parts[:k]) + ".py") or
+                         os.path.isdir(os.path.join(root, *parts[:k]))):
+        k -= 1
+    if k == 1:
+        return "no module %s" % ".".join(parts[:2])
+    mod = ".".join(parts[:k])
+    src = os.path.join(root, *parts[:k]) + ".py"
+    if not os.path.isfile(src):
+        src = os.path.join(root, *(parts[:k] + ["__init__.py"]))
+        if not os.path.isfile(src):       # a folder without __init__.py: modules only
+            return None if k == len(parts) else "no module %s" % ".".join(parts[:k + 1])
+    body = ast.parse(open(src, encoding="utf-8").read()).body
+    for a in parts[k:]:
+        node = _defined(body).get(a)
+        if node is None:
+            return "%s has no %s" % (mod, ".".join(parts[k:]))
+        body = node.body if isinstance(node, ast.ClassDef) else []
+    return None
+
+
+def test_the_firmware_name_check_finds_a_wrong_module_and_a_wrong_attribute():
+    assert unresolved_firmware_name("firmware.trig.atan2") is None
+    assert unresolved_firmware_name("firmware.heading.atan2") == "no module firmware.heading"
+    assert unresolved_firmware_name("firmware.trig.atan3") == "firmware.trig has no atan3"
+    assert unresolved_firmware_name("firmware/trig.py") is None
+    assert unresolved_firmware_name("firmware/heading.py") == "no such file or folder"
+    assert unresolved_firmware_name("firmware/*.py") is None
+    assert unresolved_firmware_name("firmware.x") is None          # a placeholder
+    assert unresolved_firmware_name("firmware.fast.isqrt") is None  # imports only on MicroPython
+    assert unresolved_firmware_name("firmware.calibrate.calibrator.Calibrator.solve") is None
+    assert unresolved_firmware_name("firmware.calibrate.calibrator.Calibrator.nothing") is not None
+
+
+def test_the_firmware_name_check_follows_modules_into_sub_packages(tmp_path):
+    # a module moved into a sub-folder (with or without __init__.py) is found by its new name
+    sub = tmp_path / "firmware" / "calibrate"
+    sub.mkdir(parents=True)
+    (sub / "solve.py").write_text("class Fit:\n    def solve(self):\n        pass\n")
+    (tmp_path / "firmware" / "gyro").mkdir()
+    (tmp_path / "firmware" / "gyro" / "__init__.py").write_text("from firmware.x import y\n")
+    root = str(tmp_path)
+    for name in ("firmware.calibrate.solve.Fit.solve", "firmware/calibrate/solve.py",
+                 "firmware.calibrate", "firmware/calibrate/", "firmware.gyro.y"):
+        assert unresolved_firmware_name(name, root) is None, name
+    assert unresolved_firmware_name("firmware.solve.Fit", root) == "no module firmware.solve"
+    assert unresolved_firmware_name("firmware.calibrate.fit", root) == \
+        "no module firmware.calibrate.fit"
+    assert unresolved_firmware_name("firmware/solve.py", root) == "no such file or folder"
+
+
+def test_every_firmware_module_and_name_readme_and_docs_quote_exists():
+    bad, n = [], 0
+    for path in _doc_files():
+        for k, line in enumerate(open(path, encoding="utf-8"), 1):
+            for m in _FW_NAME.finditer(line):
+                n += 1
+                name = m.group(0).rstrip(".,;:")
+                why = unresolved_firmware_name(name)
+                if why:
+                    bad.append("%s:%d: %s (%s)" % (os.path.relpath(path, ROOT), k, name, why))
+    assert n >= 50 and not bad, "\n".join(bad)
+
+
+# ---- the lists the docs keep: every command, example and package part ------------------------
+
+def _section(path, heading):
+    """The text of README's / a doc's section whose heading contains `heading` (to the next
+    heading of the same or a higher level)."""
+    text = open(path, encoding="utf-8").read()
+    m = re.search(r"^(#+) [^\n]*%s[^\n]*\n" % re.escape(heading), text, re.M)
+    assert m, (path, heading)
+    end = re.compile(r"^#{1,%d} " % len(m.group(1)), re.M).search(text, m.end())
+    return text[m.end():end.start() if end else len(text)]
+
+
+def test_design_names_every_command_of_the_runner():
+    from host_sim.__main__ import _COMMANDS
+    text = open(os.path.join(ROOT, "docs", "design.md"), encoding="utf-8").read()
+    para = [p for p in text.split("\n\n") if "the command-line runner:" in p]
+    assert len(para) == 1
+    listed = re.findall(r"`(\w+)`", para[0].split("the command-line runner:")[1].split(";")[0])
+    assert listed == list(_COMMANDS)
+
+
+def test_readme_names_every_example_and_every_package_part():
+    readme = os.path.join(ROOT, "README.md")
+    examples = sorted(f for f in os.listdir(os.path.join(ROOT, "examples"))
+                      if f.endswith(".py") and f not in ("__init__.py", "bus.py"))
+    assert len(examples) >= 7
+    section = _section(readme, "Examples")
+    assert [f for f in examples if "`%s`" % f not in section] == []
+    parts = sorted(os.path.basename(p) for p in glob.glob(os.path.join(ROOT, "package-*.json")))
+    assert len(parts) >= 7
+    text = open(readme, encoding="utf-8").read()
+    assert [p for p in parts if "`%s`" % p not in text] == []
+
+
+# ---- the interpreter the commands name --------------------------------------------------------
+# Stock Debian has python3 and no `python`: README, docs and the examples' usage lines say
+# python3 for what runs on the standard library alone, and .venv/bin/python (what `make run`
+# and `make test` make from requirements.txt) for what needs its packages.
+
+_BARE_PYTHON = re.compile(r"(?<![\w./-])python(?=\s)")
+# host_sim commands (and modules) that import a requirements.txt package: matplotlib for run's
+# plot and quality's plot, pygeomag for wmm, numpy for bench, pg8000 for a PostgreSQL database
+VENV_ONLY = re.compile(r"-m (host_sim (run|wmm|bench)\b|host_sim quality\b.*(\bplot\b|postgresql:)"
+                       r"|pytest\b)")
+
+
+def _command_lines():
+    """(where, line) of README, docs/*.md and the examples' docstrings, outside ```python
+    blocks (Python code, not commands)."""
+    out = []
+    for path in _doc_files():
+        fence = None
+        for k, line in enumerate(open(path, encoding="utf-8"), 1):
+            if line.lstrip().startswith("```"):
+                fence = None if fence is not None else line.strip()[3:]
+            elif fence != "python":
+                out.append(("%s:%d" % (os.path.relpath(path, ROOT), k), line))
+    for path in sorted(glob.glob(os.path.join(ROOT, "examples", "*.py"))):
+        doc = open(path, encoding="utf-8").read().split('"""')
+        if len(doc) > 2:
+            for k, line in enumerate(doc[1].splitlines(), 1):
+                out.append(("%s:%d" % (os.path.relpath(path, ROOT), k), line))
+    return out
+
+
+def test_no_command_starts_with_a_bare_python():
+    lines = _command_lines()
+    assert len(lines) > 2000
+    bare = ["%s: %s" % (w, ln.strip()) for w, ln in lines if _BARE_PYTHON.search(ln)]
+    assert bare == [], "\n".join(bare)
+
+
+def test_what_python3_runs_needs_only_the_standard_library():
+    import subprocess
+    import sys
+    seen, venv = set(), []
+    for where, line in _command_lines():
+        for m in re.finditer(r"(?<![\w./-])python3 -m ([\w.]+)(?: ([a-z]+))?", line):
+            if VENV_ONLY.search(line[m.start():]):
+                venv.append("%s: %s" % (where, line.strip()))
+            mod, cmd = m.group(1), m.group(2)
+            if mod.split(".")[0] in ("host_sim", "examples"):
+                seen.add((mod, cmd if mod == "host_sim" else None))
+    assert venv == [], "these need .venv/bin/python:\n" + "\n".join(venv)
+    assert ("host_sim", "calibrate") in seen and len(seen) >= 8
+    for mod, cmd in sorted(seen, key=str):
+        if mod == "host_sim":                    # the command's module, through the runner
+            argv = [sys.executable, "-S", "-m", mod] + ([cmd] if cmd else []) + ["--help"]
+        else:   # a script (a benchmark, an example): imported; their tests run them
+            argv = [sys.executable, "-S", "-c", "import %s" % mod]
+        p = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, timeout=120)
+        assert p.returncode == 0 and "Traceback" not in p.stderr, (argv, p.stderr[-1000:])

@@ -49,17 +49,51 @@ def test_a_log_fitted_on_the_desktop_is_loaded_onto_the_board_once(tmp_path):
     log = str(tmp_path / "log.csv")
     cal = str(tmp_path / "calibration.json")
     mp.run(["examples/log_csv.py", log, "12000"], micro=True)
-    p = subprocess.run([sys.executable, "-m", "host_sim", "calibrate", log, "--sensor",
-                        "qmc5883l", "--out", cal], cwd=mp.ROOT, capture_output=True, text=True)
-    assert p.returncode == 0, p.stderr
+    # no --sensor: the log's first line names the chip and its range
+    p = subprocess.run([sys.executable, "-m", "host_sim", "calibrate", log, "--out", cal],
+                       cwd=mp.ROOT, capture_output=True, text=True)
+    assert p.returncode == 0 and p.stderr == "", p.stderr
+    assert "board          qmc5883l at 2 G (range code 0, 12000 counts/G); the log's line " \
+        "'# qmc5883l range_code 0 counts_per_gauss 12000'" in p.stdout
     store = tmp_path / "store"
     store.mkdir()
     out = mp.run(["examples/load_calibration.py", cal, str(store)], micro=True)
     assert out.startswith("imported"), out
     assert os.path.exists(cal + ".imported") and not os.path.exists(cal)
     assert any(f.endswith(".cal") for f in os.listdir(store))
-    again = mp.run(["examples/load_calibration.py", cal, str(store)], micro=True)
-    assert again.startswith("no calibration file")  # imported once
+    # imported once: a second run finds no file, says so on stderr and exits 2
+    again = subprocess.run([mp.MICROPYTHON, "examples/load_calibration.py", cal, str(store)],
+                           cwd=mp.ROOT, env=mp._env(True), capture_output=True, text=True)
+    assert again.returncode == 2 and again.stdout == "", again
+    assert again.stderr.startswith("no calibration file") and "Traceback" not in again.stderr
+
+
+@pytest.mark.parametrize("micro", [False, True])
+def test_a_refused_calibration_file_is_said_once_and_exits_1(tmp_path, micro):
+    # a file written for another chip than the one the board finds (the simulator's QMC5883L)
+    import json
+    from host_sim.cli import calfile
+    log = str(tmp_path / "log.csv")
+    cal = str(tmp_path / "calibration.json")
+    mp.run(["examples/log_csv.py", log, "12000"], micro=True)
+    p = subprocess.run([sys.executable, "-m", "host_sim", "calibrate", log, "--sensor",
+                        "qmc5883l", "--out", cal], cwd=mp.ROOT, capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    d = calfile.read(cal)
+    d.update(sensor="hmc5883l", range_code=1, range_gauss=1.3, counts_per_gauss=1090)
+    with open(cal, "w") as f:
+        json.dump(d, f)
+    store = tmp_path / "store"
+    store.mkdir()
+    exe = [mp.MICROPYTHON] if micro else [sys.executable]
+    r = subprocess.run(exe + ["examples/load_calibration.py", cal, str(store)], cwd=mp.ROOT,
+                       env=mp._env(micro), capture_output=True, text=True)
+    assert r.returncode == 1 and r.stdout == "", r
+    line = r.stderr.strip()
+    assert "\n" not in line and line.startswith("rejected %s: " % cal), line
+    why = line[len("rejected %s: " % cal):]
+    assert "hmc5883l" in why and "refused" not in why and "rejected" not in why  # said once
+    assert os.path.exists(cal + ".rejected") and os.listdir(str(store)) == []
 
 
 def test_gyro_heading_holds_through_the_magnet_the_same_on_both_interpreters():
@@ -86,7 +120,7 @@ def usage_lines(name):
     """(host line, board line) from the docstring of examples/<name>.py."""
     doc = open(os.path.join(mp.ROOT, "examples", name + ".py")).read().split('"""')[1]
     host = [ln.split("#")[0].strip() for ln in doc.splitlines()
-            if ln.strip().startswith("python examples/%s.py" % name)]
+            if ln.strip().startswith("python3 examples/%s.py" % name)]
     board = [ln.split("#")[0].strip() for ln in doc.splitlines()
              if ln.strip().startswith("from examples.%s import " % name)]
     assert len(host) == 1 and len(board) == 1, (name, host, board)
@@ -98,7 +132,7 @@ def host_argv(line, tmp):
     cal = str(tmp / "calibration.json")
     values = {"[SECONDS]": "6", "[N]": "2", "[PATH]": str(tmp / "log.csv"),
               "[MAX_BYTES]": "2000", "FILE": cal, "[STORE_DIR]": str(tmp / "new_store")}
-    words = line.split()[1:]                     # without "python"
+    words = line.split()[1:]                     # without "python3"
     return [values.get(w, w) for w in words]
 
 

@@ -20,7 +20,8 @@ from host_sim.cli import wmm
 from host_sim.cli.benchmarks import fieldacc
 from tests import intcheck, mp
 
-pygeomag = pytest.importorskip("pygeomag")
+pygeomag = pytest.importorskip("pygeomag", reason="pygeomag not installed (requirements.txt: "
+                               "make venv)")
 ROOT = mp.ROOT
 TABLE = os.path.join(ROOT, "firmware", "field", "wmm2025.bin")
 

@@ -420,7 +420,8 @@ def pg_url():
             pw = pwd.getpwnam("postgres")
         except KeyError:
             shutil.rmtree(d)
-            pytest.skip("running as root and there is no postgres user to run the server")
+            pytest.skip("running as root and there is no postgres user to run the server (Debian's "
+                        "postgresql package makes it: make postgres)")
         os.chown(d, pw.pw_uid, pw.pw_gid)
         kw = {"user": pw.pw_uid, "group": pw.pw_gid}
     s = socket.socket()

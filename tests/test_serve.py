@@ -114,7 +114,7 @@ def _app_heading_rms(s):
     return math.sqrt(ss / len(yaws))
 
 
-@pytest.mark.parametrize("chip", ["gy87", "qmc5883l", "hmc5883l"])
+@pytest.mark.parametrize("chip", ["gy87", "qmc5883l", "qmc5883p", "hmc5883l"])
 def test_motioncal_loop_sends_cal_within_60_s_confirms_and_heads_within_1_deg(chip):
     r = calibrate_like_motioncal(chip, seed=1)
     s, mc = r["session"], r["mc"]
@@ -247,9 +247,10 @@ def _serve(*args, **kw):
                             stderr=subprocess.PIPE, **kw)
 
 
-def test_serve_on_a_pipe_applies_a_packet_and_motioncal_confirms_the_echo():
+@pytest.mark.parametrize("chip", ["gy87", "qmc5883p"])
+def test_serve_on_a_pipe_applies_a_packet_and_motioncal_confirms_the_echo(chip):
     p = _packet()
-    proc = _serve("--protocol", "motioncal", "--chip", "gy87", "--seed", "1", "--fast",
+    proc = _serve("--protocol", "motioncal", "--chip", chip, "--seed", "1", "--fast",
                   "--seconds", "3")
     out, err = proc.communicate(b"noise" + p, timeout=60)
     assert proc.returncode == 0, err
@@ -268,7 +269,7 @@ def test_serve_usage_error_is_one_line_exit_2():
     assert err.count(b"\n") == 1 and b"--protocol" in err
 
 
-@pytest.mark.skipif(not hasattr(os, "openpty"), reason="no pseudo-terminals here")
+@pytest.mark.skipif(not hasattr(os, "openpty"), reason="no pseudo-terminals here (os.openpty: Linux and macOS)")
 def test_serve_on_a_pty_like_motioncal_would_open_it():
     import tty
     proc = _serve("--pty", "--fast", "--seconds", "20")

@@ -45,7 +45,8 @@ COUNTS_PER_GAUSS = 1000   # web/webcal.py: MotionCal's 0.1 uT counts
 
 def _why_skip():
     if shutil.which("node") is None:
-        return "browser tier skipped: node not found on PATH"
+        return ("browser tier skipped: node not found on PATH (install Node.js and npm, then "
+                "make web)")
     if not os.path.exists(CHROMIUM):
         return ("browser tier skipped: %s missing (as root: apt-get install -y chromium; "
                 "`make web` does it)" % CHROMIUM)
@@ -290,6 +291,26 @@ def test_bundle_refuses_an_unknown_loader(tmp_path):
     # an export left over after the two expected ones is refused too
     with pytest.raises(UsageError):
         webcli.port_script(LOADER + "export const y=2;")
+
+
+def test_a_clone_without_the_port_is_told_what_make_web_needs(tmp_path, monkeypatch, capsys):
+    # a fresh clone: no build/npm; `python -m host_sim web` says what gets it and what that
+    # needs (node and npm), and which of them this machine lacks
+    (tmp_path / "firmware").mkdir()
+    with pytest.raises(UsageError) as e:
+        webcli.vendor(str(tmp_path))
+    msg = str(e.value)
+    assert "\n" not in msg and "`make web`" in msg and "Node.js and npm on PATH" in msg
+    monkeypatch.setattr(webcli.shutil, "which", lambda name: None)
+    with pytest.raises(UsageError) as e:
+        webcli.vendor(str(tmp_path))
+    assert str(e.value).endswith("not found here: node and npm (e.g. as root: apt-get install "
+                                 "-y nodejs npm)")
+    # through the command: one line on stderr, exit 2
+    monkeypatch.setattr(webcli, "PKG_DIR", os.path.join("build", "no-such-npm-folder"))
+    assert webcli.main(["--vendor"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "`make web`" in err and "not found here: node" in err
 
 
 def test_manifest_lists_every_firmware_module(tmp_path):

@@ -16,8 +16,7 @@ from host_sim.world import World
 CHIP = "gy271"              # host_sim.boards chip; ACCEL adds a GY-521 module
 ACCEL = True
 SEED = 1
-BREAKOUT = "gy271"          # mounting: see boards/breakouts.py
-MAG_AXES = "x,-y,-z"
+MAG_AXES = "x,-y,-z"        # the GY-271 flat, X arrow forward (boards/breakouts.py)
 ACCEL_AXES = "-x,y,z"       # GY-521 lying like the breakout (x forward, y left, z up)
 DECLINATION_CDEG = 0
 MODE = "compass"            # "compass": headings, self-calibrating; "motioncal": stream to

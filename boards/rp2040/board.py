@@ -7,9 +7,8 @@ I2C_ID = 0
 SCL_PIN = 5
 SDA_PIN = 4
 I2C_FREQ = 400000           # Hz
-BREAKOUT = "gy271"          # sensor mounting: see boards/breakouts.py (gy271, gy273, gy87)
-MAG_AXES = "x,-y,-z"        # sensor -> body of BREAKOUT's magnetometer (boards/breakouts.py;
-ACCEL_AXES = "-x,y,z"       # a GY-521 MPU6050 lying the same way; tests/test_app.py checks both)
+MAG_AXES = "x,-y,-z"        # sensor -> body: a GY-271/273/87 flat, X arrow forward (another
+ACCEL_AXES = "-x,y,z"       # mounting: boards/breakouts.py); a GY-521 MPU6050 lying the same way
 DECLINATION_CDEG = 0        # local magnetic declination, centidegrees east-positive (NOAA/WMM)
 MODE = "compass"            # "compass": headings, self-calibrating; "motioncal": stream to
 #                             PJRC MotionCal and take its Send Cal (docs/motioncal.md)

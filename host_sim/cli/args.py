@@ -291,7 +291,7 @@ class Parser:
         return opts
 
     def help_text(self):
-        lines = ["usage: python -m %s %s %s" % (PROG, self.command, self.usage)]
+        lines = ["usage: python3 -m %s %s %s" % (PROG, self.command, self.usage)]
         if self.description:
             lines += ["", self.description.rstrip("\n")]
         rows = []

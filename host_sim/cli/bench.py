@@ -1427,7 +1427,7 @@ def soak_section(res):
         SOAK_BEGIN,
         "### Fault campaign",
         "",
-        "`python -m host_sim soak` as `make soak` runs it (docs/faults.md), at the bench's size: "
+        "`python3 -m host_sim soak` as `make soak` runs it (docs/faults.md), at the bench's size: "
         "%d sessions x %d simulated s, seed %d, every fault class, and %d fault-free sessions "
         "beside them whose non-ok samples are false alarms. Counts, not times: the same on "
         "every machine (%.0f s here). `make soak` runs 600 sessions."

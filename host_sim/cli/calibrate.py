@@ -67,8 +67,8 @@ def _parser():
              help="{choices} (default 10)")
     p.option("--json", "flag", help="print one JSON object (keys below); nothing else on stdout")
     p.option("--out", "path", metavar="CAL.json",
-             help="write the calibration file a board loads (needs --sensor;\n"
-                  "format: host_sim/cli/calfile.py)")
+             help="write the calibration file a board loads (needs --sensor,\n"
+                  "or the log's sensor line; format: host_sim/cli/calfile.py)")
     p.option("--force", "flag",
              help="fit even when acceptance refuses (too few samples, planar,\n"
                   "fit error...): the result says forced and why; exit 0")
@@ -76,7 +76,9 @@ def _parser():
              help="the board's magnetometer: qmc5883l, hmc5883l, qmc5883p, or\n"
                   "its breakout gy271, gy273, gy87 (any case, '-' ignored); the\n"
                   "file is then in its counts (or --units) and V, B are the\n"
-                  "board's. Another chip's log: no --sensor, --units or --scale")
+                  "board's. Another chip's log: no --sensor, --units or --scale.\n"
+                  "Default: the log's line '# CHIP range_code N ...' (what\n"
+                  "examples/log_csv.py writes); an option that differs wins")
     p.option("--range", "str", metavar="G",
              help="its full scale in gauss (qmc5883l 2|8, qmc5883p 30|12|8|2,\n"
                   "hmc5883l 0.88|1.3|1.9|2.5|4.0|4.7|5.6|8.1; default: the\n"
@@ -88,7 +90,9 @@ def _parser():
              help="the file's units: counts, uT, mG, G, nT (any case; with a\n"
                   "micro sign, microtesla, gauss, milligauss, nanotesla too);\n"
                   "uT/mG/G/nT files are converted to the board's counts (or\n"
-                  "checked against 10..90 uT)")
+                  "checked against 10..90 uT). Default: the units the header's\n"
+                  "names state ('Mag_X (uT)', 'mx_mG', 'x [G]'); a --units that\n"
+                  "differs wins, with a warning")
     p.option("--scale", "decimal", lo="0.000001", hi=1000000, metavar="K",
              help="counts per file unit, instead of --units (e.g. 6.6667 for\n"
                   "an AK09916 log in uT: 0.15 uT per count)")
@@ -134,10 +138,11 @@ warning naming the line, on stderr; errors and warnings always go to stderr.
 JSON: model, offset, field, invw (W^-1, det 1; file units), scale (counts per file unit),
 invw_q15, offset_counts, field_counts, field_out_counts (the magnitude the compass checks),
 fit_error_x100, fit_error_percent, samples_used, coverage_percent, date, rows, skipped_rows,
-forced, refusal, warnings, and sensor, range_gauss, range_code, counts_per_gauss, field_ut
-when known; mounting (a log with accelerometer columns: the mounting check, its verdict
-and the MAG_AXES the data say; docs/calibration.md, troubleshooting); after a refusal
-{"rejected", "detail", "hint", rows, samples_held}.
+units (the file's: --units, else the header's, else null), forced, refusal, warnings, and
+sensor, range_gauss, range_code, counts_per_gauss, field_ut when known; mounting (a log with
+accelerometer columns: the mounting check, its verdict and the MAG_AXES the data say;
+docs/calibration.md, troubleshooting); after a refusal {"rejected", "detail", "hint", rows,
+samples_held}.
 
 --sensor takes a chip or its breakout in any case (GY-271 is read as its QMC5883L, with a
 warning naming the other chip it may carry). A log of a chip the firmware does not drive
@@ -178,8 +183,10 @@ class Board:
             self.cpg = cpg
             self.output = calfile.SENSORS[self.sensor]["output"]
         if opts["out"] is not None and self.sensor is None:
-            raise UsageError("--out %s needs --sensor (and --range): a board checks both "
-                             "before it loads a calibration" % opts["out"])
+            raise UsageError("--out %s needs --sensor (and --range), or a log whose first "
+                             "lines name them ('# qmc5883l range_code 0', as "
+                             "examples/log_csv.py writes): a board checks both before it "
+                             "loads a calibration" % opts["out"])
 
 
 def conversion(opts, board, mag, path):
@@ -266,6 +273,7 @@ def run(opts):
     from firmware.calibrate.calibrator import Calibrator
 
     path = opts["file"]
+    opts, board_note = logged_board(opts, path)
     board = Board(opts)
     log = logfile.Log(path, opts["columns"], opts["skip"])
     mag = logfile.Magnitude()
@@ -285,6 +293,7 @@ def run(opts):
             raise UsageError("%s: no data rows left after --skip %d" % (path, opts["skip"]))
         raise UsageError("%s: no data rows%s" % (path, " after the header (line %d)"
                                                  % log.header_line if log.header_line else ""))
+    opts, units_note = header_units(opts, log)
     num, den, cpg, p = conversion(opts, board, mag, path)
     capacity, separation, step = desktop_plan(log.rows_read, opts["capacity"],
                                               opts["separation"], opts["board_like"])
@@ -331,7 +340,10 @@ def run(opts):
     if board.sensor is not None and outside * 2 > rows:
         note = calopts.range_advice(board, opts, outside, rows, peak,
                                     calopts.named_sensor(path))
-    info = {"rows": rows, "range_note": note, "outside": outside, "used": used, "railed": cal.railed + markers,
+        board_note = None   # the advice names the log's chip already
+    info = {"rows": rows, "range_note": note, "units": opts["units"], "units_note": units_note,
+            "board_note": board_note, "logged_board": opts.get("logged_board"),
+            "outside": outside, "used": used, "railed": cal.railed + markers,
             "skipped": log.skipped,
             "warnings": log.warnings, "num": num, "den": den, "p": p, "cpg": cpg,
             "held": cal.count, "separation": cal.separation, "step": step, "board": board,
@@ -358,6 +370,77 @@ def run(opts):
         return None, rej, info
     info["forced"] = rej
     return c, None, info
+
+
+def logged_board(opts, path):
+    """(opts, note): the sensor and range a log's comment line names (examples/log_csv.py:
+    `# qmc5883l range_code 0 ...`, the board's counts) are the board's when no option says
+    what the numbers are (--sensor, --counts-per-gauss, --units other than counts, --scale);
+    an option that differs from the line wins, with a note."""
+    try:
+        named = calopts.logged_board(path)
+    except ValueError as e:
+        raise UsageError("%s: %s" % (path, e))
+    if named is None:
+        return opts, None
+    chip, rng, line = named
+    opts = dict(opts)
+    given = opts["sensor"]
+    units = opts["units"] not in (None, "counts")
+    if given is None and opts["counts_per_gauss"] is None and not units \
+            and opts["scale"] is None:
+        opts["logged_board"] = line
+        opts["sensor"] = (chip, None)
+        if opts["range"] is None:
+            opts["range"] = rng
+        elif _entry(chip, opts["range"])[1] != calfile.range_entry(chip, rng)[1]:
+            return opts, _differs("--range %s" % opts["range"], line)
+        return opts, None
+    why = None
+    if given is not None:
+        g = given if isinstance(given, str) else given[0]
+        rg = opts["range"] or calfile.SENSORS[g]["default_range"]
+        if g != chip or _entry(g, rg)[0] != rng:
+            why = "--sensor %s%s" % (g, "" if opts["range"] is None
+                                     else " --range %s" % opts["range"])
+    elif units:
+        why = "--units %s" % opts["units"]
+    elif opts["counts_per_gauss"] is not None \
+            and opts["counts_per_gauss"] != calfile.range_entry(chip, rng)[2]:
+        why = "--counts-per-gauss %d" % opts["counts_per_gauss"]
+    return opts, _differs(why, line)
+
+
+def _differs(why, line):
+    if why is None:
+        return None
+    return "%s differs from the log's line %r: read as %s says (the options win)" % (
+        why, line, why)
+
+
+def _entry(chip, rng):
+    try:
+        return calfile.range_entry(chip, rng)
+    except ValueError as e:
+        raise UsageError("--range %s: %s" % (rng, e))
+
+
+def header_units(opts, log):
+    """(opts, note): the units the header's column names state ('Mag_X (uT)', 'mx_mG', 'x [G]')
+    are the file's when neither --units nor --scale says; an explicit --units that differs
+    from them wins, with a note (one warning line) saying so."""
+    said = log.header_units()
+    if said is None:
+        return opts, None
+    if opts["units"] is None and opts["scale"] is None:
+        opts = dict(opts)
+        opts["units"] = said
+        return opts, None
+    if opts["units"] is not None and opts["units"] != said:
+        return opts, ("--units %s differs from the header's units, %s (%s): the file is read "
+                      "as %s (--units wins)" % (opts["units"], said,
+                                                ", ".join(log.column_names()), opts["units"]))
+    return opts, None
 
 
 def _unit(v, num, den):
@@ -391,7 +474,7 @@ def report(c, info, date):
         "fit_error_percent": c.fit_error / 100,
         "samples_used": c.samples,
         "rows": info["rows"], "skipped_rows": info["skipped"], "rail_samples": info["railed"],
-        "warnings": warning_list(info),
+        "units": info["units"], "warnings": warning_list(info),
     })
     if info["cpg"]:
         r["field_ut"] = c.field * 100 / info["cpg"]
@@ -404,14 +487,16 @@ def warning_list(info):
     """The JSON's warnings: the rows skipped (the first few, by line), then what the options
     and the log say together (a breakout read as its chip; most rows outside the chip)."""
     out = ["line %d: %s" % w for w in info["warnings"]]
-    for w in (info["board"].note, info.get("range_note")):
+    for w in (info["board"].note, info.get("board_note"), info.get("range_note"),
+              info.get("units_note")):
         if w:
             out.append(w)
     return out
 
 
 def _print_notes(info):
-    for w in (info["board"].note, info.get("range_note")):
+    for w in (info["board"].note, info.get("board_note"), info.get("range_note"),
+              info.get("units_note")):
         if w:
             warn(COMMAND, w)
 
@@ -443,19 +528,16 @@ def _refused(opts, rej, info):
     fail = info.get("force_failed")
     if fail is not None:
         hint = "even --force cannot fit: %s: %s" % (fail.reason, fail.detail)
-    print("%s %s: calibration refused (%s): %s; try: %s"
-          % ("host_sim", COMMAND, rej.reason, rej.detail, hint), file=sys.stderr)
+    # once, on stderr (stdout carries only a result: the JSON record with --json)
+    print("%s %s: calibration refused (%s): %s (%d rows, %d skipped; %d samples held, "
+          "separation %d counts); try: %s"
+          % ("host_sim", COMMAND, rej.reason, rej.detail, info["rows"], info["skipped"],
+             info["held"], info["separation"], hint), file=sys.stderr)
     if opts["json"]:
         print(json.dumps({"rejected": rej.reason, "detail": rej.detail, "hint": hint,
                           "rows": info["rows"], "skipped_rows": info["skipped"],
                           "rail_samples": info["railed"],
                           "samples_held": info["held"], "warnings": warning_list(info)}))
-    else:
-        print("calibration refused: %s" % rej.reason)
-        print("  %s" % rej.detail)
-        print("  try: %s" % hint)
-        print("  %d rows (%d skipped), %d samples held (separation %d counts)"
-              % (info["rows"], info["skipped"], info["held"], info["separation"]))
     return STATUS_REFUSED
 
 
@@ -510,8 +592,9 @@ def _print_text(r, c, info, opts):
                                            info["separation"], r["scale"]))
     print("coverage       %d %%" % c.coverage)
     if b.sensor:
-        print("board          %s at %s G (range code %d, %d counts/G)"
-              % (b.sensor, b.range_gauss, b.range_code, b.cpg))
+        print("board          %s at %s G (range code %d, %d counts/G)%s"
+              % (b.sensor, b.range_gauss, b.range_code, b.cpg,
+                 "; the log's line %r" % info["logged_board"] if info["logged_board"] else ""))
     if opts["out"]:
         print("written        %s" % opts["out"])
 

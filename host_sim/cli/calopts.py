@@ -3,6 +3,7 @@ not fit the options given.
 
     sensor("GY-271")   -> ("qmc5883l", note)   a chip in any case, or a breakout's name
     units("µT")        -> "uT"                 a unit in any spelling the docs use
+    logged_board("mag_log.csv") -> ("qmc5883l", "2", line)   examples/log_csv.py's first line
     range_advice(...)                          most rows outside the stated chip's output
     value_columns(fields, cols)                'Mx 34 My -292 Mz 420': --columns 2,4,6
 
@@ -100,6 +101,36 @@ def named_sensor(path):
             for name in calfile.SENSOR_NAMES:
                 if name.encode() in s:
                     return name
+    return None
+
+
+def logged_board(path):
+    """(chip, range in gauss as text, the line) from the comment line examples/log_csv.py writes
+    above its header, `# qmc5883l range_code 0 counts_per_gauss 12000`, or None when the log's
+    first lines hold none. ValueError when the line names a range or sensitivity the chip
+    does not have."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(2048)
+    except OSError:
+        return None
+    for raw in head.split(b"\n")[:20]:
+        line = raw.strip()
+        if line[:1] != b"#":
+            continue
+        text = "".join([chr(c) if c < 128 else "?" for c in line])   # any bytes, any port
+        w = text[1:].split()
+        if len(w) < 3 or w[0].lower() not in calfile.SENSOR_NAMES or w[1] != "range_code":
+            continue
+        chip = w[0].lower()
+        for rng, code, cpg in calfile.SENSORS[chip]["ranges"]:
+            if w[2] == str(code):
+                if len(w) >= 5 and w[3] == "counts_per_gauss" and w[4] != str(cpg):
+                    raise ValueError("%r: %s's range code %s is %s G at %d counts/G, not %s"
+                                     % (text, chip, code, rng, cpg, w[4]))
+                return chip, rng, text
+        raise ValueError("%r: %s has no range code %s (%s)" % (text, chip, w[2], ", ".join(
+            ["%d: %s G" % (c, r) for r, c, _ in calfile.SENSORS[chip]["ranges"]])))
     return None
 
 

@@ -1,4 +1,4 @@
-"""`python -m host_sim demo --chip {qmc5883l,hmc5883l,gy87} --seed N [--json]`: the whole story.
+"""`python -m host_sim demo --chip CHIP --seed N [--json]`: the whole story (CHIP_CHOICES).
 
 A simulated board with strong hard and soft iron, a user doing a figure-8 while the firmware's
 CompassApp calibrates, the calibration it accepts (against the world's true iron), and the
@@ -29,10 +29,11 @@ from array import array
 
 from host_sim.cli.args import STATUS_REFUSED, Parser
 
-CHIP_CHOICES = ("qmc5883l", "hmc5883l", "gy87")
+CHIP_CHOICES = ("qmc5883l", "qmc5883p", "hmc5883l", "gy87")
 # --chip -> (make_board chip, accel argument, breakout for the magnetometer's axes, label)
 _BOARDS = {
     "qmc5883l": ("gy271", True, "gy271", "GY-271 (QMC5883L) + GY-521 (MPU6050)"),
+    "qmc5883p": ("qmc5883p", True, "gy271", "newer GY-271 (QMC5883P) + GY-521 (MPU6050)"),
     "hmc5883l": ("hmc5883l", True, "gy273", "GY-273 (HMC5883L) + GY-521 (MPU6050)"),
     "gy87": ("gy87", None, "gy87", "GY-87 (MPU6050 + HMC5883L behind its bypass)"),
 }
@@ -48,6 +49,7 @@ HARD_IRON_MAX = 3.0
 SOFT_IRON_EIGS = ((0.75, 0.90), (0.90, 1.10), (1.10, 1.30))  # W eigenvalue ranges
 RANGE_MARGIN = 1.10          # installer's margin over the largest expected reading
 QMC_RANGES_G = (2, 8)        # hardware.md: +-2 G / +-8 G
+QMCP_RANGES_G = (2, 8, 12, 30)  # QMC5883P: +-2 / 8 / 12 / 30 G (firmware/qmc5883p.py)
 HMC_RATE_HZ = 75             # its fastest continuous rate (default 15 Hz): more samples per
                              # gesture and a 128-reading average in 1.7 s, not 8.5 s
 HMC_RANGES_G = (0.88, 1.3, 1.9, 2.5, 4.0, 4.7, 5.6, 8.1)  # hardware.md, per gain code 0..7
@@ -78,8 +80,9 @@ def parser(command="demo", description=None):
                "The simulated board calibrates during a figure-8 and reports its heading "
                "accuracy.")
     p.option("--chip", "choice", default="qmc5883l", choices=CHIP_CHOICES, metavar="CHIP",
-             help="qmc5883l (GY-271 + MPU6050 module), hmc5883l (GY-273 +\n"
-                  "MPU6050 module) or gy87 (MPU6050 + HMC5883L on one board);\n"
+             help="qmc5883l (GY-271 + MPU6050 module), qmc5883p (a newer\n"
+                  "GY-271 + MPU6050 module), hmc5883l (GY-273 + MPU6050\n"
+                  "module) or gy87 (MPU6050 + HMC5883L on one board);\n"
                   "default qmc5883l")
     p.option("--seed", "int", default=1, metavar="N",
              help="the world (iron) and the sensors' noise; default 1")
@@ -173,13 +176,14 @@ def largest_reading_ut(v, w, field_ut=FIELD_UT):
 
 def pick_range(kind, need_ut):
     """The most sensitive range holding need_ut x RANGE_MARGIN: ('range', G) for the
-    QMC5883L, ('gain', code) for the HMC5883L, with the full scale in G."""
+    QMC5883L and QMC5883P, ('gain', code) for the HMC5883L, with the full scale in G."""
     need_g = need_ut * RANGE_MARGIN / 100
-    if kind == "qmc5883l":
-        for r in QMC_RANGES_G:
+    if kind in ("qmc5883l", "qmc5883p"):
+        table = QMC_RANGES_G if kind == "qmc5883l" else QMCP_RANGES_G
+        for r in table:
             if need_g <= r:
                 return "range", r, r
-        return "range", QMC_RANGES_G[-1], QMC_RANGES_G[-1]
+        return "range", table[-1], table[-1]
     for code in range(len(HMC_RANGES_G)):
         if need_g <= HMC_RANGES_G[code]:
             return "gain", code, HMC_RANGES_G[code]
@@ -220,7 +224,7 @@ class Setup:
         self.chip = chip
         self.seed = seed
         self.label = label
-        self.kind = "qmc5883l" if chip == "qmc5883l" else "hmc5883l"
+        self.kind = chip if chip in ("qmc5883l", "qmc5883p") else "hmc5883l"
         self.hard_iron_ut, self.soft_iron, self.soft_eigs = demo_iron(seed)
         self.stage = Stage(motion.figure8(period_s=seconds))
         self.world = World(field_ut=FIELD_UT, inclination_deg=INCLINATION_DEG,
@@ -481,7 +485,7 @@ def print_world(setup, seconds):
           % "; ".join(" ".join("%6.3f" % w[i][j] for j in range(3)) for i in range(3)))
     print("               eigenvalues %s, principal axes rotated"
           % " ".join("%.3f" % e for e in setup.soft_eigs))
-    if setup.kind == "qmc5883l":
+    if setup.kind in ("qmc5883l", "qmc5883p"):
         rng = "+-%d G" % setup.full_scale_g
     else:
         rng = "+-%s G (gain code %d)" % (setup.full_scale_g, setup.mag.range_code)

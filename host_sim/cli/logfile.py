@@ -11,7 +11,8 @@ sign or micro sign in a header does not matter), LF, CRLF or CR line ends, field
 by ',', ';', tab or spaces (the separator is the header's most frequent one; with ';' or tab
 a decimal comma is accepted). Lines before the header (metadata such as 'Fs,50.00') and lines
 starting with '#' are skipped. The x, y, z columns come from the header (HEADER_PREFIXES: mx,
-my, mz / magX.. / mag_x.. / x, y, z ..., units in brackets ignored) or from columns= (1-based).
+my, mz / magX.. / mag_x.. / x, y, z ..., units in brackets or as a suffix) or from columns=
+(1-based); header_units() is the unit those names state ('Mag_X (uT)', 'mx_mG', 'x [G]').
 
 A corrupt data row - a field that is not a decimal number (text, nan, inf, an exponent beyond
 +-30 such as 1e30000), a short or empty row, a line longer than MAX_LINE bytes - is skipped,
@@ -80,6 +81,36 @@ def find_columns(names):
                     idx.append(norm.index(key))
             if len(idx) == 3:
                 return tuple(idx)
+    return None
+
+
+def name_unit(name):
+    """The unit a column's name states, as --units spells it: 'Mag_X (uT)' -> 'uT', 'x [G]' ->
+    'G', 'mx_mG' -> 'mG', 'mz (\u00b5T)' -> 'uT', 'mx_raw' -> 'counts'; None when it states none.
+    A non-ASCII byte reaches here as '?' (_text): '?T' / '??T' in brackets is a micro sign's."""
+    from host_sim.cli.calopts import UNIT_NAMES, units
+    word, depth = [], 0
+    for c in name:
+        if c in "([{":
+            depth += 1
+            word = []
+        elif c in ")]}" and depth:
+            depth -= 1
+            k = "".join(word).strip()
+            if k[:1] == "?" and k.strip("?") == "T":
+                return "uT"
+            try:
+                return units(k)
+            except ValueError:
+                pass
+        elif depth:
+            word.append(c)
+    n = normalise_name(name)
+    for p in HEADER_PREFIXES:
+        if n[:len(p)] == p and n[len(p):len(p) + 1] in ("x", "y", "z"):
+            u = UNIT_NAMES.get(n[len(p) + 1:])
+            if u is not None:
+                return u
     return None
 
 
@@ -224,6 +255,18 @@ class Log:
         if self.names is not None:
             return [self.names[c] for c in self.columns]
         return ["column %d" % (c + 1) for c in self.columns]
+
+    def header_units(self):
+        """The unit the x, y, z columns' header names state (name_unit), or None: no header
+        (known after a pass of rows()), no unit named, or the three disagree."""
+        if self.names is None:
+            return None
+        found = set()
+        for c in self.columns:
+            u = name_unit(self.names[c]) if c < len(self.names) else None
+            if u is not None:
+                found.add(u)
+        return found.pop() if len(found) == 1 else None
 
     def _start(self, lines):
         """Consume preamble and header; returns the first data line or None. A later pass

@@ -143,14 +143,25 @@ def vendor(root=ROOT):
     dst = os.path.join(root, "web", "vendor")
     missing = [f for f in PORT_FILES if not os.path.isfile(os.path.join(src, f))]
     if missing:
-        raise UsageError("%s not found in %s: run `make wasm` (npm ci in tests/wasm) first"
-                         % (", ".join(missing), src))
+        raise UsageError(missing_port_message(missing, src))
     os.makedirs(dst, exist_ok=True)
     for f in PORT_FILES:
         shutil.copyfile(os.path.join(src, f), os.path.join(dst, f))
     write_manifest(root)
     write_bundle(root)
     return dst
+
+
+def missing_port_message(missing, src):
+    """What a clone without the WebAssembly port needs: `make web` once, which downloads it
+    with npm (so node and npm on PATH), and which of the two is missing here."""
+    lacking = [t for t in ("node", "npm") if shutil.which(t) is None]
+    return ("%s not in %s: the page runs on the MicroPython WebAssembly port from npm; `make "
+            "web` installs it once (npm ci of tests/wasm/package-lock.json into build/npm, 17 "
+            "MB), which needs Node.js and npm on PATH%s"
+            % (", ".join(missing), src, "; not found here: %s (e.g. as root: apt-get install "
+                                        "-y nodejs npm)" % " and ".join(lacking)
+               if lacking else ""))
 
 
 def refresh(root=ROOT):
