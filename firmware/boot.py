@@ -37,10 +37,9 @@ def _import(cal_file, store, mag):
 
 
 def calibrated(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, model=10):
-    """(ok, mag): ok True when the heading can start (a calibration file waits to be
-    imported, or the store holds a good-enough fit for the chip found: the model asked for,
-    fit error within 5 %), False when boards/main.py runs the calibration program; mag the
-    driver found (start(mag=...) takes it)."""
+    """(ok, mag): ok when the heading can start (a calibration file waits, or the store holds
+    a good-enough fit for the chip found), else boards/main.py runs the calibration program;
+    mag: the driver found, which start(mag=...) takes."""
     from firmware import detect
     from firmware.calibration import GOOD_FIT_ERROR, Calibration
     from firmware.store import CalStore
