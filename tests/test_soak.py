@@ -2,7 +2,8 @@
 every fault class included, magnets too: step() never raises, no stored calibration is lost
 or replaced by a worse one, no heading is "ok" while wrong by more than the documented
 accuracy (docs/faults.md: 5 deg), every fault that needs detecting is detected within a
-second, and the fault-free sessions run alongside raise no false alarm."""
+second, and the fault-free sessions run alongside raise no false alarm. Beside it: the goals
+make soak exits 1 on."""
 import subprocess
 import sys
 
@@ -32,6 +33,36 @@ def test_a_short_fault_campaign_has_no_exception_no_loss_and_no_wrong_but_ok():
     c = st["clean"]
     assert c["sessions"] == 10 and c["steps"] > 9000
     assert c["not_ok"] <= c["steps"] // 1000 and c["wrong_but_ok"] == 0
+
+
+def test_each_goal_missed_is_named_and_the_command_exits_1(monkeypatch, capsys):
+    good = soak.campaign(sessions=1, seconds=5, seed=1, clean=1)
+    assert good["goals_failed"] == [] and soak.failed_goals(good) == []
+    bad = dict(good, exceptions=1, lost=1, wrong_but_ok=2, wrong_by_class={"magnet": 2},
+               clean=dict(good["clean"], steps=1000, not_ok=2, wrong_but_ok=1),
+               faults={"magnet": 3}, detect_ms={"magnet": {"n": 2, "median_ms": 60.0,
+                                                            "max_ms": 1200.0}})
+    got = soak.failed_goals(bad)
+    assert [g.split(" (")[0] for g in got] == [
+        "exceptions out of step() 1", "calibrations lost 1", "wrong-but-ok 2",
+        "fault-free wrong-but-ok 1", "fault-free not ok 2 of 1000 samples",
+        "magnet detected after 1200.0 ms", "magnet detected 2 of 3"]
+    assert soak.failed_goals(dict(bad, gyro=True)) == got[:5]  # "gyro held" vouches instead
+    bad["goals_failed"] = got
+    monkeypatch.setattr(soak, "campaign", lambda *a, **k: bad)
+    assert soak.main(["--sessions", "1"]) == 1
+    last = capsys.readouterr().out.splitlines()[-1]
+    assert last.startswith("goals: FAILED: exceptions out of step() 1")
+    assert last.endswith("magnet detected 2 of 3 (goal all)")
+    monkeypatch.setattr(soak, "campaign", lambda *a, **k: good)
+    assert soak.main(["--sessions", "1"]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == "goals: all met"
+
+
+def test_soak_only_names_the_campaigns_sessions():
+    p = subprocess.run([sys.executable, "-m", "host_sim", "soak", "--sessions", "10",
+                        "--only", "12"], capture_output=True, text=True)
+    assert p.returncode == 2 and p.stderr.count("\n") == 1 and "0..11" in p.stderr
 
 
 def test_soak_bad_arguments_are_one_line_and_exit_2():
