@@ -70,9 +70,10 @@ there is no good calibration yet, collect and solve one in the background.
 # steady clean samples (.dip, firmware/health.py DipCheck; an accepted fit is saved at once,
 # and once more with its dip when it is learned). A fast change of |B| or the dip (a magnet
 # moving in) is interference too, and a heading that jumps by > 4 deg between two samples
-# while the tilt holds still is "heading jumped". Any of these starts a spell (FieldWatch):
-# the status stays until the field is back where it was before, or the board has turned ~30
-# deg with clean samples for 2 s, or 10 s of clean samples (docs/faults.md). If the flags
+# (or by 4 deg plus 25 deg/s over two steps) while the tilt holds still is "heading jumped".
+# Any of these starts a spell (FieldWatch): the status stays until the field is back where it
+# was before, or the board has turned ~30 deg with clean samples for 2 s, or 10 s of clean
+# samples (docs/faults.md). If the flags
 # keep coming for _STALE_US (a spell never ended meanwhile) the calibration no longer
 # describes the board (its hard iron changed): collection restarts (.relearning) and any new
 # accepted fit replaces the stale one.
@@ -114,8 +115,8 @@ STATUS_STALE = "stale data"           # the magnetometer repeats its last sample
 STATUS_RESET = "sensor reset"         # its control registers no longer hold our configuration
 STATUS_TILT = "tilt unavailable"      # the accelerometer is implausible: level-board heading
 STATUS_INTERNAL = "internal error"    # step() caught an unexpected exception (e.g. MemoryError)
-STATUS_JUMP = "heading jumped"        # it moved > 4 deg since the last sample: a magnet moving
-#                                       in, or a turn too fast for the sample rate to follow
+STATUS_JUMP = "heading jumped"        # it moved > 4 deg in a sample (or 5 over two at 50 Hz):
+#                                       a magnet moving in, or a turn too fast to follow
 STATUS_NO_MEMORY = "out of memory"  # the heap cannot hold a job the board needs (.no_memory
 #                                       says which: "start", "load", "calibrate", "heading");
 #                                       it keeps running and tries again

@@ -28,7 +28,11 @@ of a field that moved (FieldWatch). Loaded with the heading line."""
 #   within 45 deg of level is a "jump": a sample may be ~1.5 periods old when used, so such
 #   a heading lags the truth by ~6 deg, and a magnet moving in turns the heading without
 #   touching the tilt (consecutive headings differ by 0.43 deg RMS on the GY-271, at most 3.4
-#   deg in 120,000 fault-free samples). Any flag - the windows, the dip, a shift, a jump -
+#   deg in 120,000 fault-free samples). So is a move of more than 4 deg plus 25 deg/s of turn
+#   over two still steps (5 deg at 50 Hz): a magnet moving in over several samples at just
+#   under 4 deg each is seen by the second. A two-step change carries the noise of two
+#   headings, as a one-step change does, so the limit adds only the turn of the longer time
+#   (docs/faults.md). Any flag - the windows, the dip, a shift, a jump -
 #   starts a spell, and the status stays until the evidence says the field is clean again:
 #   a magnet carried with the board acts as a hard-iron offset (AN4246 eq. 5) and keeps |B|
 #   and the dip inside their windows at some orientations while the heading is tens of
@@ -56,6 +60,7 @@ _DIP_MIN_SAMPLES = const(8)     # ...and at least 8 of them (the mean's noise < 
 _DIP_MAX_SAMPLES = const(2048)  # sums stay below 2**26
 _KANG_PER_RAD = const(10430)    # 65536 / (2 pi): a fit error (1e-4 rad of direction) -> KANG
 _JUMP_KANG = const(728)         # 4 deg from one sample to the next (see FieldWatch above)
+_TURN_KANG_PER_S = const(4551) # 25 deg/s: the turn two steps may add to that (FieldWatch above)
 _TILT_STILL_KANG = const(182)   # 1 deg of pitch and of roll from one sample to the next
 _LEVEL_KANG = const(8192)       # 45 deg: jumps are judged within this of level
 _STEADY_SHIFT = const(3)        # short averages over ~2**3 samples
@@ -164,6 +169,9 @@ class FieldWatch:
         self.g0_ok = False
         # the previous sample: heading (-1: none), tilt; the short averages of |b| and dip (x 8)
         self.prev_h, self.prev_tilt, self.prev_pitch, self.prev_roll = -1, False, 0, 0
+        self.step_h = 0                   # the last still, clean step's heading change...
+        self.step_us = 0                  # ...and its time
+        self.dt = 0                       # this sample's time (sample())
         self.mag8, self.dip8 = 0, 0
         self.shift = 2
         self.turn2 = 0
@@ -219,6 +227,7 @@ class FieldWatch:
         self.n = (self.n + 1) & 0x3FFF
         if not self.on:
             return 0
+        self.dt = dt
         k = self._flags(tilt)
         if k:
             self._mark(k)
@@ -246,11 +255,16 @@ class FieldWatch:
         if self.prev_h < 0 or tilt != self.prev_tilt:
             self.mag8 = c.magnitude << _STEADY_SHIFT  # after a gap, another calibration
             self.dip8 = c.dip_kang << _STEADY_SHIFT   # or tilt mode: start afresh
+            self.step_h = 0
         elif self._field_moved() | self._dip_moved(tilt):  # both: each updates its average
             k = SPELL_SHIFT
+            self.step_h = 0
         elif self._jumped(tilt):
             k = SPELL_JUMP
-        return SPELL_FIELD if c.interference else k
+        if c.interference:
+            self.step_h = 0
+            return SPELL_FIELD
+        return k
 
     def _field_moved(self):
         a = self.mag8
@@ -268,12 +282,22 @@ class FieldWatch:
         return tilt and (d > a or d < -a)
 
     def _jumped(self, tilt):
+        # one step, then two: .step_h is the last step's change (0 when that step was not
+        # still or raised a flag), .step_us its time
         c = self.c
         if tilt and (_off(c.pitch_kang - self.prev_pitch, _TILT_STILL_KANG)
                      or _off(c.roll_kang - self.prev_roll, _TILT_STILL_KANG)
                      or _off(c.pitch_kang, _LEVEL_KANG) or _off(c.roll_kang, _LEVEL_KANG)):
+            self.step_h = 0
             return False
-        return _off(c.heading_kang - self.prev_h, _JUMP_KANG)
+        d = ((c.heading_kang - self.prev_h + 32768) & 0xFFFF) - 32768
+        s = self.step_h + d
+        self.step_h = 0
+        if _off(d, _JUMP_KANG) or _off(s, _two_steps(self.step_us + self.dt)):
+            return True
+        self.step_h = d
+        self.step_us = self.dt
+        return False
 
     def _mark(self, k):
         # a flag (re)starts the spell; the turn is measured from this sample's field
@@ -324,6 +348,15 @@ def _off(d, lim):
     # |d| > lim for an angle difference in KANG (wrapped to -32768..32767)
     d = ((d + 32768) & 0xFFFF) - 32768
     return d > lim or d < -lim
+
+
+def _two_steps(us):
+    # the limit over two steps lasting `us`: _JUMP_KANG and the turn at _TURN_KANG_PER_S;
+    # `us` held to 8 s (two of the app's steps are at most 8 sample periods), so the product
+    # stays below 2**26
+    if us > 8000000:
+        us = 8000000
+    return _JUMP_KANG + (us // 1000) * _TURN_KANG_PER_S // 1000
 
 
 def _copy(a, b):

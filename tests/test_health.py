@@ -4,7 +4,10 @@ compass states so each rule is seen alone. The app-level scenarios are in
 tests/test_faults.py and the campaign in tests/test_soak.py."""
 from array import array
 
-from firmware import compass
+from hypothesis import given
+from hypothesis import strategies as st
+
+from firmware import compass, fieldwatch
 from firmware.calibration import Calibration
 from firmware.compass import Compass
 from firmware.fieldwatch import DipCheck, FieldWatch
@@ -66,12 +69,17 @@ class Board:
             for i in range(3):
                 self.body[i] = body[i]
 
-    def run(self, n, **kw):
+    def run(self, n, dt=PERIOD, **kw):
         out = []
         for _ in range(n):
             self.set(**kw)
-            out.append(self.w.sample(True, PERIOD))
+            out.append(self.w.sample(True, dt))
         return out
+
+    def turn(self, start, step, n, dt=PERIOD):
+        """n samples whose heading moves by `step` deg each, from `start`: their flags."""
+        return [self.run(1, dt, mag=4527, dip=DIP60, heading=k(start + step * (i + 1)))[0]
+                for i in range(n)]
 
 
 def test_a_calibration_saved_with_its_dip_arms_the_check_at_once():
@@ -107,6 +115,38 @@ def test_a_jump_needs_a_still_level_tilt():
     b = Board(dip=DIP60)
     b.run(5, mag=4527, dip=DIP60, heading=0, pitch=k(60))
     assert b.run(1, mag=4527, dip=DIP60, heading=k(8), pitch=k(60)) == [0]  # steep: no
+
+
+def test_a_drift_under_4_deg_a_step_is_a_jump_once_two_steps_pass_4_deg_and_25_deg_per_s():
+    # a magnet moving in over several samples: 3.8 deg a step passes the one-step limit, but
+    # two steps are 7.6 deg, beyond 4 deg plus 25 deg/s x 40 ms = 5 deg (docs/faults.md)
+    b = Board(dip=DIP60)
+    b.run(5, mag=4527, dip=DIP60, heading=0)
+    assert b.turn(0, 3.8, 2) == [0, SPELL_JUMP]
+    # a steady turn of 2 deg a step (100 deg/s at 50 Hz) is 4 deg over two: no flag
+    b = Board(dip=DIP60)
+    b.run(5, mag=4527, dip=DIP60, heading=0)
+    assert b.turn(0, 2.0, 30) == [0] * 30
+    # the allowance is a turn rate: at 15 Hz two steps of 3.5 deg (52 deg/s) are within
+    # 4 + 25 x 0.133 = 7.3 deg; at 50 Hz (175 deg/s) they are not
+    b = Board(dip=DIP60)
+    b.run(5, 66667, mag=4527, dip=DIP60, heading=0)
+    assert b.turn(0, 3.5, 10, dt=66667) == [0] * 10
+    b = Board(dip=DIP60)
+    b.run(5, mag=4527, dip=DIP60, heading=0)
+    assert b.turn(0, 3.5, 2) == [0, SPELL_JUMP]
+
+
+def test_two_steps_count_only_still_unflagged_ones():
+    # a step that tilted, or that was itself flagged, does not count towards the next one
+    b = Board(dip=DIP60)
+    b.run(5, mag=4527, dip=DIP60, heading=0)
+    assert b.run(1, mag=4527, dip=DIP60, heading=k(3.5), pitch=k(2)) == [0]  # tilting
+    assert b.run(1, mag=4527, dip=DIP60, heading=k(7), pitch=k(2)) == [0]    # 3.5 still
+    b = Board(dip=DIP60)
+    b.run(5, mag=4527, dip=DIP60, heading=0)
+    assert b.run(1, mag=4527, dip=DIP60, heading=k(30)) == [SPELL_JUMP]
+    assert b.run(1, mag=4527, dip=DIP60, heading=k(32)) == [0]  # the jump is not counted again
 
 
 def test_a_spell_ends_when_the_field_is_back_where_it_was():
@@ -162,3 +202,12 @@ def test_the_field_differences_stay_small_ints():
         b.w.use(Calibration(model=10, field=f, field_out=f))
         d = (32767 + 32768) >> b.w.shift
         assert 3 * d * d < 2 ** 30 and (f >> b.w.shift) < 2 ** 11
+
+
+@given(st.integers(0, 2 ** 31 - 1), st.integers(-32768, 32767), st.integers(-32768, 32767))
+def test_the_two_step_jump_limit_stays_a_small_int(us, d, s):
+    # any two steps' time (the app caps each at 4 sample periods; here anything) and any two
+    # wrapped heading changes
+    t = fieldwatch._two_steps(us)
+    assert 728 <= t <= 728 + 8000 * 4551 // 1000 and abs(d + s) < 2 ** 17
+    assert fieldwatch._two_steps(40000) == 728 + 182     # 4 deg + 25 deg/s x 40 ms: 5 deg

@@ -137,6 +137,18 @@ def test_no_false_alarm_over_a_seeded_soak_of_right_settings_on_rough_boards():
     assert st["last"].get(mountcheck.OK, 0) >= SOAK_SESSIONS - 3, st["last"]
 
 
+def test_the_soak_command_names_its_goal_and_exits_1_on_a_false_alarm(monkeypatch, capsys):
+    st = {"sessions": 1, "seed": 1, "seconds": 40, "checks": 2, "false_alarms": 0, "alarms": [],
+          "last": {"ok": 1}, "board": {"ok": 1}, "worst_sigma_q10": 40}
+    monkeypatch.setattr(M, "soak", lambda *a: st)
+    assert M.main(["--sessions", "1"]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == "goal: no false alarm: met"
+    st.update(false_alarms=1, alarms=[[100003, "qmc5883l", 12.5, mountcheck.WRONG, "y,x,-z"]])
+    assert M.main(["--sessions", "1"]) == 1
+    last = capsys.readouterr().out.splitlines()[-1]
+    assert last == "goal: no false alarm: FAILED, 1 (100003 qmc5883l 12.5 %s)" % mountcheck.WRONG
+
+
 def test_wrong_settings_on_random_rough_boards_and_worlds_are_found():
     for i in range(12):
         s = M.random_session(7 * 100003 + i, wrong=True, rough=True)

@@ -237,7 +237,11 @@ def report(st):
                               ", ".join("%s %d" % kv for kv in sorted(st["last"].items())),
                               st["worst_sigma_q10"] / 1024.0),
             "the board's own check (app.mounting at the end): %s"
-            % ", ".join("%s %d" % kv for kv in sorted(st["board"].items()))]
+            % ", ".join("%s %d" % kv for kv in sorted(st["board"].items())),
+            "goal: no false alarm: %s" % ("FAILED, %d (%s)" % (
+                st["false_alarms"], "; ".join(" ".join(str(v) for v in a[:4])
+                                              for a in st["alarms"][:5]))
+                                          if st["false_alarms"] else "met")]
 
 
 # ---- offline: a log with accelerometer columns (the calibrate command) ----------------------
@@ -371,6 +375,9 @@ def main(argv):
              help="seconds of dance per session")
     p.option("--seed", "int", default=1, lo=0, metavar="K", help="the campaign's seed")
     p.option("--json", "flag", help="one JSON object")
+    p.epilog = ("goal: no false alarm (no check says \"wrong\" with the right settings).\n"
+                "exit status: 0 the goal met; 1 a false alarm (the report's last line, or\n"
+                "false_alarms and alarms with --json, says which); 2 bad usage.")
 
     def body(o):
         st = soak(o["sessions"], o["seed"], o["seconds"])

@@ -1,6 +1,7 @@
 """`python -m host_sim soak`: a seeded fault campaign against the simulated board (make soak).
 
-    python -m host_sim soak [--sessions N] [--seconds S] [--seed K] [--clean C] [--gyro] [--json]
+    python -m host_sim soak [--sessions N] [--seconds S] [--seed K] [--clean C] [--only K]...
+                            [--gyro] [--json]
 
 Each session boots CompassApp from a store holding a good calibration (a GY-271 + MPU6050 or
 a GY-87, strong hard and soft iron, the board turning slowly and tilting), and injects
@@ -12,7 +13,13 @@ calibration at least as good as the good one), "wrong-but-ok" samples - status "
 calibration in force, and a heading error above ACCURACY_DEG - and, per fault class, the
 median and worst time from injection to the first non-ok status (docs/faults.md). Then C
 fault-free sessions (default one in ten) on the next streams: the same boards and motions
-with no fault and no reboot, whose non-ok samples are false alarms.
+with no fault and no reboot, whose non-ok samples are false alarms. Last, the goals (GOALS,
+docs/faults.md): the exit status is 1 when one fails, and the line says which.
+
+Each session is seeded on its own (stream k of the seed), so --only K runs session K of
+the campaign alone, as the whole campaign runs it (K from --sessions on: a fault-free one):
+`--seed 1 --sessions 600 --only 554` replays the one session of make soak that once held a
+heading "ok" while a magnet moved in (tests/test_soak.py).
 
 --gyro runs every app with the gyro-aided heading (CompassApp.use_gyro, docs/gyro.md) where
 an MPU6050 answers at boot: a "gyro held" sample then claims a good heading as "ok" does, and
@@ -32,7 +39,7 @@ from host_sim.boards import make_board
 from host_sim.prng import Prng
 from host_sim.world import World
 
-from host_sim.cli.args import Parser
+from host_sim.cli.args import Parser, UsageError
 from host_sim.cli.memfs import MemFs
 
 from firmware.app import CompassApp
@@ -244,35 +251,83 @@ def reboot(app, b, fs, stats, gyro=False):
     return app_on(b, CalStore("/", fs=fs), gyro)
 
 
-def campaign(sessions, seconds, seed, clean=None, gyro=False):
+def campaign(sessions, seconds, seed, clean=None, gyro=False, only=None):
     """The campaign: `sessions` sessions with faults, then `clean` fault-free ones (None:
     one in ten, at least 2) on streams after them, whose non-ok samples are false alarms;
-    gyro: every app with use_gyro() where it has an MPU6050."""
+    gyro: every app with use_gyro() where it has an MPU6050; only: run just these sessions
+    of it (stream numbers; from `sessions` on, fault-free ones)."""
     goods = [good_calibration(s, a) for s, a in SETUPS]
     if clean is None:
         clean = max(2, sessions // 10)
+    ks = range(sessions + clean) if only is None else sorted(set(only))
+    if ks and not 0 <= ks[0] <= ks[-1] < sessions + clean:
+        raise ValueError("only: sessions 0..%d" % (sessions + clean - 1))
     stats = {"sessions": sessions, "seconds_per_session": seconds, "seed": seed, "steps": 0,
-             "gyro": gyro,
+             "gyro": gyro, "only": None if only is None else list(ks),
              "faults": {}, "reboots": 0, "exceptions": 0, "lost": 0, "wrong_but_ok": 0,
              "wrong_by_class": {}, "detect_ms": {}, "reboot_cleared": {},
              "accuracy_deg": ACCURACY_DEG,
-             "clean": {"sessions": clean, "steps": 0, "not_ok": 0, "by_status": {},
-                       "wrong_but_ok": 0}}
-    for k in range(sessions):
-        session(k, seed, seconds, goods, stats, gyro=gyro)
-    for k in range(sessions, sessions + clean):
-        session(k, seed, seconds, goods, stats, faults=False, gyro=gyro)
+             "clean": {"sessions": sum(1 for k in ks if k >= sessions), "steps": 0,
+                       "not_ok": 0, "by_status": {}, "wrong_but_ok": 0}}
+    for k in ks:
+        session(k, seed, seconds, goods, stats, faults=k < sessions, gyro=gyro)
     det = {}
     for cls, v in sorted(stats["detect_ms"].items()):
         v = sorted(v)
         det[cls] = {"n": len(v), "median_ms": round(v[len(v) // 2], 1), "max_ms": round(v[-1], 1)}
     stats["detect_ms"] = det
     stats["total_faults"] = sum(stats["faults"].values())
+    stats["goals_failed"] = failed_goals(stats)
     return stats
 
 
+# The campaign's goals (docs/faults.md): make soak exits 1 when one fails. Faults that need
+# no detection: a stall (a pause), an accelerometer found missing at boot (the app runs
+# without it), a range glitch (one to the same sensitivity changes nothing).
+NEED_NO_DETECTION = ("stall", "accel_absent", "range")
+DETECT_MS = 1000.0
+GOALS = ("no exception out of step()",
+         "no calibration lost",
+         "wrong-but-ok 0 (status ok, heading more than %.0f deg off)" % ACCURACY_DEG,
+         "fault-free sessions: wrong-but-ok 0, at most 1 in 1000 samples not ok",
+         "every fault that needs it detected while it lasts, within %.0f ms\n"
+         "    (not with --gyro: 'gyro held' vouches for the heading instead)" % DETECT_MS)
+
+
+def failed_goals(st):
+    """The goals `st` (campaign()'s figures) misses, one text each naming the figure."""
+    out = []
+    if st["exceptions"]:
+        out.append("exceptions out of step() %d (goal 0; last %s)"
+                   % (st["exceptions"], st.get("last_exception")))
+    if st["lost"]:
+        out.append("calibrations lost %d (goal 0)" % st["lost"])
+    if st["wrong_but_ok"]:
+        out.append("wrong-but-ok %d (goal 0; by class %s)"
+                   % (st["wrong_but_ok"], st["wrong_by_class"]))
+    c = st["clean"]
+    if c["wrong_but_ok"]:
+        out.append("fault-free wrong-but-ok %d (goal 0)" % c["wrong_but_ok"])
+    if c["not_ok"] * 1000 > c["steps"]:
+        out.append("fault-free not ok %d of %d samples (goal at most 1 in 1000)"
+                   % (c["not_ok"], c["steps"]))
+    if st.get("gyro"):
+        return out
+    for cls in CLASSES:
+        d = st["detect_ms"].get(cls)
+        if d is not None and d["max_ms"] >= DETECT_MS:
+            out.append("%s detected after %.1f ms (goal under %.0f)" % (cls, d["max_ms"],
+                                                                       DETECT_MS))
+        n = st["faults"].get(cls, 0)
+        seen = (d["n"] if d else 0) + st["reboot_cleared"].get(cls, 0)
+        if cls not in NEED_NO_DETECTION and seen < n:
+            out.append("%s detected %d of %d (goal all)" % (cls, seen, n))
+    return out
+
+
 def parser():
-    p = Parser("soak", "[--sessions N] [--seconds S] [--seed K] [--clean C] [--gyro] [--json]",
+    p = Parser("soak", "[--sessions N] [--seconds S] [--seed K] [--clean C] [--only K]... "
+               "[--gyro] [--json]",
                "A seeded fault campaign against the simulated board (docs/faults.md).")
     p.option("--sessions", "int", default=40, lo=1, hi=100000, metavar="N",
              help="sessions with faults (default 40; make soak: 600)")
@@ -282,22 +337,32 @@ def parser():
              help="campaign seed (default 1)")
     p.option("--clean", "int", lo=0, hi=100000, metavar="C",
              help="fault-free sessions (default one in ten, at least 2)")
+    p.option("--only", "int", lo=0, hi=200000, metavar="K", repeat=True,
+             help="run only session K of the campaign (each is seeded on its own, so it runs\n"
+                  "as in the whole campaign; K >= N: a fault-free one); may be repeated")
     p.option("--gyro", "flag", help="the apps run the gyro-aided heading (use_gyro)")
     p.option("--json", "flag", help="the figures as one JSON object")
-    p.epilog = "exit status: 0 done; 2 bad usage."
+    p.epilog = ("goals (docs/faults.md), checked on the sessions run:\n"
+                + "".join("  - %s\n" % g for g in GOALS)
+                + "exit status: 0 every goal met; 1 a goal failed (the report's last line, or\n"
+                  "goals_failed with --json, says which); 2 bad usage.")
     return p
 
 
 def body(opts):
     n = opts["sessions"]
     clean = opts["clean"] if opts["clean"] is not None else max(2, n // 10)
-    st = campaign(n, opts["seconds"], opts["seed"], clean, opts["gyro"])
+    only = opts["only"] or None
+    if only is not None and max(only) >= n + clean:
+        raise UsageError("--only %d: this campaign's sessions are 0..%d (%d with faults, then "
+                         "%d fault-free)" % (max(only), n + clean - 1, n, clean))
+    st = campaign(n, opts["seconds"], opts["seed"], clean, opts["gyro"], only)
     if opts["json"]:
         print(json.dumps(st, sort_keys=True))
-        return 0
-    for line in report(st):
-        print(line)
-    return 0
+    else:
+        for line in report(st):
+            print(line)
+    return 1 if st["goals_failed"] else 0
 
 
 def main(argv):
@@ -307,9 +372,13 @@ def main(argv):
 def report(st):
     """The campaign's table as lines (make soak prints them; make bench puts them in
     docs/benchmarks.md)."""
-    out = ["soak: %d sessions x %d s, seed %d%s" % (
+    only = st.get("only")
+    out = ["soak: %d sessions x %d s, seed %d%s%s" % (
                st["sessions"], st["seconds_per_session"], st["seed"],
-               ", gyro-aided heading (ok or gyro held count as good)" if st.get("gyro") else ""),
+               ", gyro-aided heading (ok or gyro held count as good)" if st.get("gyro") else "",
+               ", only session%s %s of them" % ("s" if len(only) > 1 else "",
+                                                ", ".join(str(k) for k in only))
+               if only else ""),
            "steps %d  faults %d  reboots %d  exceptions %d  calibrations lost %d  "
            "wrong-but-ok %d (ok and > %.0f deg)" % (st["steps"], st["total_faults"],
                                                      st["reboots"], st["exceptions"],
@@ -326,6 +395,9 @@ def report(st):
     if st.get("reboot_cleared"):
         out.append("cleared by a reboot before any step read them: %s" % st["reboot_cleared"])
     out.append(false_alarms(st["clean"], st["seconds_per_session"]))
+    if "goals_failed" in st:
+        failed = st["goals_failed"]
+        out.append("goals: FAILED: %s" % "; ".join(failed) if failed else "goals: all met")
     return out
 
 
