@@ -135,8 +135,8 @@ def test_a_shift_below_the_limit_and_one_state_pass():
 
 
 def test_noise_alone_never_refuses_even_when_the_halves_differ_by_more():
-    # white noise of 10 % of B: the halves' centres differ by more than 3 % by chance, but
-    # the residual does not follow from one sample to the next
+    # white noise of 10 % of B: the halves differ by more than 3 % by chance, but within the
+    # noise (chi-square below 16; the noise from consecutive samples)
     pts = ellipsoid_points(3000, seed=5, noise=600.0)
     cal = Calibrator(model=10, capacity=300, max_fit_error=10000)
     for p in pts:
