@@ -46,12 +46,14 @@
 #                     covering part of the sphere is compared only where the other half was
 #                     too), and |c| is more than CONSISTENCY_PCT (3 %) of B - a fit between
 #                     the two states is ~1.5 % of B, ~1.7 deg of heading at 60 deg dip, off
-#                     either - and beyond the sample noise (chi-square of c above 16, the
-#                     noise from consecutive samples' differences). Fewer than 3 shared
-#                     regions, or shared regions near a plane: no verdict. The samples mix
-#                     two hard-iron states (a magnet for part of the collection, a relay or
-#                     motor switching) or a drifting one. The 4- and 7-element fits are not
-#                     judged this way. The collector then drops the held samples
+#                     either -, beyond the sample noise (chi-square of c above 16, the noise
+#                     from consecutive samples' differences), and the fit's largest error
+#                     (|c| / 2, what a mix moves the centre, above the fit's RMS residual;
+#                     else its fit error already says more). Fewer than 3 shared regions, or
+#                     shared regions near a plane: no verdict. The samples mix two hard-iron
+#                     states (a magnet for part of the collection, a relay or motor
+#                     switching) or a drifting one. The 4- and 7-element fits are not judged
+#                     this way. The collector then drops the held samples
 #                     (firmware.calibrator.Collector): the next fit sees one state.
 from firmware.calibration import MINMAX, ORDER
 from firmware.compat import const
@@ -103,8 +105,8 @@ _COVERAGE_FIT_NUM = const(3)        # ...if its fit error is within 3/2 of the c
 _COVERAGE_FIT_DEN = const(2)        # a fit over part of the sphere looks better than it is
 # inconsistent_samples: the hard iron changed by more than 3 % of B between the halves where
 # they saw the same directions, with a chi-square above 16 against the noise (3 degrees of
-# freedom: 16.3 is exceeded once in 1000 by chance); shared directions flatter than
-# det < (trace / 3)^3 / 20 are not judged.
+# freedom: 16.3 is exceeded once in 1000 by chance), and by more than twice the fit's RMS
+# residual; shared directions flatter than det < (trace / 3)^3 / 20 are not judged.
 CONSISTENCY_PCT = const(3)
 _CHI2 = const(16)
 _FLAT_HALF = const(20)
@@ -235,15 +237,19 @@ def half_is_flat(det, tr):
     return tr <= 0 or 27 * _FLAT_HALF * det < tr * tr * tr
 
 
-def check_consistency(d2, den2, field, n, chi, noise):
+def check_consistency(d2, den2, field, n, chi, noise, ee):
     # inconsistent_samples when the hard-iron change between the halves, |c|^2 = d2 / den2 (in
-    # the units of `field`, the fit's |B| in those units), is more than CONSISTENCY_PCT of B
-    # and beyond the noise of the n samples: its chi-square chi / noise above _CHI2.
+    # the units of `field`, the fit's |B| in those units), is more than CONSISTENCY_PCT of B,
+    # beyond the noise of the n samples (its chi-square chi / noise above _CHI2), and more
+    # than twice the fit's RMS residual, sqrt(ee / n) / (2 B) (ee: the sum of the samples'
+    # (|b|^2 - B^2)^2): a mix moves the fit's centre by |c| / 2, the fit's largest error then.
     f2 = field * field * den2
     if d2 * 10000 <= CONSISTENCY_PCT * CONSISTENCY_PCT * f2:
         return
     if chi <= _CHI2 * noise:
         return  # within the noise: no second state in it
+    if d2 * n * field * field <= ee * den2:
+        return  # |c| / 2 within the fit's RMS residual: its fit error says more
     from firmware.fixedpoint import isqrt
     pct = isqrt(d2 * 100000000 // f2)  # hundredths of a percent
     reject(REASON_INCONSISTENT, "the older and newer halves of the %d samples put the hard "

@@ -412,7 +412,7 @@ class Calibrator:
         k = array("h", tuple(invw) + tuple(offset))
         r = [None]
         yield from _consistency_sums(self.buffer, k, s, field_out >> s, r)
-        m, g, used, dd = r[0]
+        m, g, used, dd, ee = r[0]
         if used < 3:
             return  # fewer than 3 directions seen by both halves: no verdict
         adj = solve.adj3(m)
@@ -423,11 +423,12 @@ class Calibrator:
         p = solve.mat_vec3(adj, g)
         yield
         # the change is p / (2 det) (|.|^2 = d2 / den2); its chi-square against the sample
-        # noise, g^T M^-1 g / sigma^2 with sigma^2 = dd / (2 (n - 1)), is chi / noise
+        # noise, g^T M^-1 g / sigma^2 with sigma^2 = dd / (2 (n - 1)), is chi / noise; ee is
+        # the fit's sum of squared residuals e
         d2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2]
         chi = (g[0] * p[0] + g[1] * p[1] + g[2] * p[2]) * 2 * (n - 1)
         self._verify(acceptance.check_consistency, d2, 4 * det * det, field_out >> s, n,
-                     chi, dd * det)
+                     chi, dd * det, ee)
 
     def _finish(self, model, n, offset, w, b_q16, fe, accept):
         # InvW in Q15, the checks of firmware/acceptance.py in order, then the record
@@ -474,10 +475,10 @@ def _consistency_sums(buf, k, s, f, out):
     # e = |b|^2 - f^2 = a_r + 2 b.c [newer] + noise, a free level a_r per region absorbing
     # whatever misfit depends on the direction (least squares with region effects). Pass 1
     # sums, per region, the samples, the newer ones, sum e and the newer ones' sum b, and
-    # dd = sum (e' - e)^2 over consecutive samples (the noise); pass 2, over the newer samples
-    # in shared regions, S = sum b b^T and G = sum e b. Then M = S - sum_r P P^T / N_r and
-    # g = G - sum_r P E_r / N_r give M c = g / 2. out[0] = (M, g, shared regions, dd);
-    # _CONSISTENCY_CHUNK samples a slice.
+    # dd = sum (e' - e)^2 over consecutive samples (the noise) and ee = sum e^2; pass 2, over
+    # the newer samples in shared regions, S = sum b b^T and G = sum e b. Then
+    # M = S - sum_r P P^T / N_r and g = G - sum_r P E_r / N_r give M c = g / 2.
+    # out[0] = (M, g, shared regions, dd, ee); _CONSISTENCY_CHUNK samples a slice.
     n = buf.count
     h = n // 2
     reg = bytearray(n)                     # each sample's region (_NO_REGION: none)
@@ -489,6 +490,7 @@ def _consistency_sums(buf, k, s, f, out):
     b = array("h", (0, 0, 0))
     f2 = f * f
     dd = 0
+    ee = 0
     prev = 0
     for age in range(n):
         buf.sample(buf.slot_by_age(age), raw)
@@ -497,6 +499,7 @@ def _consistency_sums(buf, k, s, f, out):
         y = b[1] >> s
         z = b[2] >> s
         e = x * x + y * y + z * z - f2
+        ee += e * e
         if age:
             d = e - prev
             dd += d * d
@@ -560,7 +563,7 @@ def _consistency_sums(buf, k, s, f, out):
         t[8] -= rdiv(pz * es[r], c)
         yield
     m, g = _sym(t)
-    out[0] = (m, g, used, dd)
+    out[0] = (m, g, used, dd, ee)
 
 
 def _sym(t):
