@@ -226,7 +226,7 @@ def _consistency(name, *extra):
         c, rej, _ = calibrate.run(calibrate._parser().parse([log_path(name)] + list(extra)))
     finally:
         acceptance.check_consistency = orig
-    return seen[0][0], seen[0][1], None if rej is None else rej.reason
+    return seen[-1][0], seen[-1][1], None if rej is None else rej.reason
 
 
 @pytest.mark.parametrize("name", [n for n in ALL_LOGS if n != PLANAR])
