@@ -142,3 +142,22 @@ def _filled(pts):
     for i in range(0, len(pts), 3):
         cal.add(pts[i], pts[i + 1], pts[i + 2])
     return cal
+
+
+def test_the_same_rows_are_left_out_under_micropython(tmp_path):
+    # the calibrate command also runs on MicroPython (a log of 20000 rows within its heap:
+    # glitches.kth counts instead of sorting copies); the same rows out, the same fit
+    from tests.test_cli_robust import mp_call
+    rows = good_rows()
+    bad = rows[:1000] + [ZERO] + rows[1000:2000] + [RAIL] + rows[2000:] + [OFF, FAR]
+    path = write(tmp_path, bad)
+    keys = ("offset_counts", "invw_q15", "field_counts", "fit_error_x100", "glitch_rows")
+    res = [mp_call([path, "--json"], micro) for micro in (False, True)]
+    for rc, out, err in res:
+        assert rc == 0 and err.count("\n") == 1, err
+    cp, mpy = json.loads(res[0][1]), json.loads(res[1][1])
+    assert [cp[k] for k in keys] == [mpy[k] for k in keys]
+    assert cp["glitch_rows"] == {"all_zero": 1, "rails": 1, "outside_range": 1,
+                                 "off_ellipsoid": 1}
+    rc, out, err = mp_call([LOG, "--json"], True)   # the whole shipped log, 22745 rows
+    assert rc == 0 and json.loads(out)["model"] == 10, err

@@ -337,8 +337,8 @@ def run(opts):
     names = None
     outside = 0  # rows beyond the stated chip's output: its counts they are not
     peak = 0     # the largest |value| of those, in counts
-    pts = array("h")    # the rows used, in counts: x, y, z of row i at 3i .. 3i + 2
-    lines = array("i")  # and their line numbers
+    pts = array("h", bytes(6 * log.rows_read))  # the rows used, in counts: row i at 3i..3i+2
+    lines = array("i", bytes(4 * log.rows_read))  # and their line numbers
     zeros = 0           # all-zero rows (glitches.py): a failed read
     for lineno, row in log.rows():
         v = [logfile.convert(m, d, num, den) for m, d in row]
@@ -364,9 +364,11 @@ def run(opts):
         if 32767 in v or -32768 in v:
             railed += 1
             continue
+        pts[3 * used] = v[0]
+        pts[3 * used + 1] = v[1]
+        pts[3 * used + 2] = v[2]
+        lines[used] = lineno
         used += 1
-        pts.extend(v)
-        lines.append(lineno)
     keep = bytearray(b"\x01" * used)
     far = glitches.box_outliers(pts, keep)   # before any fit: rows far outside the others
     for i in far:
