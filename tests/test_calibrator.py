@@ -303,9 +303,11 @@ def test_ten_element_solve_of_a_full_buffer_takes_under_100_ms_on_micropython():
 
 def test_calibrator_results_are_bit_identical_on_micropython():
     lines = mp.json_lines(mp.parity(["tests/scenarios/calibrator_parity.py"]))
-    assert len(lines) == 7
+    assert len(lines) == 8
     assert [r[0] for r in lines[1:5]] == ["minmax", "4", "7", "10"]
     assert all(len(r[1]) == calibration.PAYLOAD_SIZE for r in lines[1:5])   # all accepted
+    # the halves check's sums, on the real log (accepted) and on two hard-iron states
+    assert lines[7][0] == ["10", "inconsistent_samples"] and len(lines[7][1]) == 2
 
 
 # ---- acceptance: every reason reachable ----------------------------------------------------

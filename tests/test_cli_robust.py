@@ -482,16 +482,13 @@ def test_every_dataset_calibrates_or_is_refused_for_a_reason(name, capsys):
     if "planar" in name:
         assert rc == 1 and r["rejected"] == "planar"
         return
-    if name == "icm20948_ak09916_jremington":
-        # every sample held: its two halves disagree on the hard iron (in float64 too:
-        # tests/test_datasets.py); --force fits it, marked forced
-        assert rc == 1 and r["rejected"] == "inconsistent_samples" and "--skip" in r["hint"]
-        rc, out, err = call(capsys, *argv + ["--force"])
-        r = json.loads(out)
-        assert r["forced"] and r["refusal"] == "inconsistent_samples"
-        assert err.count("\n") == 1 and "warning: forced" in err
-        err = ""  # that one warning, checked
-    assert rc == 0 and r["model"] == 10 and r["skipped_rows"] == 0 and err == ""
+    # at most one row in a hundred left out, far off the fit (host_sim/cli/glitches.py), and
+    # said in one line
+    g = r["glitch_rows"]
+    assert g["off_ellipsoid"] * 100 <= r["rows"] and g["off_ellipsoid"] + g["all_zero"] + \
+        g["rails"] + g["outside_range"] == g["off_ellipsoid"]
+    assert err == "" if not g["off_ellipsoid"] else err.count("\n") == 1 and "far off" in err
+    assert rc == 0 and r["model"] == 10 and r["skipped_rows"] == 0
     assert r["fit_error_x100"] < 1000 and r["coverage_percent"] >= 80
     if "field_ut" in r:
         assert 40 < r["field_ut"] < 60                      # a magnet-free room

@@ -135,8 +135,8 @@ def test_a_shift_below_the_limit_and_one_state_pass():
 
 
 def test_noise_alone_never_refuses_even_when_the_halves_differ_by_more():
-    # white noise of 10 % of B: the halves' centres differ by more than 3 % by chance, but
-    # the residual does not follow from one sample to the next
+    # white noise of 10 % of B: the halves differ by more than 3 % by chance, but within the
+    # noise (chi-square below 16; the noise from consecutive samples)
     pts = ellipsoid_points(3000, seed=5, noise=600.0)
     cal = Calibrator(model=10, capacity=300, max_fit_error=10000)
     for p in pts:
@@ -155,3 +155,24 @@ def test_the_collector_drops_mixed_samples_after_the_refusal():
     while col.job is not None:
         col.slice()
     assert col.last_reason == INCONSISTENT and col.calibrator.count == 0
+
+
+def test_each_condition_of_the_check_can_spare_a_fit():
+    # check_consistency(d2, den2, field, n, chi, noise, ee): |c| = sqrt(d2 / den2) against
+    # 3 % of field, chi / noise against 16, |c|^2 n field^2 against ee (|c| / 2 against the
+    # fit's RMS residual sqrt(ee / n) / (2 field))
+    field, n = 1000, 200
+    ee_small = n * (2 * field * 10) ** 2      # RMS residual 10 counts = 1 % of B
+
+    def refused(pct_x10, chi, ee):
+        d2 = (field * pct_x10) ** 2           # |c| = pct_x10 / 1000 of B, den2 = 1000^2
+        try:
+            acceptance.check_consistency(d2, 1000 ** 2, field, n, chi, 1, ee)
+        except CalibrationRejected as e:
+            assert e.reason == INCONSISTENT and "where they saw the same directions" in e.detail
+            return True
+        return False
+    assert refused(31, 17, ee_small)
+    assert not refused(29, 17, ee_small)      # within 3 % of B
+    assert not refused(31, 16, ee_small)      # within the noise
+    assert not refused(31, 17, 4 * ee_small)  # |c| / 2 = 1.55 % under the RMS residual, 2 %

@@ -38,24 +38,22 @@
 #                     a higher-order model gets through at <= 3.5 % (NXP), and a fit covering
 #                     15 points more of the sphere at up to 3/2 the aged fit error.
 #   inconsistent_samples  (10-element fits) the older and the newer half of the held samples
-#                     (in the order they were kept) disagree about the hard iron: with the fit's
-#                     shape and |B|, each half's centre solves (sum b b^T) c = 1/2 sum
-#                     (|b|^2 - B^2) b (the sphere |b - c| = B, linearised), and the two centres
-#                     are more than CONSISTENCY_PCT (3 %) of B apart - a fit between them is
-#                     ~1.5 % of B, ~1.7 deg of heading at 60 deg dip, off either, and what a mix
-#                     leaves grows with it (8 deg and more with a magnet near the sensor for
-#                     part of a first calibration, docs/faults.md) - and not by chance: the
-#                     radial residuals follow from one kept sample to the next (lag-1
-#                     correlation > 1/4; a board is moved continuously, noise is not), or the
-#                     two centres explain the residual far beyond chance (F ratio > 10). The
-#                     samples mix two hard-iron states (a magnet for part of the collection, a
-#                     relay or motor switching) or a drifting one. A half whose samples lie near
-#                     a plane (det of its normal matrix below 1/20 of (trace/3)^3) cannot place
-#                     its centre: no verdict then. The 4- and 7-element fits leave the soft iron
-#                     they cannot model in their residual, which differs from one part of the
-#                     sphere to another, so they are not judged this way; states that alternate
-#                     faster than half a collection put both in each half and show only as a
-#                     high fit error. The collector then drops the held samples
+#                     (in the order they were kept) disagree about the hard iron where they
+#                     saw the same directions: with the fit's shape and |B|, the change c
+#                     solves e = a_r + 2 b.c [newer half] (e = |b|^2 - B^2, the sphere
+#                     |b - c| = B linearised; a_r a free level per equal-area sphere region,
+#                     which absorbs any misfit that depends on the direction, so a half
+#                     covering part of the sphere is compared only where the other half was
+#                     too), and |c| is more than CONSISTENCY_PCT (3 %) of B - a fit between
+#                     the two states is ~1.5 % of B, ~1.7 deg of heading at 60 deg dip, off
+#                     either -, beyond the sample noise (chi-square of c above 16, the noise
+#                     from consecutive samples' differences), and the fit's largest error
+#                     (|c| / 2, what a mix moves the centre, above the fit's RMS residual;
+#                     else its fit error already says more). Fewer than 3 shared regions, or
+#                     shared regions near a plane: no verdict. The samples mix two hard-iron
+#                     states (a magnet for part of the collection, a relay or motor
+#                     switching) or a drifting one. The 4- and 7-element fits are not judged
+#                     this way. The collector then drops the held samples
 #                     (firmware.calibrate.calibrator.Collector): the next fit sees one state.
 from firmware.calibration import MINMAX, ORDER
 from firmware.compat import const
@@ -105,14 +103,12 @@ _FIT_ERROR_UPGRADE = const(350)     # NXP: a higher-order model is accepted at <
 _COVERAGE_GAIN = const(15)          # points of coverage that make a wider fit "better"...
 _COVERAGE_FIT_NUM = const(3)        # ...if its fit error is within 3/2 of the current's:
 _COVERAGE_FIT_DEN = const(2)        # a fit over part of the sphere looks better than it is
-# inconsistent_samples: the halves' centres more than 3 % of B apart (a fit between them is
-# ~1.5 % of B, ~1.7 deg of heading at 60 deg dip, off either), and not by chance: the radial
-# residuals correlated from one kept sample to the next by more than 1/4 (noise: ~0 +- 1 /
-# sqrt(n)), or the two centres' F ratio above 10 (F(6, 200) exceeds 4.6 once in 10000);
-# halves with a normal matrix flatter than det < (trace / 3)^3 / 20 are not judged.
+# inconsistent_samples: the hard iron changed by more than 3 % of B between the halves where
+# they saw the same directions, with a chi-square above 16 against the noise (3 degrees of
+# freedom: 16.3 is exceeded once in 1000 by chance), and by more than twice the fit's RMS
+# residual; shared directions flatter than det < (trace / 3)^3 / 20 are not judged.
 CONSISTENCY_PCT = const(3)
-_RHO_DEN = const(4)
-_F_RATIO = const(10)
+_CHI2 = const(16)
 _FLAT_HALF = const(20)
 
 
@@ -236,29 +232,30 @@ def check_better(model, fe, cov, current, aged):
 
 
 def half_is_flat(det, tr):
-    """True when a half's normal matrix (its samples' b b^T sums: determinant det, trace tr)
-    is too flat to place a centre: det < (tr / 3)^3 / _FLAT_HALF."""
+    """True when a normal matrix of samples (sums of b b^T: determinant det, trace tr) is too
+    flat to place a centre: det < (tr / 3)^3 / _FLAT_HALF."""
     return tr <= 0 or 27 * _FLAT_HALF * det < tr * tr * tr
 
 
-def check_consistency(d2, den2, field, n, ee, ep, red, rest):
-    # inconsistent_samples when the halves' centres differ by |dc| with |dc|^2 = d2 / den2
-    # (in the units of `field`, the fit's |B| in those units) by more than CONSISTENCY_PCT of
-    # B, and that difference is no accident of noise: the residuals follow from one kept
-    # sample to the next (ep / ee > 1/4, with ee the sum of e^2 and ep of e e' over
-    # consecutive samples: a board moved continuously), or the two centres explain the
-    # residual far beyond chance (red / 6 > 10 x rest / (n - 6): the squared residual they
-    # remove, 6 parameters, against what is left, n - 6 degrees of freedom).
+def check_consistency(d2, den2, field, n, chi, noise, ee):
+    # inconsistent_samples when the hard-iron change between the halves, |c|^2 = d2 / den2 (in
+    # the units of `field`, the fit's |B| in those units), is more than CONSISTENCY_PCT of B,
+    # beyond the noise of the n samples (its chi-square chi / noise above _CHI2), and more
+    # than twice the fit's RMS residual, sqrt(ee / n) / (2 B) (ee: the sum of the samples'
+    # (|b|^2 - B^2)^2): a mix moves the fit's centre by |c| / 2, the fit's largest error then.
     f2 = field * field * den2
     if d2 * 10000 <= CONSISTENCY_PCT * CONSISTENCY_PCT * f2:
         return
-    if _RHO_DEN * ep <= ee and red * (n - 6) <= 6 * _F_RATIO * rest:
-        return  # the residual is noise: no second state in it
+    if chi <= _CHI2 * noise:
+        return  # within the noise: no second state in it
+    if d2 * n * field * field <= ee * den2:
+        return  # |c| / 2 within the fit's RMS residual: its fit error says more
     from firmware.fixedpoint import isqrt
     pct = isqrt(d2 * 100000000 // f2)  # hundredths of a percent
     reject(REASON_INCONSISTENT, "the older and newer halves of the %d samples put the hard "
-           "iron %s of B apart (limit %d %%): the field changed while collecting (a magnet, "
-           "a motor, a drifting offset)" % (n, _pct(pct), CONSISTENCY_PCT))
+           "iron %s of B apart where they saw the same directions (limit %d %%): the field "
+           "changed while collecting (a magnet, a motor, a drifting offset)"
+           % (n, _pct(pct), CONSISTENCY_PCT))
 
 
 def check_output_field(field, field_out):

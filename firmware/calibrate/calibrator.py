@@ -26,8 +26,8 @@ from firmware.calibration import MINMAX, MODELS, UNCALIBRATED, Calibration, corr
 from firmware.compat import compiled_here, const, drop
 from firmware.errors import CalibrationRejected
 from firmware.fixedpoint import rdiv
-from firmware.calibrate.samples import (NOT_INT, REJECTED, REPLACED, SampleBuffer, bad_sample,
-                              separation_for)
+from firmware.calibrate.samples import (N_REGIONS, NOT_INT, REJECTED, REPLACED, SampleBuffer,
+                              bad_sample, region, separation_for)
 
 _RAIL_HI = const(32767)        # int16 rails: a clipping chip reads its axis as one of them
 _RAIL_LO = const(-32768)
@@ -66,8 +66,10 @@ def release_solver():
 
 
 
-_CONSISTENCY_CHUNK = const(2)  # samples per slice of the consistency sums (~14 long-int ops
-#                                each once the sums pass 2**30)
+_CONSISTENCY_CHUNK = const(2)  # newer samples per slice of the consistency sums' second pass
+#                                (~14 long-int ops each once the sums pass 2**30); the first
+#                                pass runs one sample through region() a slice
+_NO_REGION = const(255)
 
 
 def _widen(e, i, v):
@@ -403,39 +405,32 @@ class Calibrator:
         r[0] = ([rdiv(f.v_num[i], f.v_den) for i in range(3)], w, b_q16, fe)
 
     def _consistency(self, offset, invw, field_out, n):
-        # acceptance.check_consistency: each half's centre (older, newer in the order kept)
-        # with the fit's shape and |B|, and the residuals' correlation from one sample to
-        # the next; the sums are taken on b >> s, |B| >> s < 2**11
+        # acceptance.check_consistency: the hard-iron change from the older to the newer half
+        # (in the order kept), estimated where both halves saw the same directions; the sums
+        # are taken on b >> s, |B| >> s < 2**11
         s = 0
         while field_out >> s >= 1 << 11:
             s += 1
         k = array("h", tuple(invw) + tuple(offset))
         r = [None]
         yield from _consistency_sums(self.buffer, k, s, field_out >> s, r)
-        halves, ee, ep = r[0]
-        p = [None, None]
-        dets = [0, 0]
-        for h in range(2):
-            a, v = halves[h]
-            adj = solve.adj3(a)
-            yield
-            dets[h] = a[0][0] * adj[0][0] + a[0][1] * adj[1][0] + a[0][2] * adj[2][0]
-            if acceptance.half_is_flat(dets[h], a[0][0] + a[1][1] + a[2][2]):
-                return  # a half near a plane cannot place its centre: no verdict
-            p[h] = solve.mat_vec3(adj, v)
-            yield
-        # c_h = p_h / (2 det_h): |c_0 - c_1|^2 = d2 / (2 det_0 det_1)^2; the squared residual
-        # the two centres explain, sum_h v_h . c_h x 2, is red / (det_0 det_1)
-        d2 = 0
-        red = 0
-        for i in range(3):
-            d = p[0][i] * dets[1] - p[1][i] * dets[0]
-            d2 += d * d
-            red += halves[0][1][i] * p[0][i] * dets[1] + halves[1][1][i] * p[1][i] * dets[0]
+        m, g, used, dd, ee = r[0]
+        if used < 3:
+            return  # fewer than 3 directions seen by both halves: no verdict
+        adj = solve.adj3(m)
         yield
-        den = dets[0] * dets[1]
-        self._verify(acceptance.check_consistency, d2, 4 * den * den, field_out >> s, n, ee,
-                     ep, red, ee * den - red)
+        det = m[0][0] * adj[0][0] + m[0][1] * adj[1][0] + m[0][2] * adj[2][0]
+        if acceptance.half_is_flat(det, m[0][0] + m[1][1] + m[2][2]):
+            return  # the shared directions do not span 3D: no verdict
+        p = solve.mat_vec3(adj, g)
+        yield
+        # the change is p / (2 det) (|.|^2 = d2 / den2); its chi-square against the sample
+        # noise, g^T M^-1 g / sigma^2 with sigma^2 = dd / (2 (n - 1)), is chi / noise; ee is
+        # the fit's sum of squared residuals e
+        d2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2]
+        chi = (g[0] * p[0] + g[1] * p[1] + g[2] * p[2]) * 2 * (n - 1)
+        self._verify(acceptance.check_consistency, d2, 4 * det * det, field_out >> s, n,
+                     chi, dd * det, ee)
 
     def _finish(self, model, n, offset, w, b_q16, fe, accept):
         # InvW in Q15, the checks of firmware/calibrate/acceptance.py in order, then the record
@@ -476,46 +471,101 @@ class Calibrator:
 
 
 def _consistency_sums(buf, k, s, f, out):
-    # One pass over the held samples in the order kept, corrected with k (InvW, V:
-    # calibration.correct) and shifted right by s; e = |b|^2 - f^2 (2 f x the radial residual).
-    # out[0] = ([A, v] of the older half, [A, v] of the newer half, sum e^2, sum e e') with
-    # A = sum b b^T (3x3) and v = sum e b (so A c = v / 2 for a half's centre c), e' the next
-    # sample's e; _CONSISTENCY_CHUNK samples a slice.
+    # The change of hard iron c between the older and the newer half of the held samples (in
+    # the order kept), corrected with k (InvW, V: calibration.correct), shifted right by s,
+    # compared within each equal-area sphere region (samples.region) that both halves saw:
+    # e = |b|^2 - f^2 = a_r + 2 b.c [newer] + noise, a free level a_r per region absorbing
+    # whatever misfit depends on the direction (least squares with region effects). Pass 1
+    # sums, per region, the samples, the newer ones, sum e and the newer ones' sum b, and
+    # dd = sum (e' - e)^2 over consecutive samples (the noise) and ee = sum e^2; pass 2, over
+    # the newer samples in shared regions, S = sum b b^T and G = sum e b. Then
+    # M = S - sum_r P P^T / N_r and g = G - sum_r P E_r / N_r give M c = g / 2.
+    # out[0] = (M, g, shared regions, dd, ee); _CONSISTENCY_CHUNK samples a slice.
     n = buf.count
-    sums = [[0, 0, 0, 0, 0, 0, 0, 0, 0], [0, 0, 0, 0, 0, 0, 0, 0, 0]]  # xx xy xz yy yz zz vx vy vz
+    h = n // 2
+    reg = bytearray(n)                     # each sample's region (_NO_REGION: none)
+    cnt = array("H", bytes(2 * N_REGIONS))  # samples per region
+    new = array("H", bytes(2 * N_REGIONS))  # newer samples per region
+    pb = array("i", bytes(12 * N_REGIONS))  # sum b of the newer samples, per region
+    es = [0] * N_REGIONS                   # sum e, per region
     raw = array("h", (0, 0, 0))
     b = array("h", (0, 0, 0))
     f2 = f * f
+    dd = 0
     ee = 0
-    ep = 0
-    prev = None
-    j = 0
+    prev = 0
     for age in range(n):
         buf.sample(buf.slot_by_age(age), raw)
         correct(k, raw, b)
         x = b[0] >> s
         y = b[1] >> s
         z = b[2] >> s
-        t = sums[0] if age < n // 2 else sums[1]
-        t[0] += x * x
-        t[1] += x * y
-        t[2] += x * z
-        t[3] += y * y
-        t[4] += y * z
-        t[5] += z * z
         e = x * x + y * y + z * z - f2
-        t[6] += e * x
-        t[7] += e * y
-        t[8] += e * z
         ee += e * e
-        if prev is not None:
-            ep += e * prev
+        if age:
+            d = e - prev
+            dd += d * d
         prev = e
-        j += 1
-        if j == _CONSISTENCY_CHUNK:
-            j = 0
-            yield
-    out[0] = ([_sym(t) for t in sums], ee, ep)
+        r = region(x, y, z)
+        if r < 0:
+            reg[age] = _NO_REGION
+        else:
+            reg[age] = r
+            cnt[r] += 1
+            es[r] += e
+            if age >= h:
+                new[r] += 1
+                j = 3 * r
+                pb[j] += x
+                pb[j + 1] += y
+                pb[j + 2] += z
+        yield
+    t = [0, 0, 0, 0, 0, 0, 0, 0, 0]  # S: xx xy xz yy yz zz, then G: x y z
+    j = 0
+    for age in range(h, n):
+        r = reg[age]
+        if r != _NO_REGION and cnt[r] > new[r]:
+            buf.sample(buf.slot_by_age(age), raw)
+            correct(k, raw, b)
+            x = b[0] >> s
+            y = b[1] >> s
+            z = b[2] >> s
+            e = x * x + y * y + z * z - f2
+            t[0] += x * x
+            t[1] += x * y
+            t[2] += x * z
+            t[3] += y * y
+            t[4] += y * z
+            t[5] += z * z
+            t[6] += e * x
+            t[7] += e * y
+            t[8] += e * z
+            j += 1
+            if j == _CONSISTENCY_CHUNK:
+                j = 0
+                yield
+    used = 0
+    for r in range(N_REGIONS):
+        c = cnt[r]
+        if new[r] == 0 or c == new[r]:
+            continue
+        used += 1
+        q = 3 * r
+        px = pb[q]
+        py = pb[q + 1]
+        pz = pb[q + 2]
+        t[0] -= rdiv(px * px, c)
+        t[1] -= rdiv(px * py, c)
+        t[2] -= rdiv(px * pz, c)
+        t[3] -= rdiv(py * py, c)
+        t[4] -= rdiv(py * pz, c)
+        t[5] -= rdiv(pz * pz, c)
+        t[6] -= rdiv(px * es[r], c)
+        t[7] -= rdiv(py * es[r], c)
+        t[8] -= rdiv(pz * es[r], c)
+        yield
+    m, g = _sym(t)
+    out[0] = (m, g, used, dd, ee)
 
 
 def _sym(t):

@@ -7,15 +7,18 @@ Also runs under `micropython -m host_sim calibrate ...` (no argparse: host_sim/c
 
 Steps: read the log (host_sim/cli/logfile.py: separators, BOM, header names, corrupt rows
 skipped with a warning) -> choose the conversion into counts (the board's counts when its
-sensor and range are stated, else a power of ten into int16) -> feed the Calibrator (the
-desktop keeps every distinct sample; --board-like thins them as a board: desktop_plan) -> solve
-and accept, or refuse (exit 1), or with --force fit without the acceptance checks
-(forced_solve: Calibrator.solve(checks=False)) -> report in the file's units and in counts.
+sensor and range are stated, else a power of ten into int16) -> leave glitch rows out (all-zero,
+at the rails, far outside the others; after a fit, far off it: host_sim/cli/glitches.py) ->
+feed the Calibrator (the desktop keeps every distinct sample; --board-like thins them as a
+board: desktop_plan) -> solve and accept, or refuse (exit 1), or with --force fit without the
+acceptance checks (forced_solve: Calibrator.solve(checks=False)) -> report in the file's
+units and in counts.
 """
 import json
 import sys
+from array import array
 
-from host_sim.cli import calfile, calopts, logfile, mounting
+from host_sim.cli import calfile, calopts, glitches, logfile, mounting
 from host_sim.cli.args import (STATUS_OK, STATUS_REFUSED, Parser, UsageError, decimal_text,
                                warn)
 from host_sim.cli.args import parse_decimal  # noqa: F401  (its earlier home; tests use it)
@@ -133,16 +136,18 @@ within int16 (rows beyond 4x the median row's magnitude are not counted: corrupt
 results are reported back in the file's units.
 
 Corrupt rows (text, nan, inf, 1e30000, out of range, short or empty) are skipped with a
-warning naming the line, on stderr; errors and warnings always go to stderr.
+warning naming the line, on stderr; errors and warnings always go to stderr. Glitch rows
+(all-zero, at the rails, far outside the others, or more than 6 robust spreads off the fit)
+are left out of the fit, said in one line (docs/calibration.md).
 
 JSON: model, offset, field, invw (W^-1, det 1; file units), scale (counts per file unit),
 invw_q15, offset_counts, field_counts, field_out_counts (the magnitude the compass checks),
 fit_error_x100, fit_error_percent, samples_used, coverage_percent, date, rows, skipped_rows,
-units (the file's: --units, else the header's, else null), forced, refusal, warnings, and
-sensor, range_gauss, range_code, counts_per_gauss, field_ut when known; mounting (a log with
-accelerometer columns: the mounting check, its verdict and the MAG_AXES the data say;
-docs/calibration.md, troubleshooting); after a refusal {"rejected", "detail", "hint", rows,
-samples_held}.
+units (the file's: --units, else the header's, else null), glitch_rows, forced, refusal,
+warnings, and sensor, range_gauss, range_code, counts_per_gauss, field_ut when known; mounting
+(a log with accelerometer columns: the mounting check, its verdict and the MAG_AXES the data
+say; docs/calibration.md, troubleshooting); after a refusal {"rejected", "detail", "hint",
+rows, samples_held}.
 
 --sensor takes a chip or its breakout in any case (GY-271 is read as its QMC5883L, with a
 warning naming the other chip it may carry). A log of a chip the firmware does not drive
@@ -265,6 +270,30 @@ def _model(text):
     return text if text in ("minmax", "auto") else int(text)
 
 
+def _feed(cal, pts, keep, step):
+    # every step-th row of the log (desktop_plan), but those left out
+    for i in range(0, len(keep), step):
+        if keep[i]:
+            cal.add(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2])
+
+
+def _solve(cal, model):
+    """(fit, refusal, failure): the accepted fit (refusal None), or the refused one with the
+    fit forced_solve gives past the checks (None, and why in failure, when not even that)."""
+    from firmware.errors import CalibrationRejected
+    try:
+        return cal.solve(model=model, accept=False), None, None
+    except CalibrationRejected as e:
+        rej = e
+    except MemoryError:
+        raise UsageError("out of memory solving %d samples: give a smaller --capacity"
+                         % cal.count)
+    try:
+        return forced_solve(cal, model), rej, None
+    except CalibrationRejected as e:
+        return None, rej, e
+
+
 def run(opts):
     """Read, convert, calibrate. Returns (calibration or None, rejection or None, info);
     UsageError for unusable input."""
@@ -300,21 +329,29 @@ def run(opts):
     mfe = opts["max_fit_error"]
     mfe = DEFAULT_MAX_FIT_ERROR if mfe is None else logfile.scale_value(mfe[0], mfe[1], 2)
     model = _model(opts["model"])
-    try:
-        cal = Calibrator(model=model, capacity=capacity, separation=separation,
-                         counts_per_gauss=cpg, max_fit_error=mfe,
-                         overflow=-4096 if board.sensor == "hmc5883l" else None)
-    except MemoryError:
-        raise UsageError("--capacity %d: out of memory; give a smaller one" % capacity)
+
+    hmc = board.sensor == "hmc5883l"
+
+    def calibrator(plan):
+        try:
+            return Calibrator(model=model, capacity=plan[0], separation=plan[1],
+                              counts_per_gauss=cpg, max_fit_error=mfe,
+                              overflow=-4096 if hmc else None)
+        except MemoryError:
+            raise UsageError("--capacity %d: out of memory; give a smaller one" % plan[0])
     olo, ohi = board.output
     used = 0
     markers = 0  # samples holding the HMC5883L's overflow marker: dropped, not "corrupt"
+    railed = 0   # samples with an axis at an int16 rail (a clipping chip; Calibrator.add)
     names = None
     outside = 0  # rows beyond the stated chip's output: its counts they are not
     peak = 0     # the largest |value| of those, in counts
+    pts = array("h", bytes(6 * log.rows_read))  # the rows used, in counts: row i at 3i..3i+2
+    lines = array("i", bytes(4 * log.rows_read))  # and their line numbers
+    zeros = 0           # all-zero rows (glitches.py): a failed read
     for lineno, row in log.rows():
         v = [logfile.convert(m, d, num, den) for m, d in row]
-        if cal.overflow == -4096 and -4096 in v:
+        if hmc and -4096 in v:
             markers += 1
             continue
         bad = -1
@@ -330,9 +367,21 @@ def run(opts):
                 names[bad], decimal_text(row[bad]), v[bad], olo, ohi,
                 " (%s at %s G)" % (board.sensor, board.range_gauss) if board.sensor else ""))
             continue
+        if v[0] == 0 and v[1] == 0 and v[2] == 0:
+            zeros += 1
+            continue
+        if 32767 in v or -32768 in v:
+            railed += 1
+            continue
+        pts[3 * used] = v[0]
+        pts[3 * used + 1] = v[1]
+        pts[3 * used + 2] = v[2]
+        lines[used] = lineno
         used += 1
-        if (used - 1) % step == 0:
-            cal.add(v[0], v[1], v[2])
+    keep = bytearray(b"\x01" * used)
+    far = glitches.box_outliers(pts, keep)   # before any fit: rows far outside the others
+    for i in far:
+        keep[i] = 0
     # rows: every data row once (log.skipped counts the reader's corrupt rows and, since
     # log.bad, those outside the output, which log.rows_read counted as read already)
     rows = log.rows_read + log.skipped - outside
@@ -343,30 +392,48 @@ def run(opts):
         board_note = None   # the advice names the log's chip already
     info = {"rows": rows, "range_note": note, "units": opts["units"], "units_note": units_note,
             "board_note": board_note, "logged_board": opts.get("logged_board"),
-            "outside": outside, "used": used, "railed": cal.railed + markers,
+            "outside": outside, "used": used, "railed": railed + markers,
             "skipped": log.skipped,
             "warnings": log.warnings, "num": num, "den": den, "p": p, "cpg": cpg,
-            "held": cal.count, "separation": cal.separation, "step": step, "board": board,
-            "log": log}
+            "held": 0, "separation": separation, "step": step, "board": board,
+            "log": log, "zeros": zeros, "far": far, "off": [], "lines": lines}
     if used == 0:
         if note is not None:
             raise UsageError("%s: no row within %d..%d counts: %s" % (path, olo, ohi, note))
         _print_warnings(log)
         raise UsageError("%s: no row within %d..%d counts after conversion (x %s / %s): check "
                          "--units, --scale, --sensor and --range" % (path, olo, ohi, num, den))
-    try:
-        return cal.solve(), None, info
-    except CalibrationRejected as e:
-        rej = e
-    except MemoryError:
-        raise UsageError("out of memory solving %d samples: give a smaller --capacity"
-                         % cal.count)
+    # the rows far off the fit (glitches.py) are found on every row the desktop holds, even
+    # for --board-like, whose thinned buffer a row far off can bend more
+    plan = (capacity, separation, step)
+    screen = desktop_plan(used) if opts["board_like"] else plan
+    fits = 0
+    while True:
+        cal = calibrator(screen)
+        _feed(cal, pts, keep, screen[2])
+        c, rej, fail = _solve(cal, model)
+        fits += 1
+        if c is None or fits == glitches.ROUNDS or (rej is not None and rej.reason in (
+                "planar", "too_few_samples")):
+            break  # (a fit the samples do not determine says nothing of a row's distance)
+        off = glitches.radius_outliers(c, pts, keep)
+        if not off:
+            break
+        for i in off:
+            keep[i] = 0
+        info["off"] += off
+    if screen != plan:
+        cal = calibrator(plan)
+        _feed(cal, pts, keep, step)
+        c, rej, fail = _solve(cal, model)
+    info.update({"off": sorted(info["off"]), "railed": cal.railed + railed + markers,
+                 "held": cal.count, "separation": cal.separation})
+    if rej is None:
+        return c, None, info
     if not opts["force"]:
         return None, rej, info
-    try:
-        c = forced_solve(cal, model)
-    except CalibrationRejected as e:
-        info["force_failed"] = e
+    if c is None:
+        info["force_failed"] = fail
         return None, rej, info
     info["forced"] = rej
     return c, None, info
@@ -474,7 +541,7 @@ def report(c, info, date):
         "fit_error_percent": c.fit_error / 100,
         "samples_used": c.samples,
         "rows": info["rows"], "skipped_rows": info["skipped"], "rail_samples": info["railed"],
-        "units": info["units"], "warnings": warning_list(info),
+        "units": info["units"], "glitch_rows": glitch_rows(info), "warnings": warning_list(info),
     })
     if info["cpg"]:
         r["field_ut"] = c.field * 100 / info["cpg"]
@@ -483,10 +550,19 @@ def report(c, info, date):
     return r
 
 
+def glitch_rows(info):
+    """The JSON's glitch_rows: the rows left out of the fit, by kind (glitches.py)."""
+    return {"all_zero": info.get("zeros", 0), "rails": info["railed"],
+            "outside_range": len(info.get("far", ())), "off_ellipsoid": len(info.get("off", ()))}
+
+
 def warning_list(info):
     """The JSON's warnings: the rows skipped (the first few, by line), then what the options
     and the log say together (a breakout read as its chip; most rows outside the chip)."""
     out = ["line %d: %s" % w for w in info["warnings"]]
+    g = glitch_line(info)
+    if g:
+        out.append(g)
     for w in (info["board"].note, info.get("board_note"), info.get("range_note"),
               info.get("units_note")):
         if w:
@@ -501,10 +577,39 @@ def _print_notes(info):
             warn(COMMAND, w)
 
 
-def _print_warnings(log, railed=0, outside=0):
-    if railed:
-        warn(COMMAND, "%s: %d sample(s) at the sensor's rails dropped (int16 limits or an "
-             "overflow marker: a clipping or overflowing chip)" % (log.path, railed))
+def _line_list(info, idx):
+    return ", ".join(["%d" % info["lines"][i] for i in idx[:3]]) + (", ..." if len(idx) > 3
+                                                                     else "")
+
+
+def glitch_line(info):
+    """The one line that says which glitch rows were left out of the fit, of which kind and
+    how many (glitches.py), or None."""
+    parts = []
+    if info.get("zeros"):
+        parts.append("%d all-zero row(s) (a failed read)" % info["zeros"])
+    if info.get("railed"):
+        parts.append("%d sample(s) at the sensor's rails dropped (int16 limits or an overflow "
+                     "marker: a clipping or overflowing chip)" % info["railed"])
+    far = info.get("far")
+    if far:
+        parts.append("%d row(s) far outside the others' range (line %s)"
+                     % (len(far), _line_list(info, far)))
+    off = info.get("off")
+    if off:
+        parts.append("%d row(s) far off the fitted ellipsoid (line %s: corrected radius over "
+                     "%d robust spreads from the median)"
+                     % (len(off), _line_list(info, off), glitches.SPREADS))
+    if not parts:
+        return None
+    return "%s: left out of the fit: %s%s" % (info["log"].path, "; ".join(parts),
+                                              "; docs/calibration.md" if far or off else "")
+
+
+def _print_warnings(log, info=None, outside=0):
+    g = glitch_line(info) if info else None
+    if g:
+        warn(COMMAND, g)
     for ln, msg in log.warnings:
         warn(COMMAND, "%s: line %d skipped: %s" % (log.path, ln, msg))
     more = log.skipped - len(log.warnings)
@@ -536,7 +641,7 @@ def _refused(opts, rej, info):
     if opts["json"]:
         print(json.dumps({"rejected": rej.reason, "detail": rej.detail, "hint": hint,
                           "rows": info["rows"], "skipped_rows": info["skipped"],
-                          "rail_samples": info["railed"],
+                          "rail_samples": info["railed"], "glitch_rows": glitch_rows(info),
                           "samples_held": info["held"], "warnings": warning_list(info)}))
     return STATUS_REFUSED
 
@@ -544,7 +649,7 @@ def _refused(opts, rej, info):
 def body(opts):
     date = opts["date"] or calfile.iso_date()
     c, rej, info = run(opts)
-    _print_warnings(info["log"], info["railed"], info["outside"])
+    _print_warnings(info["log"], info, info["outside"])
     _print_notes(info)
     if rej is not None:
         return _refused(opts, rej, info)

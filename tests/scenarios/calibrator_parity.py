@@ -2,7 +2,9 @@
 #   1. synthetic: a QMC5883L on the simulated bus (host_sim), figure-8 motion, hard iron 2.4x
 #      the field and a rotated (non-diagonal) soft-iron matrix; every model is solved;
 #   2. a real log: every 4th row of datasets/qmc5883l_tomisuarez_filtered.csv (QMC5883L raw
-#      counts, 60 s still then turning; datasets/README.md), model 10 and min/max.
+#      counts, 60 s still then turning; datasets/README.md), model 10 and min/max;
+#   3. the halves check's integer sums (acceptance.check_consistency's arguments) on that log
+#      and on two hard-iron states (the simulated stream, then 10 uT more on x).
 # Prints integers only, one JSON list per line (the payload bytes as ints, the fit error...).
 import json
 import struct
@@ -72,3 +74,16 @@ if __name__ == "__main__":
                 x, y, z = line.strip().split(",")
                 log.add(int(x), int(y), int(z))
     print(json.dumps([log.count, result(log, 10), result(log, "minmax")]))
+    from firmware.calibrate import acceptance
+    seen = []
+    check = acceptance.check_consistency
+
+    def spy(*args):
+        seen.append(list(args))
+        return check(*args)
+    acceptance.check_consistency = spy
+    two = Calibrator(model=10, counts_per_gauss=CPG)
+    feed(two, sim_raw(3000))
+    feed(two, sim_raw(3000, hard_iron_ut=(V_UT[0] + 10.0, V_UT[1], V_UT[2]), seed=4))
+    log.solve(model=10, accept=False)     # accepted: its halves agree
+    print(json.dumps([result(two, 10), seen]))
