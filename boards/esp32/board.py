@@ -14,6 +14,8 @@ MODE = "compass"            # "compass": headings, self-calibrating; "motioncal"
 #                             PJRC MotionCal and take its Send Cal (docs/motioncal.md)
 GYRO = False                # True: the MPU6050's gyroscope holds the heading through magnets
 #                             and fast turns (docs/gyro.md; package-gyro.json installed)
+CALIBRATE = "auto"          # "auto": a board without a good stored calibration runs the
+#                             calibration program at boot; "never": it never calibrates itself
 STORE_DIR = "/"             # where the calibration record lives (LittleFS on the internal flash)
 
 

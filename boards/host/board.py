@@ -23,6 +23,8 @@ MODE = "compass"            # "compass": headings, self-calibrating; "motioncal"
 #                             PJRC MotionCal and take its Send Cal (docs/motioncal.md)
 GYRO = False                # True: the MPU6050's gyroscope holds the heading through magnets
 #                             and fast turns (docs/gyro.md; package-gyro.json installed)
+CALIBRATE = "auto"          # "auto": a board without a good stored calibration runs the
+#                             calibration program at boot; "never": it never calibrates itself
 STORE_DIR = "build"         # the calibration record (build/ecompass_a.cal, _b.cal)
 # Strong iron: |V| = 1.4 Earth fields, soft iron with eigenvalues ~0.85..1.2 and shear.
 HARD_IRON_UT = (40.0, -30.0, 25.0)
