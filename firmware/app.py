@@ -95,7 +95,7 @@ there is no good calibration yet, collect and solve one in the background.
 # the same jump is flagged again. .date_s: None, or a function returning the date in seconds
 # when the board knows it (e.g. after NTP), written with each entry. History errors are
 # counted in .history_errors (the last one in .history_reason) and never stop the loop.
-from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S
+from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED
 from firmware.compass import FLAG_NO_GRAVITY
 from firmware.compat import const, drop, drop_part, free_bytes, ticks_diff
 from firmware.errors import SensorOverflow, DataReadyTimeout
@@ -218,6 +218,19 @@ class CompassApp:
     # location, quick, accuracy, watch (firmware/health.py FieldWatch), dip (its DipCheck).
 
     location = None  # a firmware.field.location.Location after set_location()
+    # the documented state, here too so that it exists while the heap could not hold the app
+    # (.no_memory "start"): each is set again by the constructor (firmware/appsetup.py)
+    calibration = UNCALIBRATED
+    compass = None
+    collector = None
+    pending = None
+    change = None
+    stored = 0
+    save_errors = 0
+    load_reason = None
+    worst_stall_us = 0
+    history_errors = 0
+    _ended = {}      # (read only here: a made app has its own)
     no_memory = None  # what the heap could not hold: "start", "load", "calibrate" (status line)
     _args = None     # the constructor's arguments while the heap could not hold the app
     _saved_shown = 0  # app.stored when the status line last said "saved"
@@ -347,7 +360,7 @@ class CompassApp:
         # is not installed (.not_installed) or the heap has no room for a session beside the
         # heading (.no_memory "calibrate": the calibration program does it alone,
         # firmware/calibrate/program.py; boards/main.py restarts into it).
-        if self.collector is None:
+        if self.collector is None and self._args is None:  # (no app yet: nothing to collect for)
             f = free_bytes()
             if f is not None and f < SESSION_ROOM:
                 return self._no_room()

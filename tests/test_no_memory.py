@@ -100,3 +100,18 @@ def test_iron_that_changed_with_no_room_for_a_session_asks_for_the_program(no_ro
     app._stale()  # what 30 s of interference lead to (tests/test_app.py drives it for real)
     assert app.collector is None and app.no_memory == "calibrate" and app.relearn_due
     assert app.run(100) == 0  # returns at once: boards/main.py restarts into the program
+
+
+def test_every_documented_attribute_exists_while_the_app_did_not_fit(no_room_for):
+    # docs/api.md's attributes and calls, on the app that tries again every 256 steps
+    no_room_for.names = {"appsetup"}
+    b = W.make_sim("gy271", m=motion.still(30.0, 10.0, 0.0), seed=4)
+    app = W.make_app(b, store=CalStore("/", fs=W.MemFs()))
+    assert app.no_memory == "start"
+    for name in ("calibration", "stored", "collector", "pending", "change", "compass",
+                 "accepted", "refused", "accuracy", "status", "heading_kang", "last_reason",
+                 "relearning", "load_reason", "save_errors", "location", "mounting", "errors",
+                 "relearn_due", "not_installed"):
+        getattr(app, name)
+    assert app.accuracy_reason() and app.progress()["model"] is None
+    assert app.coverage() == 0 and app.calibrate() is None and app.step() is False
