@@ -9,7 +9,7 @@ Mounting assumed: the breakout lies flat, components up, its silkscreen X arrow 
 forward (the direction the heading refers to). A board mounted another way needs its own
 specs (e.g. upside down: "x,y,z" for the magnetometer, "-x,-y,-z" for the accelerometer).
 
-Derivation from the physical facts (common.md, hardware.md):
+Derivation from the physical facts (docs/hardware.md, frames):
 - each chip's axes are right-handed, z out of the package top; on these breakouts the chip's
   x runs along the X arrow and y to its left. So, in the AN4248 body frame (x forward,
   y right, z down), chip x = body x, chip y = -body y, chip z = -body z.

@@ -7,7 +7,7 @@
 #
 # KANG (T. Judd): 65536 per turn, so angle arithmetic wraps like an int16 (0.0055 deg resolution).
 # Frame: AN4248 body frame, x forward, y right, z down; a level board's accelerometer reads +1 g
-# on z (common.md). b is Calibration.correct's output mapped to the body frame (firmware.axes);
+# on z (docs/hardware.md, frames). b is Calibration.correct's output mapped to the body frame (firmware.axes);
 # g is the accelerometer in the same frame and sign. Both at any scale, components int16.
 #
 # heading(b, g=None, declination=0)

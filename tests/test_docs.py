@@ -457,3 +457,21 @@ def test_what_python3_runs_needs_only_the_standard_library():
             argv = [sys.executable, "-S", "-c", "import %s" % mod]
         p = subprocess.run(argv, cwd=ROOT, capture_output=True, text=True, timeout=120)
         assert p.returncode == 0 and "Traceback" not in p.stderr, (argv, p.stderr[-1000:])
+
+
+def test_the_module_map_in_design_names_every_firmware_module():
+    # docs/design.md's two tables (the pipeline, then every other module by part): a module
+    # added or moved without a line there fails here
+    from host_sim.cli.packaging import firmware_files
+    text = open(os.path.join(ROOT, "docs", "design.md"), encoding="utf-8").read()
+    body = text[text.index("## The pipeline, one module per step"):]
+    body = body[:body.index("\n## ", 5)]
+    missing = []
+    for f in firmware_files():
+        if not f.endswith(".py"):
+            continue
+        base = os.path.basename(f)
+        if ("firmware/" + f) not in body and ("`%s`" % base) not in body and \
+                (", %s" % base) not in body:
+            missing.append(f)
+    assert missing == [], missing

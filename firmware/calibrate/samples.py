@@ -57,7 +57,7 @@ _FAR = const(0)     # _probe(): cell empty and no sample within s met on the way
 _TAKEN = const(1)   # _probe(): the cell holds a sample, not within s
 _NEAR = const(2)    # _probe(): a held sample within s was met
 
-# MotionCal gap weights (peers.md): empty region 1.0, one sample 0.2, two 0.01, in hundredths
+# MotionCal gap weights (docs/motioncal.md, what each gauge means): empty region 1.0, one sample 0.2, two 0.01, in hundredths
 _GAP_EMPTY = const(100)
 _GAP_ONE = const(20)
 _GAP_TWO = const(1)
