@@ -18,7 +18,7 @@ BUDGETS = {
     # calibration machinery interned stay in the qstr pool when its modules are dropped
     "after_session_slack_mpy": 5 * KB,  # 3.0 KB measured with calibration mode's names
     # the live heap at the solving peak of the calibration program (.mpy,
-    # bench.PROGRAM_PROFILE_KB of heap): 95.5 KB measured (calibration mode's, which it
+    # bench.PROGRAM_PROFILE_KB of heap): 93.6-95.5 KB measured (calibration mode's, which it
     # replaced, was 115.8 KB)
     "program_peak_mpy": 100 * KB,
     # a heap from which the calibration program completes (10 elements saved and read back),
@@ -41,7 +41,8 @@ BUDGETS = {
     # completes (tests/test_heap_sweep.py, 32 KB steps), for a first calibration and for a
     # board booting on a stored one, from .mpy files and from .py sources. In 4 KB steps when
     # set: 144, 200, 92 and 104 KB; the calibration program's first calibration, restart
-    # and headings: 128 and 152 KB (make bench writes the figures of its run to the README)
+    # and headings: 124-128 and 152 KB (make bench writes the figures of its run to
+    # docs/install.md)
     "board_calibrate_mpy": 160 * KB,
     "board_calibrate_py": 192 * KB,
     "board_heading_mpy": 96 * KB,
