@@ -1,6 +1,6 @@
 """host_sim: an independent register-level simulator of the eCompass hardware.
 
-The hardware's mirror, built from the datasheets (shared/notes/hardware.md), never from the
+The hardware's mirror, built from the datasheets (docs/hardware.md and each model's docstring), never from the
 firmware: clock.py (integer microseconds), prng.py (deterministic noise), bus.py (SimI2C, a
 machine.I2C look-alike with bus timing and fault injection), world.py (Earth's field,
 gravity, orientation, hard/soft iron, magnets), motion.py (motion scripts), one model per

@@ -1,4 +1,4 @@
-"""HMC5883L register model (I2C 0x1E), built from shared/notes/hardware.md and the Honeywell
+"""HMC5883L register model (I2C 0x1E), built from the Honeywell
 HMC5883L datasheet.
 
     chip = HMC5883LSim(world, mount=(1, -2, -3), seed=1)

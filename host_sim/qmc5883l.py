@@ -1,4 +1,4 @@
-"""QMC5883L register model (I2C 0x0D), built from shared/notes/hardware.md and the QST datasheet.
+"""QMC5883L register model (I2C 0x0D), built from the QST datasheet.
 
     chip = QMC5883LSim(world, mount=(1, -2, -3), seed=1)
     i2c.attach(0x0D, chip)

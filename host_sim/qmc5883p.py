@@ -1,5 +1,5 @@
 """QMC5883P register model (I2C 0x2C), the newer clone on recent GY-271 boards, built from
-shared/notes/hardware.md and the QST QMC5883P datasheet's feature table.
+the QST QMC5883P datasheet's feature table.
 
     chip = QMC5883PSim(world, mount=(1, -2, -3), seed=1)
     i2c.attach(0x2C, chip)

@@ -18,7 +18,8 @@
 #                   poles): the declination is unreliable and so is any magnetic heading.
 #   STATUS_CAUTION  "caution zone": H < 6000 nT (WMM's caution zone): heading accuracy degraded.
 #   STATUS_NO_DATE  "no date": year_e3 was None, so the middle of the model's life (2027.5) was
-#                   used; declination changes by up to ~0.2 deg a year (notes/field_model.md),
+#                   used; declination changes by up to ~0.2 deg a year (WMM2025's secular
+#                   variation, docs/field_model.md),
 #                   so it may be ~0.5 deg off.
 #   STATUS_OK       "ok".
 #
