@@ -79,10 +79,16 @@ def test_largest_reading_bounds_every_field_direction_and_is_reached(v, wf):
 
 @given(st.floats(1, 900))
 def test_range_is_the_most_sensitive_one_that_holds_the_field(need_ut):
-    for kind, table in (("qmc5883l", demo.QMC_RANGES_G), ("hmc5883l", demo.HMC_RANGES_G)):
+    from host_sim import chips
+    assert [fs for fs, _ in demo.full_scales("qmc5883l")] == [2, 8]
+    assert [fs for fs, _ in demo.full_scales("qmc5883p")] == [2, 8, 12, 30]
+    assert demo.full_scales("hmc5883l")[0] == (0.88, 0)
+    for kind in chips.MAG_KINDS:
+        table = [fs for fs, _ in demo.full_scales(kind)]
         opt, code, fs = demo.pick_range(kind, need_ut)
-        assert opt == ("range" if kind == "qmc5883l" else "gain")
-        i = list(table).index(fs)
+        assert opt == chips.mag(kind)["range_option"]
+        assert dict(demo.full_scales(kind))[fs] == code
+        i = table.index(fs)
         need_g = need_ut * demo.RANGE_MARGIN / 100
         if need_g <= table[-1]:
             assert need_g <= fs                          # holds it

@@ -15,6 +15,7 @@ and accept, or refuse (exit 1), or with --force fit without the acceptance check
 import json
 import sys
 
+from host_sim import chips
 from host_sim.cli import calfile, calopts, logfile, mounting
 from host_sim.cli.args import (STATUS_OK, STATUS_REFUSED, Parser, UsageError, decimal_text,
                                warn)
@@ -73,14 +74,17 @@ def _parser():
              help="fit even when acceptance refuses (too few samples, planar,\n"
                   "fit error...): the result says forced and why; exit 0")
     p.option("--sensor", calopts.sensor, metavar="CHIP",
-             help="the board's magnetometer: qmc5883l, hmc5883l, qmc5883p, or\n"
-                  "its breakout gy271, gy273, gy87 (any case, '-' ignored); the\n"
-                  "file is then in its counts (or --units) and V, B are the\n"
-                  "board's. Another chip's log: no --sensor, --units or --scale")
+             help="the board's magnetometer: %s,\n"
+                  "or its breakout %s (any case, '-' ignored);\n"
+                  "the file is then in its counts (or --units) and V, B are\n"
+                  "the board's. Another chip's log: no --sensor, --units or\n"
+                  "--scale" % (", ".join(calfile.SENSOR_NAMES),
+                                ", ".join(sorted(calopts.BREAKOUTS))))
     p.option("--range", "str", metavar="G",
-             help="its full scale in gauss (qmc5883l 2|8, qmc5883p 30|12|8|2,\n"
-                  "hmc5883l 0.88|1.3|1.9|2.5|4.0|4.7|5.6|8.1; default: the\n"
-                  "driver's, 2 / 8 / 1.3)")
+             help="its full scale in gauss (%s;\n"
+                  "default: the driver's)" % ",\n".join(
+                      "%s %s" % (k, "|".join(r[0] for r in calfile.SENSORS[k]["ranges"]))
+                      for k in calfile.SENSOR_NAMES))
     p.option("--counts-per-gauss", "int", lo=1, hi=100000, metavar="N",
              help="the board's sensitivity (instead of --sensor/--range):\n"
                   "enables the 10..90 uT field check")
@@ -161,9 +165,10 @@ class Board:
         self.range_code = None
         self.cpg = opts["counts_per_gauss"]
         self.output = (-32768, 32767)
+        self.overflow = None
         if opts["range"] is not None and self.sensor is None:
-            raise UsageError("--range %s needs --sensor (qmc5883l, hmc5883l or qmc5883p)"
-                             % opts["range"])
+            raise UsageError("--range %s needs --sensor (%s)"
+                             % (opts["range"], ", ".join(calfile.SENSOR_NAMES)))
         if self.sensor is not None:
             rng = opts["range"]
             if rng is None:
@@ -177,6 +182,7 @@ class Board:
                                  "or the other)" % (self.cpg, self.sensor, self.range_gauss, cpg))
             self.cpg = cpg
             self.output = calfile.SENSORS[self.sensor]["output"]
+            self.overflow = chips.mag(self.sensor)["overflow"]  # the HMC5883L's -4096
         if opts["out"] is not None and self.sensor is None:
             raise UsageError("--out %s needs --sensor (and --range): a board checks both "
                              "before it loads a calibration" % opts["out"])
@@ -294,7 +300,7 @@ def run(opts):
     try:
         cal = Calibrator(model=model, capacity=capacity, separation=separation,
                          counts_per_gauss=cpg, max_fit_error=mfe,
-                         overflow=-4096 if board.sensor == "hmc5883l" else None)
+                         overflow=board.overflow)
     except MemoryError:
         raise UsageError("--capacity %d: out of memory; give a smaller one" % capacity)
     olo, ohi = board.output
@@ -305,7 +311,7 @@ def run(opts):
     peak = 0     # the largest |value| of those, in counts
     for lineno, row in log.rows():
         v = [logfile.convert(m, d, num, den) for m, d in row]
-        if cal.overflow == -4096 and -4096 in v:
+        if cal.overflow is not None and cal.overflow in v:
             markers += 1
             continue
         bad = -1
