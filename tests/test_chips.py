@@ -9,43 +9,53 @@ from host_sim.boards import make_board
 from host_sim.cli import calfile, calopts, demo, serve
 
 
-def _rows(role):
-    return [r for r in detect.CHIPS if r[1] == role]
+def fields(line):
+    """A line of firmware/detect.py CHIPS as a dict (its comment says what each field is)."""
+    f = line.decode().split()
+    assert len(f) == 9, line
+    return {"role": f[0], "addresses": tuple(int(a, 16) for a in f[1].split(",")),
+            "id_reg": int(f[2], 16), "id": bytes.fromhex(f[3]), "id_name": f[4],
+            "module": f[5], "cls": f[5].upper(), "name": f[6], "options": f[7].split(","),
+            "behind": () if f[8] == "-" else tuple(f[8].split(","))}
 
 
-MAG_ROWS = _rows(0)
-IMU_ROWS = _rows(1)
+ROWS = [fields(r) for r in detect.CHIPS]
+MAG_ROWS = [r for r in ROWS if r["role"] == "M"]
+IMU_ROWS = [r for r in ROWS if r["role"] == "I"]
+assert len(MAG_ROWS) + len(IMU_ROWS) == len(ROWS)
 
 
 def test_both_tables_name_the_same_chips():
-    assert sorted(r[0].decode() for r in MAG_ROWS) == sorted(chips.MAG_KINDS)
-    assert sorted(r[0].decode() for r in IMU_ROWS) == sorted(m["kind"] for m in chips.IMUS)
+    assert sorted(r["module"] for r in MAG_ROWS) == sorted(chips.MAG_KINDS)
+    assert sorted(r["name"] for r in IMU_ROWS) == sorted(m["name"] for m in chips.IMUS)
+    names = {r["name"] for r in IMU_ROWS}
+    assert all(set(r["behind"]) <= names for r in MAG_ROWS)
 
 
-@pytest.mark.parametrize("row", MAG_ROWS, ids=[r[0].decode() for r in MAG_ROWS])
+@pytest.mark.parametrize("row", MAG_ROWS, ids=[r["module"] for r in MAG_ROWS])
 def test_a_magnetometer_row_agrees_with_the_simulator_and_its_driver(row):
-    m = chips.mag(row[0].decode())
-    assert row[2].decode() == m["name"]
-    assert row[3] == (m["address"],)
-    assert m["id"][0] == row[4] and m["id"][1] in row[6]
-    cls = detect.driver_class(row[7], row[8])
-    assert cls.KIND == m["kind"]
+    m = chips.mag(row["module"])
+    assert row["name"] == m["name"]
+    assert row["addresses"] == (m["address"],)
+    assert (row["id_reg"], row["id"]) == m["id"]
+    cls = detect.driver_class(row["module"], row["cls"])
+    assert cls.KIND == m["kind"] and cls.REGISTERS[0] == row["id_reg"] and cls.ID == row["id"]
     # every option the table lets through is one the driver takes
-    assert {o.decode() for o in row[9] + detect._COMMON} <= set(cls.OPTIONS)
+    assert set(row["options"] + ["delay_us", "timeout_us"]) <= set(cls.OPTIONS)
     assert [r[2] for r in m["ranges"]] == list(cls.PER_CODE[1])      # counts per gauss
     assert [r[1] for r in m["ranges"]] == list(range(len(cls.PER_CODE[1])))
     if m["range_option"] is not None:
         assert cls.OPTIONS[0] == m["range_option"]
         assert [r[3] for r in m["ranges"]] == list(cls.TABLES[0])
-    assert cls.MIRROR == m["mirror"]
+    assert getattr(cls, "MIRROR", False) == m["mirror"]
 
 
-@pytest.mark.parametrize("row", IMU_ROWS, ids=[r[0].decode() for r in IMU_ROWS])
-def test_an_accelerometer_row_agrees_with_the_simulator(row):
-    m = chips.imu(row[0].decode())
-    assert row[2].decode() == m["name"] and row[3] == m["addresses"]
-    assert m["id"][0] == row[4] and m["id"][1] in row[6]
-    assert detect.driver_class(row[7], row[8]).__name__ == row[8].decode()
+@pytest.mark.parametrize("row", IMU_ROWS, ids=[r["name"] for r in IMU_ROWS])
+def test_an_accelerometer_row_agrees_with_the_simulator_and_its_driver(row):
+    m = [i for i in chips.IMUS if i["name"] == row["name"]][0]
+    assert row["addresses"] == m["addresses"] and (row["id_reg"], row["id"]) == m["id"]
+    cls = detect.driver_class(row["module"], row["cls"])
+    assert set(row["options"]) == set(cls.OPTIONS) and hasattr(cls, "enable_bypass")
 
 
 @pytest.mark.parametrize("kind", chips.MAG_KINDS)
@@ -88,16 +98,14 @@ def test_an_unknown_chip_at_a_known_address_is_named_as_such():
     from host_sim.bus import RegisterFile, SimI2C
     from host_sim.clock import SimClock
     for row in MAG_ROWS:
+        a = row["addresses"][0]
         bus = SimI2C(SimClock())
-        bus.attach(row[3][0], RegisterFile())  # every register reads 0x00
-        if row[6] == (b"\x00",):
-            continue
+        bus.attach(a, RegisterFile())  # every register reads 0x00
+        assert row["id"] != bytes(len(row["id"]))
         with pytest.raises(SensorNotFound) as e:
             detect.detect(bus)
         msg = str(e.value)
         # the first row at an address: its driver's refusal; a later one: the table's ID read
-        assert ("no %s at 0x%02X: ID register 0x%02X reads " % (row[2].decode(), row[3][0],
-                                                               row[4]) in msg
-                or "0x%02X answers but %s (0x%02X) reads " % (row[3][0], row[5].decode(),
-                                                              row[4]) in msg), msg
-        assert row[2].decode() in msg, msg
+        assert ("no %s at 0x%02X: ID register 0x%02X reads " % (row["cls"], a, row["id_reg"])
+                in msg or "0x%02X answers but %s (0x%02X) reads " % (
+                    a, row["id_name"], row["id_reg"]) in msg), msg
