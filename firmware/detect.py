@@ -35,10 +35,15 @@ _IMU = const(0x49)  # "I": an accelerometer whose I2C bypass may hide a magnetom
 # Lines that share an address are tried in table order. One bytes object a line: a str would be
 # an interned name held from boot on, a field its own object (docs/chips.md, heap).
 CHIPS = (
+    b"M 0C 00 4809 WIA1 ak09916 AK09916 range,rate ICM-20948",
+    b"M 0C 00 48 WIA ak8963 AK8963 range,rate MPU-9250,MPU-9255",
     b"M 0D 0D FF ID qmc5883l QMC5883L range,odr,osr MPU6050",
     b"M 1E 0A 483433 ID hmc5883l HMC5883L gain,rate,averaging MPU6050",
     b"M 2C 00 80 ID qmc5883p QMC5883P range,odr,osr,dsr -",
     b"I 68,69 75 68 WHO_AM_I mpu6050 MPU6050 accel_range,dlpf,gyro_range -",
+    b"I 68,69 75 71 WHO_AM_I mpu9250 MPU-9250 accel_range,dlpf,gyro_range -",
+    b"I 68,69 75 73 WHO_AM_I mpu9250 MPU-9255 accel_range,dlpf,gyro_range -",
+    b"I 68,69 00 EA WHO_AM_I icm20948 ICM-20948 accel_range,dlpf,gyro_range -",
 )
 _COMMON = b"delay_us,timeout_us"
 

@@ -190,8 +190,8 @@ class Magnetometer(Device):
     #   REGISTERS      (ID register, status register, data-ready bit, first of the six data
     #                  registers, first configuration register)
     #   ID             the bytes the ID register and those after it read
-    #   MIRROR         True where the datasheet draws the magnetometer's axes as a mirror image
-    #                  of its package's accelerometer's: MAG_AXES is then a mirror too
+    #   MIRROR         (where True only) the datasheet draws the magnetometer's axes as a
+    #                  mirror image of its package's accelerometer's: MAG_AXES is a mirror too
     #
     # The chip's constructor passes its option values in the order of OPTIONS; the chip gives
     # _config_of(codes) (the bytes the configuration registers hold from the first on, which
@@ -199,7 +199,6 @@ class Magnetometer(Device):
     # the guard; _check_config() reads the configuration back) and, where its data block is not
     # X, Y, Z int16 LSB first, its own sample_into(buf). The six data bytes are read in one
     # transaction: a partial read leaves the chip's data lock set.
-    MIRROR = False
 
     def __init__(self, i2c, address, delay_us, timeout_us, *values):
         from firmware.devinit import magnetometer

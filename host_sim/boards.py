@@ -15,6 +15,11 @@ is the body -> sensor signed permutation of host_sim.world):
                         until the bypass is opened) + BMP180 at 0x77; MPU6050 and HMC5883L both
                         x forward, y left, z up -> (1, -2, -3)
   'gy87-qmc'            the GY-87 clone with a QMC5883L at 0x0D behind the bypass instead
+  'gy9250'              MPU-9250 at 0x68 (x forward, y left, z up) with its AK8963 at 0x0C
+                        behind the bypass, its axes as the MPU-9250's datasheet draws them:
+                        x = the accelerometer's y, y = its x, z = -its z -> (-2, 1, 3)
+  'icm20948'            ICM-20948 at 0x68 with its AK09916 at 0x0C behind the bypass:
+                        x = the accelerometer's x, y = -its y, z = -its z -> (1, 2, 3)
 (host_sim/chips.py BOARDS holds this list.)
 `accel=True` adds a separate MPU6050 module (GY-521, 0x68, x forward, y left, z up) to a board
 without one. For these mountings the firmware's sensor -> body maps are: magnetometer

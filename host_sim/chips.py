@@ -57,16 +57,38 @@ MAGS = (
                 ("2", 3, 15000, 2)), "range_option": "range",
      "default": "8", "output": (-32768, 32767), "overflow": None, "mirror": False,
      "demo_options": {}, "standby": (0x0A, b"\x00")},
+    # AK8963 inside the MPU-9250 / MPU-9255 (datasheet MS1356-E-02; MPU-9250 register map
+    # RM-MPU-9250A-00 section 5): one range, +-4912 uT at 0.15 uT/LSB = 666.7 counts/G
+    # (667 here, an integer as the firmware's counts_per_gauss), after the fuse-ROM ASA
+    {"kind": "ak8963", "name": "AK8963", "address": 0x0C, "id": (0x00, b"\x48"),
+     "model": "ak8963.AK8963Sim",
+     "ranges": (("49", 0, 667, 49),), "range_option": "range",
+     "default": "49", "output": (-32768, 32767), "overflow": None, "mirror": False,
+     "demo_options": {}, "standby": (0x0A, b"\x10")},
+    # AK09916 inside the ICM-20948 (datasheet DS-000189 sections 3.3, 13): as the AK8963
+    {"kind": "ak09916", "name": "AK09916", "address": 0x0C, "id": (0x00, b"\x48\x09"),
+     "model": "ak09916.AK09916Sim",
+     "ranges": (("49", 0, 667, 49),), "range_option": "range",
+     "default": "49", "output": (-32768, 32767), "overflow": None, "mirror": False,
+     "demo_options": {}, "standby": (0x31, b"\x00")},
 )
 
 IMUS = (
     {"kind": "mpu6050", "name": "MPU6050", "addresses": (0x68, 0x69), "id": (0x75, b"\x68"),
      "model": "mpu6050.MPU6050Sim"},
+    {"kind": "mpu9250", "name": "MPU-9250", "addresses": (0x68, 0x69), "id": (0x75, b"\x71"),
+     "model": "mpu6050.MPU9250Sim"},
+    {"kind": "mpu9255", "name": "MPU-9255", "addresses": (0x68, 0x69), "id": (0x75, b"\x73"),
+     "model": "mpu6050.MPU9250Sim", "options": {"who_am_i": 0x73}},
+    {"kind": "icm20948", "name": "ICM-20948", "addresses": (0x68, 0x69), "id": (0x00, b"\xea"),
+     "model": "icm20948.ICM20948Sim"},
 )
 
 # the usual lie of a breakout: x forward, y left, z up (host_sim.world mounting, body ->
-# sensor)
+# sensor); the magnetometers inside an IMU sit in their package as its datasheet draws them
 _XFWD = (1, -2, -3)
+_AK8963_IN_MPU9250 = (-2, 1, 3)   # x = the accelerometer's y, y = its x, z = -its z
+_AK09916_IN_ICM20948 = (1, 2, 3)  # x = the accelerometer's x, y = -its y, z = -its z
 
 BOARDS = (
     ("qmc5883l", ("qmc5883l", None, False, "QMC5883L module", _XFWD)),
@@ -76,6 +98,10 @@ BOARDS = (
     ("gy87", ("hmc5883l", "mpu6050", True, "GY-87 (MPU6050 + HMC5883L behind its bypass)",
               _XFWD)),
     ("gy87-qmc", ("qmc5883l", "mpu6050", True, "GY-87 clone (MPU6050 + QMC5883L)", _XFWD)),
+    ("gy9250", ("ak8963", "mpu9250", True, "GY-9250 (MPU-9250, its AK8963 behind the bypass)",
+                _AK8963_IN_MPU9250)),
+    ("icm20948", ("ak09916", "icm20948", True,
+                  "ICM-20948 module (its AK09916 behind the bypass)", _AK09916_IN_ICM20948)),
 )
 
 DEMOS = (
@@ -83,12 +109,19 @@ DEMOS = (
     ("hmc5883l", ("hmc5883l", True, "gy273", "GY-273 (HMC5883L) + GY-521 (MPU6050)")),
     ("gy87", ("gy87", None, "gy87", "GY-87 (MPU6050 + HMC5883L behind its bypass)")),
     ("qmc5883p", ("qmc5883p", True, "gy271", "GY-271 (QMC5883P) + GY-521 (MPU6050)")),
+    ("ak8963", ("gy9250", None, "gy9250", "GY-9250 (MPU-9250 + its AK8963)")),
+    ("ak09916", ("icm20948", None, "icm20948", "ICM-20948 module (+ its AK09916)")),
 )
 
 BREAKOUTS = (
     ("gy271", ("qmc5883l", "a newer GY-271 carries a QMC5883P (I2C 0x2C): --sensor qmc5883p")),
     ("gy273", ("hmc5883l", None)),
     ("gy87", ("hmc5883l", "a GY-87 with a QMC5883L: --sensor qmc5883l")),
+    ("gy9250", ("ak8963", None)),
+    ("gy91", ("ak8963", None)),
+    ("mpu9250", ("ak8963", None)),
+    ("mpu9255", ("ak8963", None)),
+    ("icm20948", ("ak09916", None)),
 )
 
 MAG_KINDS = tuple(m["kind"] for m in MAGS)

@@ -109,3 +109,19 @@ def test_an_unknown_chip_at_a_known_address_is_named_as_such():
         assert ("no %s at 0x%02X: ID register 0x%02X reads " % (row["cls"], a, row["id_reg"])
                 in msg or "0x%02X answers but %s (0x%02X) reads " % (
                     a, row["id_name"], row["id_reg"]) in msg), msg
+
+
+def test_an_mpu9250_without_its_magnetometer_says_what_answered():
+    from firmware.errors import SensorNotFound
+    from host_sim.bus import RegisterFile, SimI2C
+    from host_sim.clock import SimClock
+    from host_sim.mpu6050 import MPU9250Sim
+    bus = SimI2C(SimClock())
+    imu = MPU9250Sim()
+    bus.attach(0x68, imu)
+    bus.attach(0x0C, RegisterFile({0x00: 0x12}), gate=imu.bypass_open)  # not an AKM chip
+    with pytest.raises(SensorNotFound) as e:
+        detect.detect(bus)
+    msg = str(e.value)
+    assert "0x0C answers but WIA (0x00) reads 0x12, not the AK8963's 0x48" in msg, msg
+    assert "no AK09916 at 0x0C" in msg and e.value.found == (0x0C, 0x68)

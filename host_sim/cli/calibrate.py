@@ -95,7 +95,7 @@ def _parser():
                   "checked against 10..90 uT)")
     p.option("--scale", "decimal", lo="0.000001", hi=1000000, metavar="K",
              help="counts per file unit, instead of --units (e.g. 6.6667 for\n"
-                  "an AK09916 log in uT: 0.15 uT per count)")
+                  "a log in uT of a chip at 0.15 uT per count)")
     p.option("--columns", parse_columns_opt, metavar="X,Y,Z",
              help="1-based columns of x, y, z (overrides the header)")
     p.option("--skip", "int", default=0, lo=0, hi=10 ** 9, metavar="N",
@@ -145,7 +145,7 @@ and the MAG_AXES the data say; docs/calibration.md, troubleshooting); after a re
 
 --sensor takes a chip or its breakout in any case (GY-271 is read as its QMC5883L, with a
 warning naming the other chip it may carry). A log of a chip the firmware does not drive
-(LSM303, LIS3MDL, AK09916, ...) is fitted without --sensor: give its units (--units uT) or
+(LSM303, LIS3MDL, BMM150, ...) is fitted without --sensor: give its units (--units uT) or
 --scale; the result is in the file's units (--out needs a supported chip).
 
 exit status: 0 calibrated (or forced); 1 the data was read but the calibration was refused
@@ -183,6 +183,9 @@ class Board:
             self.cpg = cpg
             self.output = calfile.SENSORS[self.sensor]["output"]
             self.overflow = chips.mag(self.sensor)["overflow"]  # the HMC5883L's -4096
+        wrong = mounting.handedness(opts.get("mag_axes"), self.sensor)
+        if wrong is not None:
+            raise UsageError("--mag-axes %s" % wrong)
         if opts["out"] is not None and self.sensor is None:
             raise UsageError("--out %s needs --sensor (and --range): a board checks both "
                              "before it loads a calibration" % opts["out"])
