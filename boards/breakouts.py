@@ -41,13 +41,22 @@ AK09916_IN_ICM20948 = ("x", "-y", "-z")   # ICM-20948 datasheet DS-000189, orien
 IN_PACKAGE = {"gy9250": AK8963_IN_MPU9250, "gy91": AK8963_IN_MPU9250,
               "icm20948": AK09916_IN_ICM20948}
 
+# single-chip modules named by their chip, lying as the others (x forward, y left printed)
+LIS3MDL = {"mag": "x,-y,-z"}   # LIS3MDL at 0x1C or 0x1E
+MMC5603 = {"mag": "x,-y,-z"}   # MMC5603NJ at 0x30
+# the LIS2MDL's axes are a left-handed set (docs/hardware.md, LIS2MDL handedness): x, y as
+# printed, its z into the board, so its map is a mirror (det -1; its driver's MIRROR)
+LIS2MDL = {"mag": "x,-y,z"}
+MIRRORED = {"lis2mdl"}
+
 BREAKOUTS = {"gy271": GY271, "gy273": GY273, "gy87": GY87, "gy9250": GY9250, "gy91": GY91,
-             "icm20948": ICM20948}
+             "icm20948": ICM20948, "lis3mdl": LIS3MDL, "lis2mdl": LIS2MDL,
+             "mmc5603": MMC5603}
 
 
 def breakout(name):
-    """The specs of a breakout by name ('gy271', 'gy273', 'gy87', 'gy9250', 'gy91', 'icm20948';
-    case and '-' ignored)."""
+    """The specs of a breakout by name ('gy271', 'gy273', 'gy87', 'gy9250', 'gy91', 'icm20948',
+    'lis3mdl', 'lis2mdl', 'mmc5603'; case and '-' ignored)."""
     key = name.lower().replace("-", "").replace("_", "")
     if key not in BREAKOUTS:
         raise ValueError("unknown breakout %r; known: %s" % (name, ", ".join(sorted(BREAKOUTS))))

@@ -39,7 +39,10 @@ CHIPS = (
     b"M 0C 00 48 WIA ak8963 AK8963 range,rate MPU-9250,MPU-9255",
     b"M 0D 0D FF ID qmc5883l QMC5883L range,odr,osr MPU6050",
     b"M 1E 0A 483433 ID hmc5883l HMC5883L gain,rate,averaging MPU6050",
+    b"M 1C,1E 0F 3D WHO_AM_I lis3mdl LIS3MDL range,odr,mode -",
+    b"M 1E 4F 40 WHO_AM_I lis2mdl LIS2MDL range,odr -",
     b"M 2C 00 80 ID qmc5883p QMC5883P range,odr,osr,dsr -",
+    b"M 30 39 10 Product_ID mmc5603 MMC5603 range,bw -",
     b"I 68,69 75 68 WHO_AM_I mpu6050 MPU6050 accel_range,dlpf,gyro_range -",
     b"I 68,69 75 71 WHO_AM_I mpu9250 MPU-9250 accel_range,dlpf,gyro_range -",
     b"I 68,69 75 73 WHO_AM_I mpu9250 MPU-9255 accel_range,dlpf,gyro_range -",
@@ -175,15 +178,18 @@ def detect(i2c, **options):
     tried = []
     mags = []
     for accel in (_MAG, _IMU):
+        first = len(tried)
         for f in rows:
             for a in f[1].split(b","):
                 a = int(a, 16)
                 if f[0][0] == accel and a not in tried:
                     tried.append(a)
-                    if accel == _MAG:
-                        mags.append("0x%02X (%s)" % (a, ", ".join(
-                            [g[6].decode() for g in rows if g[0][0] == accel and int(
-                                g[1][:2], 16) == a])))
+        tried[first:] = sorted(tried[first:])
+    for a in tried:
+        names = [g[6].decode() for g in rows if g[0][0] == _MAG and a in [
+            int(h, 16) for h in g[1].split(b",")]]
+        if names:
+            mags.append("0x%02X (%s)" % (a, ", ".join(names)))
     raise SensorNotFound(
         "no magnetometer found: tried %s, and at %s the I2C bypass of an accelerometer (%s), "
         "behind which may sit %s; the bus scan found %s%s" % (

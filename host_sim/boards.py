@@ -11,6 +11,10 @@ is the body -> sensor signed permutation of host_sim.world):
   'qmc5883l', 'gy271'   QMC5883L at 0x0D, chip x forward, y left, z up  -> (1, -2, -3)
   'hmc5883l'            HMC5883L at 0x1E (GY-273 / older GY-271), same axes -> (1, -2, -3)
   'qmc5883p'            QMC5883P at 0x2C (newer GY-271), same axes        -> (1, -2, -3)
+  'lis3mdl'             LIS3MDL at 0x1C, same axes                        -> (1, -2, -3)
+  'lis2mdl'             LIS2MDL at 0x1E, x forward, y left, its z down: a left-handed set
+                        (docs/hardware.md)                                -> (1, -2, 3)
+  'mmc5603'             MMC5603NJ at 0x30, same axes as the QMC5883L      -> (1, -2, -3)
   'gy87'                MPU6050 at 0x68 + HMC5883L at 0x1E on the MPU's auxiliary bus (hidden
                         until the bypass is opened) + BMP180 at 0x77; MPU6050 and HMC5883L both
                         x forward, y left, z up -> (1, -2, -3)
@@ -23,7 +27,7 @@ is the body -> sensor signed permutation of host_sim.world):
 (host_sim/chips.py BOARDS holds this list.)
 `accel=True` adds a separate MPU6050 module (GY-521, 0x68, x forward, y left, z up) to a board
 without one. For these mountings the firmware's sensor -> body maps are: magnetometer
-(x, -y, -z); accelerometer, AN4248 gravity sign, (-x, y, z).
+(x, -y, -z) (the LIS2MDL: (x, -y, z)); accelerometer, AN4248 gravity sign, (-x, y, z).
 """
 from host_sim import chips
 from host_sim.bus import RegisterFile, SimI2C

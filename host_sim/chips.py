@@ -14,7 +14,8 @@ counts per gauss are the driver's, and that each mirror flag is the driver's.
 MAGS, one dict per magnetometer:
   kind        the firmware driver's KIND (records, calibration files, --sensor)
   name        as the datasheet writes it
-  address     its I2C address; id: (ID register, the bytes it reads from there on)
+  address     its I2C address (the simulated board's); addresses: every one it may have,
+              where more than one; id: (ID register, the bytes it reads from there on)
   model       "module.Class" of its register model in host_sim/
   ranges      per range code: (full scale in gauss as text, range code, counts per gauss, the
               value of the driver's range option for it); range_option names that option
@@ -25,7 +26,8 @@ MAGS, one dict per magnetometer:
               its package's accelerometer's (a left-handed pair): MAG_AXES is then a mirror
   demo_options  driver options the demo adds (the HMC5883L's fastest rate)
   standby     (register, bytes) a write that stops the conversions (standby, idle, suspend or
-              power-down): no data-ready after it
+              power-down): no data-ready after it; None where the driver commands each
+              measurement
 IMUS, one dict per accelerometer: kind, name, addresses, id, model (as above), options (what
   the model is made with: the MPU-9255 is the MPU-9250's model with its WHO_AM_I).
 BOARDS: make_board's names -> (magnetometer kind, accelerometer kind or None, True when the
@@ -71,6 +73,28 @@ MAGS = (
      "ranges": (("49", 0, 667, 49),), "range_option": "range",
      "default": "49", "output": (-32768, 32767), "overflow": None, "mirror": False,
      "demo_options": {}, "standby": (0x31, b"\x00")},
+    # LIS3MDL (ST; docs/hardware.md): at 0x1C (SA1 low, the board here) or 0x1E
+    {"kind": "lis3mdl", "name": "LIS3MDL", "address": 0x1C, "addresses": (0x1C, 0x1E),
+     "id": (0x0F, b"\x3d"), "model": "lis3mdl.LIS3MDLSim",
+     "ranges": (("4", 0, 6842, 4), ("8", 1, 3421, 8), ("12", 2, 2281, 12),
+                ("16", 3, 1711, 16)), "range_option": "range",
+     "default": "4", "output": (-32768, 32767), "overflow": None, "mirror": False,
+     "demo_options": {}, "standby": (0x22, b"\x03")},
+    # LIS2MDL (ST; docs/hardware.md): one range, the driver's 2000 counts/G (three times the
+    # chip's 1.5 mG LSB); its axes are a left-handed set (docs/hardware.md, handedness)
+    {"kind": "lis2mdl", "name": "LIS2MDL", "address": 0x1E, "id": (0x4F, b"\x40"),
+     "model": "lis2mdl.LIS2MDLSim",
+     "ranges": (("16", 0, 2000, 16),), "range_option": "range",
+     "default": "16", "output": (-32768, 32767), "overflow": None, "mirror": True,
+     "demo_options": {}, "standby": (0x60, b"\x03")},
+    # MMC5603NJ (MEMSIC; docs/hardware.md): the driver's field H / 2^s, s = 1..4; it commands
+    # each measurement, so no write stops its samples (standby None)
+    {"kind": "mmc5603", "name": "MMC5603", "address": 0x30, "id": (0x39, b"\x10"),
+     "model": "mmc5603.MMC5603Sim",
+     "ranges": (("4", 0, 8192, 4), ("8", 1, 4096, 8), ("16", 2, 2048, 16),
+                ("30", 3, 1024, 30)), "range_option": "range",
+     "default": "4", "output": (-32768, 32767), "overflow": None, "mirror": False,
+     "demo_options": {}, "standby": None},
 )
 
 IMUS = (
@@ -89,6 +113,7 @@ IMUS = (
 _XFWD = (1, -2, -3)
 _AK8963_IN_MPU9250 = (-2, 1, 3)   # x = the accelerometer's y, y = its x, z = -its z
 _AK09916_IN_ICM20948 = (1, 2, 3)  # x = the accelerometer's x, y = -its y, z = -its z
+_XFWD_MIRROR = (1, -2, 3)  # a left-handed chip (LIS2MDL): x forward, y left, its z down
 
 BOARDS = (
     ("qmc5883l", ("qmc5883l", None, False, "QMC5883L module", _XFWD)),
@@ -98,6 +123,9 @@ BOARDS = (
     ("gy87", ("hmc5883l", "mpu6050", True, "GY-87 (MPU6050 + HMC5883L behind its bypass)",
               _XFWD)),
     ("gy87-qmc", ("qmc5883l", "mpu6050", True, "GY-87 clone (MPU6050 + QMC5883L)", _XFWD)),
+    ("lis3mdl", ("lis3mdl", None, False, "LIS3MDL module", _XFWD)),
+    ("lis2mdl", ("lis2mdl", None, False, "LIS2MDL module", _XFWD_MIRROR)),
+    ("mmc5603", ("mmc5603", None, False, "MMC5603 module", _XFWD)),
     ("gy9250", ("ak8963", "mpu9250", True, "GY-9250 (MPU-9250, its AK8963 behind the bypass)",
                 _AK8963_IN_MPU9250)),
     ("icm20948", ("ak09916", "icm20948", True,
@@ -109,6 +137,9 @@ DEMOS = (
     ("hmc5883l", ("hmc5883l", True, "gy273", "GY-273 (HMC5883L) + GY-521 (MPU6050)")),
     ("gy87", ("gy87", None, "gy87", "GY-87 (MPU6050 + HMC5883L behind its bypass)")),
     ("qmc5883p", ("qmc5883p", True, "gy271", "GY-271 (QMC5883P) + GY-521 (MPU6050)")),
+    ("lis3mdl", ("lis3mdl", True, "lis3mdl", "LIS3MDL module + GY-521 (MPU6050)")),
+    ("lis2mdl", ("lis2mdl", True, "lis2mdl", "LIS2MDL module + GY-521 (MPU6050)")),
+    ("mmc5603", ("mmc5603", True, "mmc5603", "MMC5603 module + GY-521 (MPU6050)")),
     ("ak8963", ("gy9250", None, "gy9250", "GY-9250 (MPU-9250 + its AK8963)")),
     ("ak09916", ("icm20948", None, "icm20948", "ICM-20948 module (+ its AK09916)")),
 )

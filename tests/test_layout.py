@@ -13,9 +13,7 @@ from tests import mp
 ROOT = mp.ROOT
 FW = os.path.join(ROOT, "firmware")
 # the chip drivers: firmware/detect.py's table names them (docs/chips.md)
-DRIVERS = sorted({row.split()[5].decode() for row in CHIPS}
-                 # drivers not yet rows of the table (docs/hardware.md)
-                 | {"lis3mdl", "lis2mdl", "mmc5603"})
+DRIVERS = sorted({row.split()[5].decode() for row in CHIPS})
 PIPELINE = ["compat", "errors", "fixedpoint", "i2cdevice", "detect"] + DRIVERS + [
             "axes", "calibrate.samples", "calibrate.accum",
             "calibrate.solve", "calibration", "calibrate.acceptance", "calibrate.calibrator",

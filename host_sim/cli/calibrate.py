@@ -153,7 +153,7 @@ rows, samples_held}.
 
 --sensor takes a chip or its breakout in any case (GY-271 is read as its QMC5883L, with a
 warning naming the other chip it may carry). A log of a chip the firmware does not drive
-(LSM303, LIS3MDL, BMM150, ...) is fitted without --sensor: give its units (--units uT) or
+(BMM150, LSM303DLHC, ...) is fitted without --sensor: give its units (--units uT) or
 --scale; the result is in the file's units (--out needs a supported chip).
 
 exit status: 0 calibrated (or forced); 1 the data was read but the calibration was refused

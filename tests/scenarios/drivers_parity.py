@@ -45,7 +45,8 @@ for i, chip in enumerate(chips.BOARD_NAMES):  # every simulated board (host_sim/
         rows.append(row)
     emit(("rows", rows))
 
-    b.mag.inject_raw(40000, -5, 5)  # out of range on either chip
+    # out of range on every chip (the MMC5603's model takes the field, 16384 counts/G: 8 G)
+    b.mag.inject_raw(131072 if mag.KIND == "mmc5603" else 40000, -5, 5)
     try:
         mag.read()
     except SensorOverflow as e:
@@ -55,12 +56,13 @@ for i, chip in enumerate(chips.BOARD_NAMES):  # every simulated board (host_sim/
         mag.read()
     except BusError as e:
         err(e)
-    reg, value = chips.mag(mag.KIND)["standby"]  # no more samples
-    b.bus.writeto_mem(mag.address, reg, value)
-    try:
-        mag.read()
-    except DataReadyTimeout as e:
-        err(e)
+    standby = chips.mag(mag.KIND)["standby"]  # no more samples (None: the driver triggers
+    if standby is not None:                   # each measurement, no write stops them)
+        b.bus.writeto_mem(mag.address, standby[0], standby[1])
+        try:
+            mag.read()
+        except DataReadyTimeout as e:
+            err(e)
     emit(("t_us", b.clock.now_us), ("transactions", b.bus.transactions),
          ("skipped", getattr(mag, "skipped", -1)))
 
