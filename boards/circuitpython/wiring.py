@@ -12,7 +12,8 @@ SCL_PIN = "GP5"             # the Pico's I2C0 pins; a Feather has none, so SCL/S
 SDA_PIN = "GP4"
 I2C_FREQ = 400000           # Hz; QMC5883L, HMC5883L and MPU6050 are all 400 kHz parts
 LOCK_TIMEOUT_US = 50000     # the longest wait for the bus lock (firmware/circuitpython/busio_i2c.py)
-BREAKOUT = "gy271"          # sensor mounting: see boards/breakouts.py (gy271, gy273, gy87)
+BREAKOUT = "gy271"          # sensor mounting: see boards/breakouts.py (gy271, gy273, gy87,
+#                             gy9250, gy91, icm20948: their MAG_AXES differ)
 MAG_AXES = "x,-y,-z"        # sensor -> body of BREAKOUT's magnetometer (boards/breakouts.py;
 ACCEL_AXES = "-x,y,z"       # a GY-521 MPU6050 lying the same way; tests/test_app.py checks both)
 DECLINATION_CDEG = 0        # local magnetic declination, centidegrees east-positive (NOAA/WMM)

@@ -7,7 +7,8 @@ I2C_ID = 0
 SCL_PIN = 22
 SDA_PIN = 21
 I2C_FREQ = 400000           # Hz; QMC5883L, HMC5883L and MPU6050 are all 400 kHz parts
-BREAKOUT = "gy271"          # sensor mounting: see boards/breakouts.py (gy271, gy273, gy87)
+BREAKOUT = "gy271"          # sensor mounting: see boards/breakouts.py (gy271, gy273, gy87,
+#                             gy9250, gy91, icm20948: their MAG_AXES differ)
 MAG_AXES = "x,-y,-z"        # sensor -> body of BREAKOUT's magnetometer (boards/breakouts.py;
 ACCEL_AXES = "-x,y,z"       # a GY-521 MPU6050 lying the same way; tests/test_app.py checks both)
 DECLINATION_CDEG = 0        # local magnetic declination, centidegrees east-positive (NOAA/WMM)
