@@ -12,8 +12,8 @@ the main bus once the IMU's I2C bypass is open.
 #   range  49: +-4912 uT at 0.15 uT/LSB, 667 counts/G (666.7, rounded): its only range
 #   rate   output rate in Hz: 10, 20, 50, 100 (continuous measurement mode 1-4)
 # read() -> (x, y, z) counts in the chip's axes; read_into(buf) without allocating. .KIND
-# 'ak09916', .range_code 0, .counts_per_gauss, .skipped (reads whose ST1 said DOR),
-# config_ok() (CNTL2 read back).
+# 'ak09916', .range_code 0, .counts_per_gauss, .skipped (reads whose ST1 said DOR), .suspect
+# (this read's DOR: an exact repeat is then stale data), config_ok() (CNTL2 read back).
 #
 # From the ICM-20948 datasheet (DS-000189 rev 1.3, section 13; docs/hardware.md): WIA1, WIA2
 # read 0x48 0x09; a read polls ST1 for DRDY, then takes HXL..HZH, TMPS and ST2 (0x11..0x18)
@@ -52,7 +52,7 @@ class AK09916(Magnetometer):
     OPTIONS = ("range", "rate", "delay_us", "timeout_us")
     TABLES = (_RANGES_G, _RATES_HZ)
     PER_CODE = (_PERIODS_US, _COUNTS_PER_GAUSS)
-    FLAGS = (0, _DOR)
+    FLAGS = (_DOR, _DOR)  # DOR: a set was lost (.suspect: a repeat is then stale data)
     REGISTERS = (_WIA1, _ST1, _DRDY, _HXL, _CNTL2)
     ID = b"\x48\x09"
 
@@ -78,6 +78,7 @@ class AK09916(Magnetometer):
         self.register = _HXL
         d = self._blk
         self._i2c.readfrom_mem_into(self.address, _HXL, d)
+        self.suspect = status & _DOR != 0
         if status & _DOR:
             self.skipped += 1
         if d[7] & _HOFL:

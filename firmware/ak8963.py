@@ -15,7 +15,8 @@ MPU-9255 (GY-9250, GY-91 breakouts), on the main bus once the IMU's I2C bypass i
 # read() -> (x, y, z) counts in the chip's axes, sensitivity-adjusted; read_into(buf) fills
 # buf[0..2] without allocating. .asa: the fuse ROM's ASAX, ASAY, ASAZ. .KIND 'ak8963',
 # .range_code 0, .counts_per_gauss, .skipped (reads whose ST1 said DOR: a set was lost),
-# config_ok() (CNTL1 read back).
+# .suspect (this read's DOR: the app then takes an exact repeat for stale data, as with the
+# QMC5883L's DOR: a live AK8963's 2-count noise makes one rare), config_ok() (CNTL1 read back).
 #
 # From the AK8963 datasheet (MS1356-E-02) and the MPU-9250 register map (RM-MPU-9250A-00,
 # section 5; docs/hardware.md):
@@ -61,7 +62,7 @@ class AK8963(Magnetometer):
     OPTIONS = ("range", "rate", "delay_us", "timeout_us")
     TABLES = (_RANGES_G, _RATES_HZ)
     PER_CODE = (_PERIODS_US, _COUNTS_PER_GAUSS)
-    FLAGS = (0, _DOR)  # DOR: the registers hold the newest set; one before it was lost
+    FLAGS = (_DOR, _DOR)  # DOR: a set was lost (.suspect: a repeat is then stale data)
     REGISTERS = (_WIA, _ST1, _DRDY, _HXL, _CNTL1)
     ID = b"\x48"
 
@@ -95,6 +96,7 @@ class AK8963(Magnetometer):
         self.register = _HXL
         d = self._blk
         self._i2c.readfrom_mem_into(self.address, _HXL, d)
+        self.suspect = status & _DOR != 0
         if status & _DOR:
             self.skipped += 1
         if d[6] & _HOFL:

@@ -41,7 +41,7 @@ Behaviour modelled (lazily, on the next transaction):
   0.15 uT/LSB, a model choice) and rounds to the nearest count.
 - Self-test and external trigger modes are not modelled (no data).
 - Fault hooks: freeze() and constant(x, y, z) (host_sim.bus.MagnetometerModel), brown_out(),
-  glitch(reg, value); inject_raw(x, y, z) forces the raw counts of the next set (values
+  glitch(reg, value) (the mode register takes it whatever the mode rules); inject_raw(x, y, z) forces the raw counts of the next set (values
   beyond the output range are clipped and set HOFL).
 """
 import math
@@ -119,7 +119,15 @@ class AKMagSim(MagnetometerModel):
         self.power_on()
 
     def glitch(self, reg, value):
-        self.write_reg(reg, value)
+        """A write the driver never made (a bus glitch); to the mode register, taken whatever
+        the mode rules (a corrupted register, not a command)."""
+        if reg != self.CNTL:
+            self.write_reg(reg, value)
+            return
+        self.regs[reg] = value
+        self.mode = value & self.MODE_MASK
+        self._t0 = self.now_us if self.mode in self.PERIODS else None
+        self._k = 0
 
     def inject_raw(self, x, y, z):
         self.injected.append((int(x), int(y), int(z)))
