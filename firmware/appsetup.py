@@ -31,6 +31,13 @@ def setup(app, i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, s
     app._ticks, app._wrap = _app_clock(app, ticks_us_)
     app._wall, app._wall_diff = wall_clock()
     app.mag, app.accel = _sensors(i2c, mag, accel, mag_options, delay_us)
+    if app._mag_map.det != (-1 if getattr(app.mag, "MIRROR", False) else 1):
+        raise ValueError(
+            "mag_axes %r is a %s: the %s's axes are %s (its datasheet), so is its map (e.g. %s)"
+            % (app._mag_map.spec, "rotation" if app._mag_map.det > 0 else "mirror image",
+               app.mag.KIND, "a mirror image of its accelerometer's" if app._mag_map.det > 0
+               else "right-handed as the body frame", "x,y,-z" if app._mag_map.det > 0
+               else "x,-y,-z"))
     app.model = model
     app.capacity = capacity if capacity else DEFAULT_CAPACITY
     app.solve_every = solve_every
@@ -145,10 +152,6 @@ def _check_options(model, declination_cdeg, solve_every, reinit_after):
                          % (reinit_after,))
 
 def _app_clock(app, clock):
-    if app._mag_map.det != 1:
-        raise ValueError("mag_axes %r is a mirror image: a magnetometer's map is a rotation "
-                         "(chip and body frames are both right-handed)"
-                         % (app._mag_map.spec,))
     if app._acc_map.det != -1:
         raise ValueError("accel_axes %r is a rotation: an accelerometer's map to AN4248's "
                          "gravity sign is a mirror (see firmware/axes.py)"

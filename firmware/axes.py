@@ -9,7 +9,9 @@
 # spec. A board's specs live in boards/ (boards/breakouts.py derives them for common breakouts).
 #
 # .det is +1 for a rotation and -1 for a mirror image. A magnetometer's map is a rotation (chip
-# and body frames are both right-handed). An accelerometer's map to AN4248's sign is a mirror:
+# and body frames are both right-handed), a mirror only for a chip whose datasheet draws its
+# axes as a mirror of its accelerometer's (the driver's MIRROR; docs/chips.md). An
+# accelerometer's map to AN4248's sign is a mirror:
 # the chip reads +1 g on an axis pointing up (specific force), AN4248 wants +1 g on z down, so
 # the rotation is followed by a negation.
 

@@ -191,6 +191,8 @@ class Magnetometer(Device):
     #   REGISTERS      (ID register, status register, data-ready bit, first of the six data
     #                  registers, first configuration register)
     #   ID             the bytes the ID register and those after it read
+    #   MIRROR         (where True only) the datasheet draws the magnetometer's axes as a
+    #                  mirror image of its package's accelerometer's: MAG_AXES is a mirror too
     #
     # The chip's constructor passes its option values in the order of OPTIONS; the chip gives
     # _config_of(codes) (the bytes the configuration registers hold from the first on, which

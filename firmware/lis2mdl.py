@@ -65,6 +65,7 @@ class LIS2MDL(Magnetometer):
     FLAGS = (0, _ZYXOR)
     REGISTERS = (_WHO_AM_I, _STATUS, _ZYXDA, _OUT_BLOCK, _CFG_REG_A)
     ID = b"\x40"
+    MIRROR = True   # its axes are a left-handed set (docs/hardware.md, LIS2MDL handedness)
 
     def __init__(self, i2c, address=0x1E, *, range=16, odr=20, delay_us=None,
                  timeout_us=None):

@@ -90,7 +90,7 @@ def load(app, data):
     # calibration was made through another MAG_AXES than the one in force: its dip (measured
     # in the body frame, firmware/health.py DipCheck) is then no reference, and is learned
     # afresh.
-    said = _parse(data, app.mag.KIND, app._acc_map.spec)
+    said = _parse(data, app.mag.KIND, app._acc_map.spec, app._mag_map.det)
     if said is None:
         return False
     now = app._mag_map.spec
@@ -103,9 +103,10 @@ def load(app, data):
     return True
 
 
-def _parse(data, kind, accel):
+def _parse(data, kind, accel, det):
     # (MAG_AXES judged, MAG_AXES said) of an intact line judged with this magnetometer and
-    # this ACCEL_AXES; None for anything else
+    # this ACCEL_AXES, both maps of its handedness (det: +1 a rotation, -1 where the chip's
+    # axes are a mirror of its accelerometer's); None for anything else
     i = data.rfind(b" ")
     if i < 0 or len(data) >= _LINE_MAX or data[-1:] != b"\n":
         return None  # torn (no newline yet), or longer than any line
@@ -121,6 +122,6 @@ def _parse(data, kind, accel):
         said = AxisMap(w[4])
     except ValueError:  # not hex, not text (UnicodeError), not an axis map
         return None
-    if judged.det != 1 or said.det != 1 or acc.det != -1 or judged == said or acc.spec != accel:
+    if judged.det != det or said.det != det or acc.det != -1 or judged == said or acc.spec != accel:
         return None
     return judged.spec, said.spec

@@ -11,20 +11,31 @@ is the body -> sensor signed permutation of host_sim.world):
   'qmc5883l', 'gy271'   QMC5883L at 0x0D, chip x forward, y left, z up  -> (1, -2, -3)
   'hmc5883l'            HMC5883L at 0x1E (GY-273 / older GY-271), same axes -> (1, -2, -3)
   'qmc5883p'            QMC5883P at 0x2C (newer GY-271), same axes        -> (1, -2, -3)
+  'lis3mdl'             LIS3MDL at 0x1C, same axes                        -> (1, -2, -3)
+  'lis2mdl'             LIS2MDL at 0x1E, x forward, y left, its z down: a left-handed set
+                        (docs/hardware.md)                                -> (1, -2, 3)
+  'mmc5603'             MMC5603NJ at 0x30, same axes as the QMC5883L      -> (1, -2, -3)
   'gy87'                MPU6050 at 0x68 + HMC5883L at 0x1E on the MPU's auxiliary bus (hidden
                         until the bypass is opened) + BMP180 at 0x77; MPU6050 and HMC5883L both
                         x forward, y left, z up -> (1, -2, -3)
   'gy87-qmc'            the GY-87 clone with a QMC5883L at 0x0D behind the bypass instead
+  'gy9250'              MPU-9250 at 0x68 (x forward, y left, z up) with its AK8963 at 0x0C
+                        behind the bypass, its axes as the MPU-9250's datasheet draws them:
+                        x = the accelerometer's y, y = its x, z = -its z -> (-2, 1, 3)
+  'icm20948'            ICM-20948 at 0x68 with its AK09916 at 0x0C behind the bypass:
+                        x = the accelerometer's x, y = -its y, z = -its z -> (1, 2, 3)
+(host_sim/chips.py BOARDS holds this list.)
 `accel=True` adds a separate MPU6050 module (GY-521, 0x68, x forward, y left, z up) to a board
 without one. For these mountings the firmware's sensor -> body maps are: magnetometer
-(x, -y, -z); accelerometer, AN4248 gravity sign, (-x, y, z).
+(x, -y, -z) (the LIS2MDL: (x, -y, z)); accelerometer, AN4248 gravity sign, (-x, y, z).
 """
+from host_sim import chips
 from host_sim.bus import RegisterFile, SimI2C
 from host_sim.clock import SimClock
 from host_sim.prng import mix32
 from host_sim.world import World, check_mount
 
-CHIPS = ("qmc5883l", "gy271", "hmc5883l", "qmc5883p", "gy87", "gy87-qmc")
+CHIPS = chips.BOARD_NAMES  # host_sim/chips.py BOARDS
 MOUNT_X_FWD_Y_LEFT_Z_UP = (1, -2, -3)
 _BMP180_ADDR = 0x77
 _BMP180_ID_REG = 0xD0
@@ -53,14 +64,8 @@ class Board:
 
 
 def _mag(kind, world, mount, seed, noise):
-    if kind == "qmc5883l":
-        from host_sim.qmc5883l import QMC5883LSim
-        return QMC5883LSim(world, mount=mount, seed=seed, noise=noise), 0x0D
-    if kind == "hmc5883l":
-        from host_sim.hmc5883l import HMC5883LSim
-        return HMC5883LSim(world, mount=mount, seed=seed, noise=noise), 0x1E
-    from host_sim.qmc5883p import QMC5883PSim
-    return QMC5883PSim(world, mount=mount, seed=seed, noise=noise), 0x2C
+    m = chips.mag(kind)
+    return chips.model_class(m)(world, mount=mount, seed=seed, noise=noise), m["address"]
 
 
 def make_board(chip="qmc5883l", world=None, seed=1, noise=True, freq=400000, mount=None,
@@ -81,20 +86,24 @@ def make_board(chip="qmc5883l", world=None, seed=1, noise=True, freq=400000, mou
     b = Board(chip, clock, bus, world)
     mag_seed = mix32(seed * 2 + 1)
     acc_seed = mix32(seed * 2 + 2)
-    b.mount = check_mount(mount if mount is not None else MOUNT_X_FWD_Y_LEFT_Z_UP)
+    kind, imu, behind, _, own = chips.board(chip)
+    b.mount = check_mount(mount if mount is not None else own)
     b.accel_mount = check_mount(accel_mount if accel_mount is not None else MOUNT_X_FWD_Y_LEFT_Z_UP)
-    kind = {"gy271": "qmc5883l", "gy87": "hmc5883l", "gy87-qmc": "qmc5883l"}.get(chip, chip)
     b.mag, b.mag_address = _mag(kind, world, b.mount, mag_seed, noise)
-    has_accel = chip in ("gy87", "gy87-qmc") if accel is None else bool(accel)
-    if has_accel:
-        from host_sim.mpu6050 import MPU6050Sim
-        b.accel = MPU6050Sim(world, mount=b.accel_mount, seed=acc_seed, noise=noise,
-                             **(gyro or {}))
-        b.accel_address = 0x68
-        bus.attach(0x68, b.accel)
-    if chip in ("gy87", "gy87-qmc"):
+    if imu is None and accel:
+        imu = "mpu6050"  # a GY-521 module beside the magnetometer
+    if imu is not None and (accel is None or accel):
+        m = chips.imu(imu)
+        kw = dict(m.get("options", {}))
+        kw.update(gyro or {})
+        b.accel = chips.model_class(m)(world, mount=b.accel_mount, seed=acc_seed, noise=noise,
+                                       **kw)
+        b.accel_address = m["addresses"][0]
+        bus.attach(b.accel_address, b.accel)
+    if behind:
         bus.attach(b.mag_address, b.mag, gate=b.accel.bypass_open)
-        bus.attach(_BMP180_ADDR, RegisterFile({_BMP180_ID_REG: _BMP180_ID}))
+        if imu == "mpu6050":  # the GY-87's barometer
+            bus.attach(_BMP180_ADDR, RegisterFile({_BMP180_ID_REG: _BMP180_ID}))
     else:
         bus.attach(b.mag_address, b.mag)
     return b

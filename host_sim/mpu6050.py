@@ -102,6 +102,10 @@ class MPU6050Sim(RegisterDevice):
     +-50 mg X/Y, +-80 mg Z; default none)."""
 
     ADDRESS = 0x68
+    WHO_AM_I = _WHO_AM_I
+    GYRO_RMS_DPS = _GYRO_RMS_DPS
+    TEMP_COUNTS_PER_C = _TEMP_COUNTS_PER_C
+    TEMP_OFFSET_C = _TEMP_OFFSET_C
 
     def __init__(self, world=None, mount=(1, -2, -3), seed=1, noise=True, bias_g=(0.0, 0.0, 0.0),
                  gyro_bias_dps=(0.0, 0.0, 0.0), gyro_temp_dps_per_c=(0.0, 0.0, 0.0),
@@ -141,6 +145,10 @@ class MPU6050Sim(RegisterDevice):
 
     def counts_per_g(self):
         return _ACCEL_COUNTS_PER_G[(self.regs[_REG_ACCEL_CONFIG] >> 3) & 0x03]
+
+    def accel_sigma_g(self):
+        """The accelerometer's RMS noise in g at the filter setting in use."""
+        return _ACCEL_PSD_G * math.sqrt(_DLPF_BW_HZ[self.regs[_REG_CONFIG] & 0x07])
 
     def _gyro_hz(self):
         """Gyro output rate: 8 kHz with the DLPF off (DLPF_CFG 0 or 7), else 1 kHz."""
@@ -189,7 +197,8 @@ class MPU6050Sim(RegisterDevice):
         if self.world is not None:
             rate = mount_apply(self.mount, self.world.angular_rate_body(t_us))
         g = Prng(self.seed, stream=t_us) if self.noise else None
-        sigma = _ACCEL_PSD_G * math.sqrt(_DLPF_BW_HZ[self.regs[_REG_CONFIG] & 0x07]) * cpg
+        sigma = self.accel_sigma_g() * cpg
+        gyro_rms = self.GYRO_RMS_DPS
         gcount = _GYRO_COUNTS_PER_DPS[(self.regs[_REG_GYRO_CONFIG] >> 3) & 0x03]
         t_s = t_us / 1e6
         for i in range(3):
@@ -198,10 +207,11 @@ class MPU6050Sim(RegisterDevice):
                  + self.gyro_drift_dps_per_s[i] * t_s) * gcount
             if g is not None:
                 v += g.gauss(sigma)
-                w += g.gauss(_GYRO_RMS_DPS * gcount)
+                w += g.gauss(gyro_rms * gcount)
             self.accel[i] = _sat16(int(math.floor(v + 0.5)))
             self.gyro[i] = _sat16(int(math.floor(w + 0.5)))
-        self.temp = _sat16(int(math.floor((tc - _TEMP_OFFSET_C) * _TEMP_COUNTS_PER_C + 0.5)))
+        self.temp = _sat16(int(math.floor((tc - self.TEMP_OFFSET_C) * self.TEMP_COUNTS_PER_C
+                                          + 0.5)))
         self.int_status |= _DATA_RDY_INT
         self.samples += 1
 
@@ -235,7 +245,7 @@ class MPU6050Sim(RegisterDevice):
             self.int_status = 0
             return v
         if reg == _REG_WHO_AM_I:
-            return _WHO_AM_I
+            return self.WHO_AM_I
         if reg == _REG_FIFO_R_W:
             return 0
         return self.regs[reg]
@@ -256,3 +266,34 @@ class MPU6050Sim(RegisterDevice):
             self.regs[reg] = value
             if reg in (_REG_SMPLRT_DIV, _REG_CONFIG) and not self.asleep():
                 self._restart()
+
+
+# MPU-9250 / MPU-9255: the MPU-6050's accelerometer and gyroscope registers (and the same
+# bypass), its own WHO_AM_I, filter register and noise (product specification PS-MPU-9250A-01
+# rev 1.0, table 2, and register map RM-MPU-9250A-00 rev 1.4, 4.8 and 4.38).
+_REG_ACCEL_CONFIG2 = const(0x1D)  # ACCEL_FCHOICE_B bit3, A_DLPF_CFG[2:0]
+_A_DLPF_BW_HZ = (218.1, 218.1, 99.0, 44.8, 21.2, 10.2, 5.05, 420.0)
+_ACCEL_PSD_G_9250 = 300e-6     # 300 ug/sqrt(Hz)
+
+
+class MPU9250Sim(MPU6050Sim):
+    """MPU-9250 (WHO_AM_I 0x71) or, with who_am_i=0x73, MPU-9255: the MPU-6050 model with
+    WHO_AM_I, the accelerometer's own low-pass filter in ACCEL_CONFIG2 (0x1D: A_DLPF_CFG
+    0-7 = 218, 218, 99, 45, 21, 10, 5, 420 Hz; ACCEL_FCHOICE_B = 1 bypasses it, 1046 Hz),
+    300 ug/sqrt(Hz) of accelerometer noise, 0.1 deg/s RMS of gyroscope noise and the
+    temperature scale T = TEMP_OUT / 333.87 + 21 C. Its AK8963 sits behind the bypass
+    (host_sim/ak8963.py; host_sim/boards.py 'gy9250')."""
+
+    WHO_AM_I = 0x71
+    GYRO_RMS_DPS = 0.1
+    TEMP_COUNTS_PER_C = 333.87
+    TEMP_OFFSET_C = 21.0
+
+    def __init__(self, world=None, mount=(1, -2, -3), seed=1, noise=True, who_am_i=0x71, **kw):
+        self.WHO_AM_I = who_am_i
+        MPU6050Sim.__init__(self, world, mount, seed, noise, **kw)
+
+    def accel_sigma_g(self):
+        a2 = self.regs[_REG_ACCEL_CONFIG2]
+        bw = 1046.0 if a2 & 0x08 else _A_DLPF_BW_HZ[a2 & 0x07]
+        return _ACCEL_PSD_G_9250 * math.sqrt(bw)

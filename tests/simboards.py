@@ -1,5 +1,5 @@
-"""One chip model on a simulated bus, for the tests of chips that are not yet simulated boards
-of host_sim.boards.make_board (LIS3MDL, LIS2MDL, MMC5603)."""
+"""One chip model alone on a simulated bus (LIS3MDL, LIS2MDL, MMC5603), for the tests of a
+driver against its model's registers; host_sim.boards.make_board builds whole boards."""
 from host_sim.bus import SimI2C
 from host_sim.clock import SimClock
 from host_sim.world import World

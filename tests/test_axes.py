@@ -11,7 +11,7 @@ import math
 import pytest
 from hypothesis import given, strategies as st
 
-from boards.breakouts import BREAKOUTS, GY87, GY271, GY273, breakout
+from boards.breakouts import BREAKOUTS, GY87, GY271, GY273, IN_PACKAGE, MIRRORED, breakout
 from firmware.axes import AxisMap
 from firmware.compass import Compass, heading
 
@@ -114,14 +114,26 @@ def rot(yaw, pitch, roll):
     return mm(rx, mm(ry, rz))
 
 
-def chip_readings(yaw, pitch, roll, incl=60.0, field=6000.0, one_g=16384.0):
+def in_package(rel):
+    """The magnetometer's axis vectors in the body frame when its axes are `rel` (the
+    accelerometer's axes, boards/breakouts.py IN_PACKAGE) and the accelerometer's are those
+    of a flat breakout."""
+    out = []
+    for a in rel:
+        v = CHIP_AXES_IN_BODY["xyz".index(a[-1])]
+        out.append(tuple(-c for c in v) if a[0] == "-" else v)
+    return tuple(out)
+
+
+def chip_readings(yaw, pitch, roll, incl=60.0, field=6000.0, one_g=16384.0,
+                  mag_axes=CHIP_AXES_IN_BODY):
     """What the chips of a flat breakout read: field and specific force along chip axes."""
     r = rot(yaw, pitch, roll)
     d = math.radians(incl)
     b_body = matvec(r, (field * math.cos(d), 0.0, field * math.sin(d)))
     down = matvec(r, (0.0, 0.0, 1.0))  # world down in body axes
     f_body = [-one_g * v for v in down]  # specific force at rest points up
-    mag = [round(sum(a * b for a, b in zip(axis, b_body))) for axis in CHIP_AXES_IN_BODY]
+    mag = [round(sum(a * b for a, b in zip(axis, b_body))) for axis in mag_axes]
     acc = [round(sum(a * f for a, f in zip(axis, f_body))) for axis in CHIP_AXES_IN_BODY]
     an4248_g = [round(one_g * v) for v in down]  # AN4248 Gp: +1 g on z for a level board
     return mag, acc, [round(v) for v in b_body], an4248_g
@@ -131,11 +143,18 @@ def chip_readings(yaw, pitch, roll, incl=60.0, field=6000.0, one_g=16384.0):
 def test_breakout_maps_turn_chip_readings_into_an4248_body_vectors(name):
     maps = breakout(name)
     mag_map = AxisMap(maps["mag"])
-    assert mag_map.det == 1  # a rotation: both frames right-handed
+    mirror = name in MIRRORED  # a left-handed magnetometer (LIS2MDL): its z into the board
+    assert mag_map.det == (-1 if mirror else 1)  # else a rotation: both frames right-handed
     acc_map = AxisMap(maps["accel"]) if "accel" in maps else AxisMap("-x,y,z")
     assert acc_map.det == -1  # rotation then the specific-force sign flip
+    axes = in_package(IN_PACKAGE[name]) if name in IN_PACKAGE else CHIP_AXES_IN_BODY
+    if mirror:
+        axes = (axes[0], axes[1], tuple(-c for c in axes[2]))
+    x, y, z = axes  # the magnetometer's frame is right-handed too (left-handed: mirrored)
+    cross = (x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0])
+    assert cross == (tuple(-c for c in z) if mirror else z)
     for yaw, pitch, roll in [(0, 0, 0), (90, 0, 0), (37, 25, -30), (200, -40, 170), (300, 80, 10)]:
-        mag, acc, b_body, g_body = chip_readings(yaw, pitch, roll)
+        mag, acc, b_body, g_body = chip_readings(yaw, pitch, roll, mag_axes=axes)
         b, g = [0, 0, 0], [0, 0, 0]
         mag_map.apply(mag, b)
         acc_map.apply(acc, g)

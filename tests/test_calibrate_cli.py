@@ -379,7 +379,7 @@ def test_sensor_names_in_any_case_and_breakouts_by_their_name(tmp_path):
         assert '"sensor": "%s"' % chip in out or "%s's output" % chip in out, (name, out)
 
 
-@pytest.mark.parametrize("chip", ["lsm303", "LIS3MDL", "ak09916", "bmm150", "mmc5883"])
+@pytest.mark.parametrize("chip", ["lsm303", "IST8310", "lsm9ds1", "bmm150", "mmc5883"])
 def test_an_unsupported_chip_points_at_the_generic_path_which_fits_it(tmp_path, chip):
     p = sphere_csv(tmp_path, n=600)          # a log in uT of some chip
     rc, out, err = cli_run("calibrate", p, "--sensor", chip)

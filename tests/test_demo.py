@@ -14,7 +14,15 @@ from hypothesis import given, strategies as st
 from host_sim.cli import demo
 from tests import mp
 
-GOAL_DEG = 0.5  # calibrated max error on the tilted grid, every chip
+GOAL_DEG = 0.5  # calibrated max error on the tilted grid, every chip but the AKM ones:
+# their count is 0.15 uT, 1/167 of a 25 uT horizontal field (an AK8963's raw count, before
+# its fuse-ROM trim, up to 0.22 uT): with the world's own iron and no noise the grid's worst
+# is 0.71 deg (AK8963) and 0.46 deg (AK09916), half-count rounding on two axes, so 0.75
+GOAL_AKM_DEG = 0.75
+# the LIS3MDL's noise, 3.2 mG RMS on x and y and 4.1 mG on z (its datasheet, section 2.1;
+# the QMC5883L's and MMC5603's are ~2 mG) enters the fit through the samples: fit error
+# 0.7 % (QMC5883L 0.4 %), grid worst 0.35-0.67 deg over seeds 1-3, rms 0.16-0.30 deg
+GOAL_NOISY_DEG = 0.75
 # Seeds 1-12 measured 0.14-0.35 deg (HMC5883L boards) and 0.16-0.29 deg (QMC5883L). The
 # HMC5883L's floor is the calibration's integer-count offset V: at the gain strong hard iron
 # forces (820 counts/G) half a count is 0.06 uT, up to 0.2 deg of a 25 uT horizontal field.
@@ -79,11 +87,16 @@ def test_largest_reading_bounds_every_field_direction_and_is_reached(v, wf):
 
 @given(st.floats(1, 900))
 def test_range_is_the_most_sensitive_one_that_holds_the_field(need_ut):
-    for kind, table in (("qmc5883l", demo.QMC_RANGES_G), ("qmc5883p", demo.QMCP_RANGES_G),
-                        ("hmc5883l", demo.HMC_RANGES_G)):
+    from host_sim import chips
+    assert [fs for fs, _ in demo.full_scales("qmc5883l")] == [2, 8]
+    assert [fs for fs, _ in demo.full_scales("qmc5883p")] == [2, 8, 12, 30]
+    assert demo.full_scales("hmc5883l")[0] == (0.88, 0)
+    for kind in chips.MAG_KINDS:
+        table = [fs for fs, _ in demo.full_scales(kind)]
         opt, code, fs = demo.pick_range(kind, need_ut)
-        assert opt == ("gain" if kind == "hmc5883l" else "range")
-        i = list(table).index(fs)
+        assert opt == chips.mag(kind)["range_option"]
+        assert dict(demo.full_scales(kind))[fs] == code
+        i = table.index(fs)
         need_g = need_ut * demo.RANGE_MARGIN / 100
         if need_g <= table[-1]:
             assert need_g <= fs                          # holds it
@@ -143,7 +156,8 @@ def test_grid_heading_with_the_true_iron_and_no_noise_matches_the_true_heading()
 @pytest.mark.parametrize("chip", demo.CHIP_CHOICES)
 def test_calibrated_heading_meets_the_goal_and_beats_minmax_and_none(chip, seed):
     # the accuracy goal on the demo's world (seed 1) and two more seeds, for every chip
-    bound = GOAL_DEG
+    bound = (GOAL_AKM_DEG if chip in ("ak8963", "ak09916") else
+             GOAL_NOISY_DEG if chip == "lis3mdl" else GOAL_DEG)
     r = demo_json(chip, seed)
     e = r["heading_error_deg"]
     assert set(e) >= {"uncalibrated", "minmax", "calibrated"}
@@ -151,6 +165,10 @@ def test_calibrated_heading_meets_the_goal_and_beats_minmax_and_none(chip, seed)
         assert set(e[m]) >= {"max", "rms"}
         assert 0 <= e[m]["rms"] <= e[m]["max"]
     assert e["calibrated"]["max"] <= bound
+    assert r["calibration"]["model"] == 10 and e["calibrated"]["rms"] <= 1.0  # issue goal
+    print("%s seed %d: 10-element fit error %d.%02d %%, heading error rms %.2f deg, max %.2f"
+          % (chip, seed, r["calibration"]["fit_error"] // 100, r["calibration"]["fit_error"] % 100,
+             e["calibrated"]["rms"], e["calibrated"]["max"]))
     assert e["calibrated"]["max"] < e["minmax"]["max"] < e["uncalibrated"]["max"]
     assert e["calibrated"]["rms"] < e["minmax"]["rms"] < e["uncalibrated"]["rms"]
 
@@ -181,7 +199,7 @@ def test_every_chip_the_simulator_models_is_a_demo_choice():
     # host_sim/boards.py's magnetometers, each by its chip's name (the GY-271 / GY-87 are
     # breakouts of those chips, gy87 the demo's one-board choice)
     from host_sim.boards import CHIPS
-    assert {c for c in CHIPS if c[:2] in ("qm", "hm")} <= set(demo.CHIP_CHOICES)
+    assert {c for c in CHIPS if c[:2] in ("qm", "hm", "li", "mm")} <= set(demo.CHIP_CHOICES)
     r = demo_json("qmc5883p")
     assert r["chip"] == "qmc5883p" and r["calibration"]["counts_per_gauss"] in (
         1000, 2500, 3750, 15000)                       # the QMC5883P's, not the QMC5883L's

@@ -58,10 +58,15 @@ def test_empty_bus_names_every_address_tried_and_that_nothing_answered():
     with pytest.raises(SensorNotFound) as e:
         detect.detect(SimI2C(SimClock()))
     msg = str(e.value)
-    for a in ("0x0D", "0x1E", "0x2C", "0x68", "0x69"):
+    for a in ("0x0C", "0x0D", "0x1C", "0x1E", "0x2C", "0x30", "0x68", "0x69"):
         assert a in msg
+    for name in ("AK8963", "AK09916", "MPU-9250", "ICM-20948", "QMC5883P", "LIS3MDL",
+                 "LIS2MDL", "MMC5603"):
+        assert name in msg
+    assert "0x1E (HMC5883L, LIS3MDL, LIS2MDL)" in msg
     assert "found nothing" in msg
-    assert e.value.tried == (0x0D, 0x1E, 0x2C, 0x68, 0x69) and e.value.found == ()
+    assert e.value.tried == (0x0C, 0x0D, 0x1C, 0x1E, 0x2C, 0x30, 0x68, 0x69)
+    assert e.value.found == ()
     assert isinstance(e.value, OSError)
 
 
@@ -214,19 +219,23 @@ def test_timeout_out_of_range_is_value_error():
 
 def test_drivers_bit_identical_on_micropython():
     out = [dict(pairs) for pairs in mp.json_lines(mp.parity(["tests/scenarios/drivers_parity.py"]))]
+    from host_sim import chips
     kinds = [o["kind"] for o in out if "kind" in o]
-    assert kinds == ["qmc5883l", "hmc5883l", "hmc5883l", "qmc5883l", "qmc5883p"]
+    assert kinds == [chips.board(b)[0] for b in chips.BOARD_NAMES]
+    n = len(kinds)
     errors = [o["error"] for o in out if "error" in o]
-    assert errors.count("SensorOverflow") == 5 and errors.count("DataReadyTimeout") == 5
-    assert errors.count("BusError") == 5 and errors.count("SensorNotFound") == 1
+    triggered = len([k for k in kinds if chips.mag(k)["standby"] is None])  # no standby
+    assert errors.count("SensorOverflow") == n
+    assert errors.count("DataReadyTimeout") == n - triggered
+    assert errors.count("BusError") == n and errors.count("SensorNotFound") == 1
     rows = [o["rows"] for o in out if "rows" in o]
-    assert len(rows) == 5 and all(len(r) == 25 and len(set(map(tuple, r))) == 25 for r in rows)
+    assert len(rows) == n and all(len(r) == 25 and len(set(map(tuple, r))) == 25 for r in rows)
 
 
 def test_read_into_allocates_nothing_on_micropython():
     out = mp.json_lines(mp.run(["tests/scenarios/drivers_alloc.py"], micro=True))
     rows = [o for o in out if "chip" in o]
-    assert len(rows) == 12
+    assert len(rows) == 22
     for o in rows:
         assert o["heap_locked_reads"] == o["reads"] == 200, o
         assert o["net_bytes"] == 0, o

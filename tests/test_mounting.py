@@ -453,3 +453,73 @@ def test_on_the_board_a_right_setting_is_never_questioned():
         assert s.app.mounting[0] == mountcheck.OK, (chip, s.app.mounting)
         assert not any(st.startswith("check MAG_AXES") for st in s.statuses), chip
         assert s.app.status == "ok" and s.app.accuracy_reason() != "mag_axes"
+
+
+# --- the magnetometers inside an IMU, and handedness -------------------------------------------
+@pytest.mark.parametrize("board,breakout_name", [("gy9250", "gy9250"), ("icm20948", "icm20948")])
+def test_an_imus_own_magnetometer_is_confirmed_where_its_datasheet_puts_it(board, breakout_name):
+    # the AK8963 / AK09916 sit in their package as the datasheets draw them (host_sim/chips.py
+    # mountings); boards/breakouts.py's MAG_AXES for them are confirmed, the usual breakout's
+    # map is named wrong with the right one in its place
+    from boards.breakouts import breakout
+    from host_sim import chips
+    mount = chips.board(board)[4]
+    right = breakout(breakout_name)["mag"]
+    assert M.mag_axes(mount) == right
+    s = M.Session(board, None, mount=mount, mag_axes=right)
+    assert s.verdict[0] == mountcheck.OK, s.checks
+    s = M.Session(board, None, mount=mount, mag_axes="x,-y,-z")
+    assert s.verdict == (mountcheck.WRONG, right), s.checks
+
+
+def _mirrored():
+    from firmware.qmc5883l import QMC5883L
+
+    class MirroredQMC(QMC5883L):
+        MIRROR = True  # as a chip whose datasheet draws its axes as a mirror of its accelerometer's
+    return MirroredQMC
+
+
+def test_a_mirror_map_only_for_a_chip_whose_axes_are_a_mirror():
+    from host_sim import motion
+    from host_sim.boards import make_board
+    from host_sim.world import World
+    from firmware.app import CompassApp
+    from firmware.qmc5883l import QMC5883L
+
+    def app(cls, axes, mount=(1, -2, 3)):
+        w = World(field_ut=50.0, inclination_deg=60.0, hard_iron_ut=(45.0, -35.0, 30.0),
+                  motion=motion.figure8())
+        b = make_board("qmc5883l", world=w, seed=3, accel=True, mount=mount)
+        return b, CompassApp(b.bus, mag=cls(b.bus, delay_us=b.sleep_us), mag_axes=axes,
+                             accel_axes="-x,y,z", store=None, delay_us=b.sleep_us,
+                             ticks_us=b.clock.ticks_us)
+    with pytest.raises(ValueError, match="mirror image: the qmc5883l's axes are right-handed"):
+        app(QMC5883L, "x,-y,z")
+    with pytest.raises(ValueError, match="rotation: the qmc5883l's axes are a mirror"):
+        app(_mirrored(), "x,-y,-z")
+    # a left-handed chip (x forward, y left, z down) with its mirror map: a heading, and the
+    # check confirms it; a wrong mirror map is named, with the right mirror in its place
+    for given, verdict in (("x,-y,z", (mountcheck.OK, "x,-y,z")),
+                           ("y,x,z", (mountcheck.WRONG, "x,-y,z"))):
+        b, a = app(_mirrored(), given)
+        while b.clock.now_us < M.SECONDS * 1000000:
+            a.step()
+        assert a.mounting[:2] == verdict, a.mounting
+
+
+def test_the_calibrate_command_takes_a_mirror_map_only_without_a_right_handed_chip(logs):
+    from host_sim import chips
+    r = _calibrate([logs["wrong"], "--sensor", "ak8963", "--mag-axes", "x,y,-z"])
+    assert r.returncode == 2 and "--mag-axes 'x,y,-z' is a mirror image: the ak8963's" in r.stderr
+    r = _calibrate([logs["wrong"], "--mag-axes", "x,y,-z", "--json"])   # no chip named
+    assert r.returncode in (0, 1) and json.loads(r.stdout)["mounting"]["mag_axes_given"] == \
+        "x,y,-z"
+    assert M.handedness("x,y,-z", None) is None and M.handedness("x,-y,-z", "hmc5883l") is None
+    m = chips.mag("hmc5883l")
+    try:
+        m["mirror"] = True   # a chip whose datasheet draws a mirror
+        assert M.handedness("x,y,-z", "hmc5883l") is None
+        assert "is a rotation" in M.handedness("x,-y,-z", "hmc5883l")
+    finally:
+        m["mirror"] = False

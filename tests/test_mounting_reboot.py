@@ -364,3 +364,14 @@ def test_the_boot_and_the_session_name_the_verdicts_code_by_strings_only():
                 strings.append(node.value)
         assert "firmware.mountnote" in strings and mountnote.NAME in strings, name
         assert all(len(s) > 10 for s in ("firmware.mountnote", mountnote.NAME))
+
+
+def test_a_verdict_is_kept_in_the_handedness_of_the_chip():
+    # a chip whose axes are a mirror of its accelerometer's (driver MIRROR): its maps are
+    # mirrors, and a line of rotations is no verdict for it (nor a line of mirrors for others)
+    from firmware import mountnote
+    mirrors = _line(b"wrong lsm9ds1 x,y,-z -x,y,z y,x,z")
+    assert mountnote._parse(mirrors, "lsm9ds1", "-x,y,z", -1) == ("x,y,-z", "y,x,z")
+    assert mountnote._parse(mirrors, "lsm9ds1", "-x,y,z", 1) is None
+    assert mountnote._parse(_GOOD, "hmc5883l", "-x,y,z", -1) is None
+    assert mountnote._parse(_GOOD, "hmc5883l", "-x,y,z", 1) == ("x,-y,-z", "y,x,-z")

@@ -293,11 +293,13 @@ def test_board_mountings_match_the_documented_sensor_to_body_maps(a):
 # --- boards -------------------------------------------------------------------------------
 def test_every_board_builds_and_answers_at_its_addresses():
     expect = {"qmc5883l": [0x0D], "gy271": [0x0D], "hmc5883l": [0x1E], "qmc5883p": [0x2C],
-              "gy87": [0x68, 0x77], "gy87-qmc": [0x68, 0x77]}
+              "gy87": [0x68, 0x77], "gy87-qmc": [0x68, 0x77], "gy9250": [0x68],
+              "icm20948": [0x68],   # an IMU's magnetometer: behind its bypass
+              "lis3mdl": [0x1C], "lis2mdl": [0x1E], "mmc5603": [0x30]}
     for chip in CHIPS:
         b = make_board(chip)
         assert b.bus.scan() == expect[chip], chip
-        assert (b.accel is not None) == chip.startswith("gy87")
+        assert (b.accel is not None) == (chip in ("gy87", "gy87-qmc", "gy9250", "icm20948"))
     b = make_board("gy271", accel=True)
     assert b.bus.scan() == [0x0D, 0x68]
     with pytest.raises(ValueError):

@@ -14,6 +14,7 @@ I2C_FREQ = 400000           # Hz; QMC5883L, HMC5883L and MPU6050 are all 400 kHz
 LOCK_TIMEOUT_US = 50000     # the longest wait for the bus lock (firmware/circuitpython/busio_i2c.py)
 MAG_AXES = "x,-y,-z"        # sensor -> body: a GY-271/273/87 flat, X arrow forward (another
 ACCEL_AXES = "-x,y,z"       # mounting: boards/breakouts.py); a GY-521 MPU6050 lying the same way
+#                             (GY-9250, GY-91, ICM-20948, LIS2MDL: other MAG_AXES, breakouts.py)
 DECLINATION_CDEG = 0        # local magnetic declination, centidegrees east-positive (NOAA/WMM)
 STORE_DIR = "/"             # CIRCUITPY; code may write there only when boot.py allows it
 STORE_JUMPER = "GP15"       # boot.py: to GND at power-up, code.py may save ("D5" on a Feather)

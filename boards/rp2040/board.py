@@ -9,6 +9,7 @@ SDA_PIN = 4
 I2C_FREQ = 400000           # Hz
 MAG_AXES = "x,-y,-z"        # sensor -> body: a GY-271/273/87 flat, X arrow forward (another
 ACCEL_AXES = "-x,y,z"       # mounting: boards/breakouts.py); a GY-521 MPU6050 lying the same way
+#                             (GY-9250, GY-91, ICM-20948, LIS2MDL: other MAG_AXES, breakouts.py)
 DECLINATION_CDEG = 0        # local magnetic declination, centidegrees east-positive (NOAA/WMM)
 MODE = "compass"            # "compass": headings, self-calibrating; "motioncal": stream to
 #                             PJRC MotionCal and take its Send Cal (docs/motioncal.md)

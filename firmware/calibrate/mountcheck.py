@@ -11,9 +11,10 @@ a calibration is accepted and dropped after the check (firmware.compat.drop).
 # ACCEL_AXES are both in the body frame (firmware/axes.py); when the two maps disagree by a
 # rotation R (a chip turned against the other, a wrong sign), the angle measured is the one
 # between R b and g, and it swings by tens of degrees as the board turns. Of the 24 rotations
-# among the signed permutations (a mirror map is refused when the app is made), a calibration
-# dance that turns the board through many directions leaves one steady: the one that relates
-# the magnetometer to the accelerometer. Which way is forward, and up from down for both chips
+# among the signed permutations, applied after the map in use (so every candidate keeps its
+# handedness, which is the chip's: firmware/appsetup.py refuses another), a calibration dance
+# that turns the board through many directions leaves one steady: the one that relates the
+# magnetometer to the accelerometer. Which way is forward, and up from down for both chips
 # together, the data cannot tell (examples/check_axes.py asks for poses); the check names the
 # MAG_AXES that agrees with the ACCEL_AXES in use.
 #

@@ -330,6 +330,22 @@ class Parser:
             return STATUS_USAGE
 
 
+def wrap(text, width=60):
+    """`text` with its spaces turned into line breaks so no line passes `width` (a help text
+    naming a table's chips; the help column is ~60 wide)."""
+    lines = []
+    for para in text.split("\n"):
+        line = ""
+        for w in para.split(" "):
+            if line and len(line) + 1 + len(w) > width:
+                lines.append(line)
+                line = w
+            else:
+                line = line + " " + w if line else w
+        lines.append(line)
+    return "\n".join(lines)
+
+
 def _rows(rows, width=22):
     out = []
     for head, text in rows:

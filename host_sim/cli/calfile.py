@@ -4,11 +4,11 @@ read() and ignored by validate(), so a later version may add some):
 
     format             "ecompass-calibration"
     version            1 (FORMAT_VERSION)
-    sensor             "qmc5883l", "hmc5883l" or "qmc5883p" (the driver's KIND)
-    range_gauss        the full scale the log was taken at: QMC5883L 2 | 8, QMC5883P 30 | 12 |
-                       8 | 2, HMC5883L 0.88 | 1.3 | 1.9 | 2.5 | 4.0 | 4.7 | 5.6 | 8.1
-    range_code         the driver's .range_code for it (QMC5883L RNG, QMC5883P RNG, HMC5883L
-                       gain GN): the board refuses a calibration made at another range
+    sensor             the driver's KIND: a magnetometer of host_sim/chips.py ("qmc5883l", ...)
+    range_gauss        the full scale the log was taken at, as that table gives it (QMC5883L
+                       2 | 8, HMC5883L 0.88 | 1.3 | ... | 8.1, ...)
+    range_code         the driver's .range_code for it (QMC5883L RNG, HMC5883L gain GN, ...):
+                       the board refuses a calibration made at another range
     counts_per_gauss   the sensitivity at that range (datasheet)
     model              "minmax", 4, 7 or 10
     offset_counts      V, hard iron: 3 ints in int16, raw counts (AN4246 eq. 19)
@@ -34,25 +34,17 @@ board can use the same checks.
 import json
 import os
 
+from host_sim import chips
+
 FORMAT = "ecompass-calibration"
 FORMAT_VERSION = 1
 MODELS = ("minmax", 4, 7, 10)
 # Per sensor: (range in gauss as text, range code, counts per gauss), in range-code order, and
-# the raw output range. Datasheet tables, as firmware/qmc5883l.py, qmc5883p.py and
-# hmc5883l.py hold them (tests/test_cli_robust.py checks they agree).
-SENSORS = {
-    "qmc5883l": {"ranges": (("2", 0, 12000), ("8", 1, 3000)),
-                 "output": (-32768, 32767), "default_range": "2"},
-    "qmc5883p": {"ranges": (("30", 0, 1000), ("12", 1, 2500), ("8", 2, 3750), ("2", 3, 15000)),
-                 "output": (-32768, 32767), "default_range": "8"},
-    # HMC5883L: 12-bit output -2048..2047; -4096 marks an ADC overflow (datasheet, data
-    # output registers)
-    "hmc5883l": {"ranges": (("0.88", 0, 1370), ("1.3", 1, 1090), ("1.9", 2, 820),
-                            ("2.5", 3, 660), ("4.0", 4, 440), ("4.7", 5, 390), ("5.6", 6, 330),
-                            ("8.1", 7, 230)),
-                 "output": (-2048, 2047), "default_range": "1.3"},
-}
-SENSOR_NAMES = ("qmc5883l", "hmc5883l", "qmc5883p")
+# the raw output range: host_sim/chips.py's table (tests/test_chips.py checks it against the
+# drivers).
+SENSORS = {m["kind"]: {"ranges": tuple(r[:3] for r in m["ranges"]), "output": m["output"],
+                       "default_range": m["default"]} for m in chips.MAGS}
+SENSOR_NAMES = chips.MAG_KINDS
 KEYS = ("format", "version", "sensor", "range_gauss", "range_code", "counts_per_gauss", "model",
         "offset_counts", "invw_q15", "field_counts", "field_out_counts", "fit_error_x100",
         "samples", "coverage_percent", "date", "forced", "refusal")

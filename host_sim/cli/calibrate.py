@@ -18,9 +18,10 @@ import json
 import sys
 from array import array
 
+from host_sim import chips
 from host_sim.cli import calfile, calopts, glitches, logfile, mounting
 from host_sim.cli.args import (STATUS_OK, STATUS_REFUSED, Parser, UsageError, decimal_text,
-                               warn)
+                               warn, wrap)
 from host_sim.cli.args import parse_decimal  # noqa: F401  (its earlier home; tests use it)
 
 # The desktop holds every distinct sample of a log, up to the most a Calibrator holds
@@ -76,16 +77,17 @@ def _parser():
              help="fit even when acceptance refuses (too few samples, planar,\n"
                   "fit error...): the result says forced and why; exit 0")
     p.option("--sensor", calopts.sensor, metavar="CHIP",
-             help="the board's magnetometer: qmc5883l, hmc5883l, qmc5883p, or\n"
-                  "its breakout gy271, gy273, gy87 (any case, '-' ignored); the\n"
-                  "file is then in its counts (or --units) and V, B are the\n"
-                  "board's. Another chip's log: no --sensor, --units or --scale.\n"
-                  "Default: the log's line '# CHIP range_code N ...' (what\n"
-                  "examples/log_csv.py writes); an option that differs wins")
+             help=wrap("the board's magnetometer: %s, or its breakout %s (any case, '-' "
+                       "ignored); the file is then in its counts (or --units) and V, B are "
+                       "the board's. Another chip's log: no --sensor, --units or --scale. "
+                       "Default: the log's line '# CHIP range_code N ...' (what "
+                       "examples/log_csv.py writes); an option that differs wins"
+                       % (", ".join(calfile.SENSOR_NAMES), ", ".join(sorted(calopts.BREAKOUTS)))))
     p.option("--range", "str", metavar="G",
-             help="its full scale in gauss (qmc5883l 2|8, qmc5883p 30|12|8|2,\n"
-                  "hmc5883l 0.88|1.3|1.9|2.5|4.0|4.7|5.6|8.1; default: the\n"
-                  "driver's, 2 / 8 / 1.3)")
+             help="its full scale in gauss (%s;\n"
+                  "default: the driver's)" % ",\n".join(
+                      "%s %s" % (k, "|".join(r[0] for r in calfile.SENSORS[k]["ranges"]))
+                      for k in calfile.SENSOR_NAMES))
     p.option("--counts-per-gauss", "int", lo=1, hi=100000, metavar="N",
              help="the board's sensitivity (instead of --sensor/--range):\n"
                   "enables the 10..90 uT field check")
@@ -98,7 +100,7 @@ def _parser():
                   "differs wins, with a warning")
     p.option("--scale", "decimal", lo="0.000001", hi=1000000, metavar="K",
              help="counts per file unit, instead of --units (e.g. 6.6667 for\n"
-                  "an AK09916 log in uT: 0.15 uT per count)")
+                  "a log in uT of a chip at 0.15 uT per count)")
     p.option("--columns", parse_columns_opt, metavar="X,Y,Z",
              help="1-based columns of x, y, z (overrides the header)")
     p.option("--skip", "int", default=0, lo=0, hi=10 ** 9, metavar="N",
@@ -151,7 +153,7 @@ rows, samples_held}.
 
 --sensor takes a chip or its breakout in any case (GY-271 is read as its QMC5883L, with a
 warning naming the other chip it may carry). A log of a chip the firmware does not drive
-(LSM303, LIS3MDL, AK09916, ...) is fitted without --sensor: give its units (--units uT) or
+(BMM150, LSM303DLHC, ...) is fitted without --sensor: give its units (--units uT) or
 --scale; the result is in the file's units (--out needs a supported chip).
 
 exit status: 0 calibrated (or forced); 1 the data was read but the calibration was refused
@@ -171,9 +173,10 @@ class Board:
         self.range_code = None
         self.cpg = opts["counts_per_gauss"]
         self.output = (-32768, 32767)
+        self.overflow = None
         if opts["range"] is not None and self.sensor is None:
-            raise UsageError("--range %s needs --sensor (qmc5883l, hmc5883l or qmc5883p)"
-                             % opts["range"])
+            raise UsageError("--range %s needs --sensor (%s)"
+                             % (opts["range"], ", ".join(calfile.SENSOR_NAMES)))
         if self.sensor is not None:
             rng = opts["range"]
             if rng is None:
@@ -187,6 +190,10 @@ class Board:
                                  "or the other)" % (self.cpg, self.sensor, self.range_gauss, cpg))
             self.cpg = cpg
             self.output = calfile.SENSORS[self.sensor]["output"]
+            self.overflow = chips.mag(self.sensor)["overflow"]  # the HMC5883L's -4096
+        wrong = mounting.handedness(opts.get("mag_axes"), self.sensor)
+        if wrong is not None:
+            raise UsageError("--mag-axes %s" % wrong)
         if opts["out"] is not None and self.sensor is None:
             raise UsageError("--out %s needs --sensor (and --range), or a log whose first "
                              "lines name them ('# qmc5883l range_code 0', as "
@@ -330,13 +337,11 @@ def run(opts):
     mfe = DEFAULT_MAX_FIT_ERROR if mfe is None else logfile.scale_value(mfe[0], mfe[1], 2)
     model = _model(opts["model"])
 
-    hmc = board.sensor == "hmc5883l"
-
     def calibrator(plan):
         try:
             return Calibrator(model=model, capacity=plan[0], separation=plan[1],
                               counts_per_gauss=cpg, max_fit_error=mfe,
-                              overflow=-4096 if hmc else None)
+                              overflow=board.overflow)
         except MemoryError:
             raise UsageError("--capacity %d: out of memory; give a smaller one" % plan[0])
     olo, ohi = board.output
@@ -351,7 +356,7 @@ def run(opts):
     zeros = 0           # all-zero rows (glitches.py): a failed read
     for lineno, row in log.rows():
         v = [logfile.convert(m, d, num, den) for m, d in row]
-        if hmc and -4096 in v:
+        if board.overflow is not None and board.overflow in v:
             markers += 1
             continue
         bad = -1

@@ -11,16 +11,14 @@ Each refusal raises ValueError with one line saying what to give instead (args.p
 `host_sim calibrate: error: --sensor X: ...`, exit 2). Also runs under MicroPython.
 """
 from firmware.calibrate.samples import MAX_CAPACITY  # noqa: F401  (--capacity's bound: the Calibrator's)
+from host_sim import chips
 from host_sim.cli import calfile
 from host_sim.cli.args import parse_decimal
 
 # Breakouts by their silkscreen name (README's wiring table, boards/breakouts.py): the chip the
-# calibration is for, and what to give when that breakout carries the other chip.
-BREAKOUTS = {
-    "gy271": ("qmc5883l", "a newer GY-271 carries a QMC5883P (I2C 0x2C): --sensor qmc5883p"),
-    "gy273": ("hmc5883l", None),
-    "gy87": ("hmc5883l", "a GY-87 with a QMC5883L: --sensor qmc5883l"),
-}
+# calibration is for, and what to give when that breakout carries another chip
+# (host_sim/chips.py BREAKOUTS).
+BREAKOUTS = dict(chips.BREAKOUTS)
 NO_MAGNETOMETER = {"gy521": "the GY-521 carries an MPU6050 (accelerometer and gyroscope), "
                             "no magnetometer"}
 GENERIC = ("for another chip's log leave out --sensor and give the file's units (--units uT, "

@@ -1,4 +1,5 @@
-"""`python -m host_sim demo --chip CHIP --seed N [--json]`: the whole story (CHIP_CHOICES).
+"""`python -m host_sim demo --chip CHIP --seed N [--json]`: the whole story (CHIP: one of
+host_sim/chips.py DEMOS, e.g. qmc5883l, hmc5883l, gy87).
 
 A simulated board with strong hard and soft iron, a user doing a figure-8 while the firmware's
 CompassApp calibrates, the calibration it accepts (against the world's true iron), and the
@@ -14,7 +15,7 @@ The world (seeded by --seed, so each seed is a different, reproducible world):
   a rotation part of W would be indistinguishable from the chip's mounting).
 The sensor range is the one an installer would pick: the most sensitive range whose datasheet
 full scale holds max_i (|V_i| + B |row_i(W)|), the largest reading on any axis, with 10 %
-margin (QMC5883L: +-2 or +-8 G; HMC5883L: gain code 0..7).
+margin (host_sim/chips.py ranges: QMC5883L +-2 or +-8 G; HMC5883L gain code 0..7; ...).
 
 Heading accuracy is measured on a grid of still orientations (GRID_*), AVERAGE_N readings
 each, the true heading from the world (magnetic yaw + declination). What limits it: on the
@@ -27,16 +28,12 @@ import math
 import sys
 from array import array
 
+from host_sim import chips
 from host_sim.cli.args import STATUS_REFUSED, Parser
 
-CHIP_CHOICES = ("qmc5883l", "qmc5883p", "hmc5883l", "gy87")
-# --chip -> (make_board chip, accel argument, breakout for the magnetometer's axes, label)
-_BOARDS = {
-    "qmc5883l": ("gy271", True, "gy271", "GY-271 (QMC5883L) + GY-521 (MPU6050)"),
-    "qmc5883p": ("qmc5883p", True, "gy271", "newer GY-271 (QMC5883P) + GY-521 (MPU6050)"),
-    "hmc5883l": ("hmc5883l", True, "gy273", "GY-273 (HMC5883L) + GY-521 (MPU6050)"),
-    "gy87": ("gy87", None, "gy87", "GY-87 (MPU6050 + HMC5883L behind its bypass)"),
-}
+# --chip: host_sim/chips.py DEMOS (make_board chip, accel argument, breakout for the
+# magnetometer's axes, label)
+CHIP_CHOICES = chips.DEMO_CHIPS
 # GY-521 lies like the magnetometer breakouts (x forward, y left, z up): AN4248 gravity sign
 # of a specific-force reading is (-x, y, z) (boards/breakouts.py derives the same for GY-87).
 _GY521_ACCEL_AXES = "-x,y,z"
@@ -48,11 +45,8 @@ HARD_IRON_MIN = 1.0          # |V| in Earth fields: "strong" iron
 HARD_IRON_MAX = 3.0
 SOFT_IRON_EIGS = ((0.75, 0.90), (0.90, 1.10), (1.10, 1.30))  # W eigenvalue ranges
 RANGE_MARGIN = 1.10          # installer's margin over the largest expected reading
-QMC_RANGES_G = (2, 8)        # hardware.md: +-2 G / +-8 G
-QMCP_RANGES_G = (2, 8, 12, 30)  # QMC5883P: +-2 / 8 / 12 / 30 G (firmware/qmc5883p.py)
-HMC_RATE_HZ = 75             # its fastest continuous rate (default 15 Hz): more samples per
-                             # gesture and a 128-reading average in 1.7 s, not 8.5 s
-HMC_RANGES_G = (0.88, 1.3, 1.9, 2.5, 4.0, 4.7, 5.6, 8.1)  # hardware.md, per gain code 0..7
+# (the HMC5883L runs at its fastest rate, 75 Hz, not its default 15 Hz: more samples per
+# gesture and a 128-reading average in 1.7 s, not 8.5 s: chips.py demo_options)
 
 MODEL = 10                   # the app's calibration model: AN4246's full 10 elements
 SESSION_S = 30               # one figure8() period: waves through every field direction
@@ -80,10 +74,8 @@ def parser(command="demo", description=None):
                "The simulated board calibrates during a figure-8 and reports its heading "
                "accuracy.")
     p.option("--chip", "choice", default="qmc5883l", choices=CHIP_CHOICES, metavar="CHIP",
-             help="qmc5883l (GY-271 + MPU6050 module), qmc5883p (a newer\n"
-                  "GY-271 + MPU6050 module), hmc5883l (GY-273 + MPU6050\n"
-                  "module) or gy87 (MPU6050 + HMC5883L on one board);\n"
-                  "default qmc5883l")
+             help="%s;\ndefault qmc5883l" % ",\n".join(
+                 "%s (%s)" % (c, chips.demo(c)[3]) for c in CHIP_CHOICES))
     p.option("--seed", "int", default=1, metavar="N",
              help="the world (iron) and the sensors' noise; default 1")
     p.option("--seconds", "int", default=SESSION_S, lo=1, hi=100000, metavar="S",
@@ -174,20 +166,24 @@ def largest_reading_ut(v, w, field_ut=FIELD_UT):
     return max(abs(v[i]) + field_ut * _norm(w[i]) for i in range(3))
 
 
+def full_scales(kind):
+    """(full scale in G, the driver's range option value) of each range of `kind`, most
+    sensitive first (host_sim/chips.py ranges: "2" -> 2, "1.3" -> 1.3)."""
+    out = [(float(r[0]) if "." in r[0] else int(r[0]), r[3]) for r in chips.mag(kind)["ranges"]]
+    return sorted(out, key=lambda t: t[0])
+
+
 def pick_range(kind, need_ut):
-    """The most sensitive range holding need_ut x RANGE_MARGIN: ('range', G) for the
-    QMC5883L and QMC5883P, ('gain', code) for the HMC5883L, with the full scale in G."""
+    """The most sensitive range holding need_ut x RANGE_MARGIN: (the driver's range option,
+    e.g. 'range' for the QMC5883L, 'gain' for the HMC5883L, None for a chip with one range;
+    its value; the full scale in G)."""
     need_g = need_ut * RANGE_MARGIN / 100
-    if kind in ("qmc5883l", "qmc5883p"):
-        table = QMC_RANGES_G if kind == "qmc5883l" else QMCP_RANGES_G
-        for r in table:
-            if need_g <= r:
-                return "range", r, r
-        return "range", table[-1], table[-1]
-    for code in range(len(HMC_RANGES_G)):
-        if need_g <= HMC_RANGES_G[code]:
-            return "gain", code, HMC_RANGES_G[code]
-    return "gain", len(HMC_RANGES_G) - 1, HMC_RANGES_G[-1]
+    opt = chips.mag(kind)["range_option"]
+    table = full_scales(kind)
+    for fs, value in table:
+        if need_g <= fs:
+            return opt, value, fs
+    return opt, table[-1][1], table[-1][0]
 
 
 class Stage:
@@ -220,11 +216,11 @@ class Setup:
         from host_sim.world import World
         from boards.breakouts import breakout
 
-        board_chip, accel, axes_name, label = _BOARDS[chip]
+        board_chip, accel, axes_name, label = chips.demo(chip)
         self.chip = chip
         self.seed = seed
         self.label = label
-        self.kind = chip if chip in ("qmc5883l", "qmc5883p") else "hmc5883l"
+        self.kind = chips.board(board_chip)[0]  # the magnetometer's KIND
         self.hard_iron_ut, self.soft_iron, self.soft_eigs = demo_iron(seed)
         self.stage = Stage(motion.figure8(period_s=seconds))
         self.world = World(field_ut=FIELD_UT, inclination_deg=INCLINATION_DEG,
@@ -235,9 +231,9 @@ class Setup:
         self.need_ut = largest_reading_ut(self.hard_iron_ut, self.soft_iron)
         opt, val, self.full_scale_g = pick_range(self.kind, self.need_ut)
         b = self.board
-        opts = {opt: val}
-        if self.kind == "hmc5883l":
-            opts["rate"] = HMC_RATE_HZ
+        opts = dict(chips.mag(self.kind)["demo_options"])
+        if opt is not None:
+            opts[opt] = val
         self.mag = detect.detect(b.bus, delay_us=b.sleep_us, **opts)
         self.accel = detect.detect_accel(b.bus)
         if self.accel is None:
@@ -485,10 +481,10 @@ def print_world(setup, seconds):
           % "; ".join(" ".join("%6.3f" % w[i][j] for j in range(3)) for i in range(3)))
     print("               eigenvalues %s, principal axes rotated"
           % " ".join("%.3f" % e for e in setup.soft_eigs))
-    if setup.kind in ("qmc5883l", "qmc5883p"):
-        rng = "+-%d G" % setup.full_scale_g
-    else:
+    if chips.mag(setup.kind)["range_option"] == "gain":
         rng = "+-%s G (gain code %d)" % (setup.full_scale_g, setup.mag.range_code)
+    else:
+        rng = "+-%s G" % setup.full_scale_g
     print("  range %s, %d counts/G: readings reach %s uT on one axis"
           % (rng, setup.cpg, _fmt(setup.need_ut, 0)))
     print("User: figure-8 for %d s (host_sim.motion.figure8) while CompassApp calibrates" % seconds)

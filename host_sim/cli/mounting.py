@@ -267,17 +267,35 @@ def accel_columns(names):
 
 
 def _axes(text, accel=False):
+    # a magnetometer's map of either handedness here: which one its chip needs is known once
+    # --sensor is (handedness() below)
     from firmware.axes import AxisMap
     try:
         m = AxisMap(text)
     except ValueError as e:
         raise ValueError(str(e))
-    if m.det != (-1 if accel else 1):
-        raise ValueError("%r is a %s: %s" % (
-            text, "mirror image" if m.det < 0 else "rotation",
-            "an accelerometer's map to AN4248 is a rotation then a negation (e.g. -x,y,z)"
-            if accel else "a magnetometer's map is a rotation (e.g. x,-y,-z)"))
+    if accel and m.det != -1:
+        raise ValueError("%r is a rotation: an accelerometer's map to AN4248 is a rotation "
+                         "then a negation (e.g. -x,y,z)" % text)
     return m.spec
+
+
+def handedness(mag_axes, sensor):
+    """None when the MAG_AXES spec `mag_axes` has the handedness of the magnetometer `sensor`
+    (host_sim/chips.py: a rotation, a mirror where the datasheet draws the chip's axes as a
+    mirror of its accelerometer's; any for a chip not named, None), else what is wrong."""
+    from firmware.axes import AxisMap
+    from host_sim import chips
+    if mag_axes is None or sensor is None:
+        return None
+    want = -1 if chips.mag(sensor)["mirror"] else 1
+    det = AxisMap(mag_axes).det
+    if det == want:
+        return None
+    return ("%r is a %s: the %s's axes are %s (its datasheet), so is its map (e.g. %s)" % (
+        mag_axes, "mirror image" if det < 0 else "rotation", sensor,
+        "right-handed as the body frame" if want > 0 else "a mirror of its accelerometer's",
+        "x,-y,-z" if want > 0 else "x,y,-z"))
 
 
 def mag_axes_opt(text):

@@ -24,7 +24,7 @@ import sys
 import time
 
 from host_sim.cli import demo
-from host_sim.cli.args import Parser
+from host_sim.cli.args import Parser, wrap
 from host_sim.cli.memfs import MemFs
 
 PROTOCOLS = ("motioncal",)
@@ -39,8 +39,8 @@ def parser():
     p.option("--protocol", "choice", default="motioncal", choices=PROTOCOLS, metavar="P",
              help="the serial protocol: motioncal (PJRC MotionCal; the only one)")
     p.option("--chip", "choice", default=DEFAULT_CHIP, choices=demo.CHIP_CHOICES,
-             metavar="CHIP", help="qmc5883l, qmc5883p, hmc5883l or gy87 (as the demo's);\n"
-                                  "default gy87")
+             metavar="CHIP", help=wrap("%s (as the demo's); default gy87"
+                                       % ", ".join(demo.CHIP_CHOICES)))
     p.option("--seed", "int", default=1, metavar="N",
              help="the world (iron) and the sensors' noise; default 1")
     p.option("--rate", "int", default=DEFAULT_RATE_HZ, lo=1, hi=400, metavar="HZ",

@@ -1,10 +1,12 @@
 """`python -m host_sim soak`: a seeded fault campaign against the simulated board (make soak).
 
     python -m host_sim soak [--sessions N] [--seconds S] [--seed K] [--clean C] [--only K]...
-                            [--gyro] [--json]
+                            [--gyro] [--akm] [--json]
 
 Each session boots CompassApp from a store holding a good calibration (a GY-271 + MPU6050 or
-a GY-87, strong hard and soft iron, the board turning slowly and tilting), and injects
+a GY-87: SETUPS; --akm: a GY-9250 (MPU-9250 and its AK8963) or an ICM-20948 module (and its
+AK09916): AKM_SETUPS; strong hard and soft iron, the board turning slowly and tilting), and
+injects
 random field faults from every class below through the simulator's fault hooks, each held
 for a random spell and then cleared; some sessions reboot the app half-way (same board and
 filesystem, sometimes with the accelerometer absent at boot). Printed: steps, faults,
@@ -50,10 +52,12 @@ ACCURACY_DEG = 5.0      # documented accuracy of a calibrated "ok" heading (docs
 HARD_IRON_UT = (45.0, -35.0, 30.0)
 SOFT_IRON = ((1.18, 0.09, -0.06), (0.09, 0.88, 0.07), (-0.06, 0.07, 1.04))
 SETUPS = (("gy271", True), ("gy87", None))
+AKM_SETUPS = (("gy9250", None), ("icm20948", None))
 CLASSES = ("stale", "zeros", "mag_reset", "range", "accel_sleep", "accel_ff", "free_fall",
            "stall", "magnet", "nack", "accel_absent")
-MAG_AXES = "x,-y,-z"
-ACCEL_AXES = "-x,y,z"
+# each board's maps (boards/breakouts.py: the magnetometer inside an IMU has its own axes)
+AXES = {"gy271": ("x,-y,-z", "-x,y,z"), "gy87": ("x,-y,-z", "-x,y,z"),
+        "gy9250": ("y,-x,z", "-x,y,z"), "icm20948": ("x,y,z", "-x,y,z")}
 
 
 class Turning:
@@ -80,7 +84,8 @@ GOOD = ("ok", "gyro held")  # statuses that present the heading as good
 
 
 def app_on(b, store, gyro=False, **kw):
-    app = CompassApp(b.bus, mag_axes=MAG_AXES, accel_axes=ACCEL_AXES, declination_cdeg=400,
+    mag_axes, accel_axes = AXES[b.chip]
+    app = CompassApp(b.bus, mag_axes=mag_axes, accel_axes=accel_axes, declination_cdeg=400,
                      store=store, delay_us=b.sleep_us, ticks_us=b.clock.ticks_us, **kw)
     if gyro and app.accel is not None:
         app.use_gyro()
@@ -128,6 +133,9 @@ def inject(b, cls, g):
     if cls == "range":
         if b.mag_address == 0x0D:
             mag.glitch(0x09, mag.ctrl1 ^ 0x10)
+        elif b.mag_address == 0x0C:  # the AKM chips: their mode register (output width, rate)
+            reg = mag.CNTL
+            mag.glitch(reg, mag.regs[reg] ^ (0x10 if reg == 0x0A else 0x06))
         else:
             mag.glitch(0x01, (g.randrange(8) << 5))
         return lambda: None
@@ -154,13 +162,14 @@ def inject(b, cls, g):
     return lambda: None
 
 
-def session(k, seed, seconds, goods, stats, trace=None, faults=True, gyro=False):
-    """One session (stream k of the seed); faults=False: the same board and motion with no
-    fault and no reboot, counting its non-ok samples in stats["clean"] (false alarms).
-    trace(k, board, app, last_class) is called after every step when given."""
+def session(k, seed, seconds, goods, stats, trace=None, faults=True, gyro=False,
+            setups=SETUPS):
+    """One session (stream k of the seed) on one of `setups`; faults=False: the same board
+    and motion with no fault and no reboot, counting its non-ok samples in stats["clean"]
+    (false alarms). trace(k, board, app, last_class) is called after every step when given."""
     g = Prng(seed, stream=k)
-    si = g.randrange(len(SETUPS))
-    setup, accel = SETUPS[si]
+    si = g.randrange(len(setups))
+    setup, accel = setups[si]
     cal, kind, rng = goods[si]
     m = Turning(g.randrange(360), 3.0 + g.randrange(20), g.uniform() * 6.0)
     b = make_board(setup, world=world(m), seed=1000 + k, accel=accel)
@@ -251,12 +260,13 @@ def reboot(app, b, fs, stats, gyro=False):
     return app_on(b, CalStore("/", fs=fs), gyro)
 
 
-def campaign(sessions, seconds, seed, clean=None, gyro=False, only=None):
+def campaign(sessions, seconds, seed, clean=None, gyro=False, only=None, setups=SETUPS):
     """The campaign: `sessions` sessions with faults, then `clean` fault-free ones (None:
     one in ten, at least 2) on streams after them, whose non-ok samples are false alarms;
     gyro: every app with use_gyro() where it has an MPU6050; only: run just these sessions
-    of it (stream numbers; from `sessions` on, fault-free ones)."""
-    goods = [good_calibration(s, a) for s, a in SETUPS]
+    of it (stream numbers; from `sessions` on, fault-free ones); setups: the boards drawn
+    from."""
+    goods = [good_calibration(s, a) for s, a in setups]
     if clean is None:
         clean = max(2, sessions // 10)
     ks = range(sessions + clean) if only is None else sorted(set(only))
@@ -270,7 +280,7 @@ def campaign(sessions, seconds, seed, clean=None, gyro=False, only=None):
              "clean": {"sessions": sum(1 for k in ks if k >= sessions), "steps": 0,
                        "not_ok": 0, "by_status": {}, "wrong_but_ok": 0}}
     for k in ks:
-        session(k, seed, seconds, goods, stats, faults=k < sessions, gyro=gyro)
+        session(k, seed, seconds, goods, stats, faults=k < sessions, gyro=gyro, setups=setups)
     det = {}
     for cls, v in sorted(stats["detect_ms"].items()):
         v = sorted(v)
@@ -327,7 +337,7 @@ def failed_goals(st):
 
 def parser():
     p = Parser("soak", "[--sessions N] [--seconds S] [--seed K] [--clean C] [--only K]... "
-               "[--gyro] [--json]",
+               "[--gyro] [--akm] [--json]",
                "A seeded fault campaign against the simulated board (docs/faults.md).")
     p.option("--sessions", "int", default=40, lo=1, hi=100000, metavar="N",
              help="sessions with faults (default 40; make soak: 600)")
@@ -341,6 +351,7 @@ def parser():
              help="run only session K of the campaign (each is seeded on its own, so it runs\n"
                   "as in the whole campaign; K >= N: a fault-free one); may be repeated")
     p.option("--gyro", "flag", help="the apps run the gyro-aided heading (use_gyro)")
+    p.option("--akm", "flag", help="the boards with an AKM magnetometer (AKM_SETUPS)")
     p.option("--json", "flag", help="the figures as one JSON object")
     p.epilog = ("goals (docs/faults.md), checked on the sessions run:\n"
                 + "".join("  - %s\n" % g for g in GOALS)
@@ -356,7 +367,8 @@ def body(opts):
     if only is not None and max(only) >= n + clean:
         raise UsageError("--only %d: this campaign's sessions are 0..%d (%d with faults, then "
                          "%d fault-free)" % (max(only), n + clean - 1, n, clean))
-    st = campaign(n, opts["seconds"], opts["seed"], clean, opts["gyro"], only)
+    st = campaign(n, opts["seconds"], opts["seed"], clean, opts["gyro"], only,
+                  AKM_SETUPS if opts["akm"] else SETUPS)
     if opts["json"]:
         print(json.dumps(st, sort_keys=True))
     else:

@@ -21,8 +21,12 @@ import json
 import micropython
 from array import array
 
+from firmware.ak09916 import AK09916
+from firmware.ak8963 import AK8963
 from firmware.hmc5883l import HMC5883L
+from firmware.icm20948 import ICM20948
 from firmware.mpu6050 import MPU6050
+from firmware.mpu9250 import MPU9250
 from firmware.qmc5883l import QMC5883L
 from firmware.qmc5883p import QMC5883P
 
@@ -139,12 +143,35 @@ def qmcp_image(raw):
     return img
 
 
-def mpu_image(raw):
+def mpu_image(raw, who=0x68):
     img = bytearray(256)
-    img[0x75] = 0x68
+    img[0x75] = who
     for i in range(3):
         img[0x3B + 2 * i] = (raw[i] >> 8) & 0xFF
         img[0x3C + 2 * i] = raw[i] & 0xFF
+    return img
+
+
+def ak_image(raw, wia, st1, data, st2):
+    # an AKM compass: its ID, ST1 with DRDY, the data LSB first, ST2 (AK8963: BITM, 16-bit),
+    # the AK8963's fuse ROM values
+    img = bytearray(256)
+    img[0:len(wia)] = wia
+    img[st1] = 0x01
+    for i in range(3):
+        img[data + 2 * i] = raw[i] & 0xFF
+        img[data + 2 * i + 1] = (raw[i] >> 8) & 0xFF
+    img[st2] = 0x10 if st2 == 0x09 else 0x00
+    img[0x10:0x13] = b"\xb0\xb2\xa6" if st2 == 0x09 else img[0x10:0x13]
+    return img
+
+
+def icm_image(raw):
+    img = bytearray(256)
+    img[0x00] = 0xEA
+    for i in range(3):
+        img[0x2D + 2 * i] = (raw[i] >> 8) & 0xFF
+        img[0x2E + 2 * i] = raw[i] & 0xFF
     return img
 
 
@@ -154,17 +181,25 @@ for delay in ("counted", "board"):
     bus.attach(0x1E, hmc_image((-2048, 2047, -1)), 0x09)
     bus.attach(0x68, mpu_image((-32768, 16384, -1)), 0xFF)
     bus.attach(0x2C, qmcp_image((-32768, 32767, -1)), 0x09)
+    bus.attach(0x0C, ak_image((-32760, 32760, -1), b"\x48", 0x02, 0x03, 0x09), 0x02)
+    bus.attach(0x0E, ak_image((-32752, 32752, -1), b"\x48\x09", 0x10, 0x11, 0x18), 0x10)
+    bus.attach(0x69, icm_image((-32768, 16384, -1)), 0xFF)
+    bus.attach(0x6A, mpu_image((-32768, 16384, -1), 0x71), 0xFF)
     # "board": the driver's own delay, time.sleep_us and time.ticks_us, sleeping for real; the
     # fastest rates and one "not ready" poll per read keep that short.
     if delay == "counted":
         q = QMC5883L(bus, delay_us=bus.sleep_us)
         h = HMC5883L(bus, delay_us=bus.sleep_us)
         p = QMC5883P(bus, delay_us=bus.sleep_us)
+        k = AK8963(bus, delay_us=bus.sleep_us)
+        k9 = AK09916(bus, address=0x0E, delay_us=bus.sleep_us)
         polls = 3
     else:
         q = QMC5883L(bus, odr=200)
         h = HMC5883L(bus, rate=75)
         p = QMC5883P(bus, odr=200)
+        k = AK8963(bus)
+        k9 = AK09916(bus, address=0x0E)
         polls = 1
     m = MPU6050(bus)
     print(json.dumps({"delay": delay}))
@@ -176,6 +211,13 @@ for delay in ("counted", "board"):
     g = MPU6050(bus)
     g.gyro_into = array("h", [0, 0, 0])  # use_gyro(): the 14-byte burst with the gyroscope
     measure("mpu6050/gyro", bus, g.read_accel_into, [0, 0, 0], 0)
+    measure("ak8963", bus, k.read_into, array("h", [0, 0, 0]), polls)
+    measure("ak09916", bus, k9.read_into, [0, 0, 0], polls)
+    measure("mpu9250", bus, MPU9250(bus, address=0x6A).read_accel_into, [0, 0, 0], 0)
+    c = ICM20948(bus, address=0x69)
+    measure("icm20948", bus, c.read_accel_into, [0, 0, 0], 0)
+    c.gyro_into = array("h", [0, 0, 0])
+    measure("icm20948/gyro", bus, c.read_accel_into, [0, 0, 0], 0)
 
 # The board path of the bounded wait (time.sleep_us + time.ticks_us, delay_us=None): a chip
 # whose status never says ready must time out after timeout_us of real time.

@@ -4,7 +4,7 @@ import json
 
 from firmware import detect
 from firmware.errors import BusError, DataReadyTimeout, SensorNotFound, SensorOverflow
-from host_sim import motion
+from host_sim import chips, motion
 from host_sim.boards import make_board
 from host_sim.bus import SimI2C
 from host_sim.clock import SimClock
@@ -26,9 +26,7 @@ def err(e):
     emit(("error", type(e).__name__), *[(k, getattr(e, k)) for k in FIELDS[type(e)]])
 
 
-STOP = {"qmc5883l": (0x09, b"\x00"), "hmc5883l": (0x02, b"\x02"), "qmc5883p": (0x0A, b"\x00")}
-
-for i, chip in enumerate(("qmc5883l", "hmc5883l", "gy87", "gy87-qmc", "qmc5883p")):
+for i, chip in enumerate(chips.BOARD_NAMES):  # every simulated board (host_sim/chips.py)
     world = World(motion=motion.figure8(period_s=4), seed=11 + i)
     b = make_board(chip, world=world, seed=11 + i)
     mag = detect.detect(b.bus, delay_us=b.sleep_us)
@@ -47,7 +45,8 @@ for i, chip in enumerate(("qmc5883l", "hmc5883l", "gy87", "gy87-qmc", "qmc5883p"
         rows.append(row)
     emit(("rows", rows))
 
-    b.mag.inject_raw(40000, -5, 5)  # out of range on either chip
+    # out of range on every chip (the MMC5603's model takes the field, 16384 counts/G: 8 G)
+    b.mag.inject_raw(131072 if mag.KIND == "mmc5603" else 40000, -5, 5)
     try:
         mag.read()
     except SensorOverflow as e:
@@ -57,12 +56,13 @@ for i, chip in enumerate(("qmc5883l", "hmc5883l", "gy87", "gy87-qmc", "qmc5883p"
         mag.read()
     except BusError as e:
         err(e)
-    reg, value = STOP[mag.KIND]  # standby / idle / suspend: no more samples
-    b.bus.writeto_mem(mag.address, reg, value)
-    try:
-        mag.read()
-    except DataReadyTimeout as e:
-        err(e)
+    standby = chips.mag(mag.KIND)["standby"]  # no more samples (None: the driver triggers
+    if standby is not None:                   # each measurement, no write stops them)
+        b.bus.writeto_mem(mag.address, standby[0], standby[1])
+        try:
+            mag.read()
+        except DataReadyTimeout as e:
+            err(e)
     emit(("t_us", b.clock.now_us), ("transactions", b.bus.transactions),
          ("skipped", getattr(mag, "skipped", -1)))
 

@@ -1,0 +1,89 @@
+"""AK09916 3-axis magnetometer (AKM), I2C address 0x0C: the compass inside the ICM-20948, on
+the main bus once the IMU's I2C bypass is open.
+"""
+#     from machine import I2C, Pin
+#     from firmware.icm20948 import ICM20948
+#     from firmware.ak09916 import AK09916
+#     i2c = I2C(0, scl=Pin(22), sda=Pin(21), freq=400000)
+#     ICM20948(i2c, address=0x69).enable_bypass()  # the AK09916 answers at 0x0C from now on
+#     x, y, z = AK09916(i2c).read()
+#
+# AK09916(i2c, address=0x0C, *, range=49, rate=100, delay_us=None, timeout_us=None)
+#   range  49: +-4912 uT at 0.15 uT/LSB, 667 counts/G (666.7, rounded): its only range
+#   rate   output rate in Hz: 10, 20, 50, 100 (continuous measurement mode 1-4)
+# read() -> (x, y, z) counts in the chip's axes; read_into(buf) without allocating. .KIND
+# 'ak09916', .range_code 0, .counts_per_gauss, .skipped (reads whose ST1 said DOR), .suspect
+# (this read's DOR: an exact repeat is then stale data), config_ok() (CNTL2 read back).
+#
+# From the ICM-20948 datasheet (DS-000189 rev 1.3, section 13; docs/hardware.md): WIA1, WIA2
+# read 0x48 0x09; a read polls ST1 for DRDY, then takes HXL..HZH, TMPS and ST2 (0x11..0x18)
+# in one transfer: "be sure to read ST2 register at the end" (13.4), it ends the read; ST2.HOFL:
+# the data are not correct (SensorOverflow). Its sensitivity is trimmed inside the chip (no
+# fuse ROM). A mode is set from power-down, 100 us after entering it: configure() soft-resets
+# (CNTL3.SRST, every register to power-down), waits, then starts the continuous mode.
+from firmware.compat import const
+
+from firmware import i2cdevice
+from firmware.i2cdevice import Magnetometer
+
+# Registers
+_WIA1 = const(0x00)        # WIA1 0x48, WIA2 0x09
+_ST1 = const(0x10)
+_HXL = const(0x11)         # X, Y, Z int16 LSB first in 0x11..0x16, TMPS 0x17, ST2 0x18
+_CNTL2 = const(0x31)
+_CNTL3 = const(0x32)
+
+# Bit fields
+_DRDY = const(0x01)        # ST1 bit0
+_DOR = const(0x02)         # ST1 bit1
+_HOFL = const(0x08)        # ST2 bit3
+_SRST = const(0x01)        # CNTL3 bit0
+_RESET_US = const(1000)    # after SRST and power-down (100 us is the datasheet's least)
+
+_RANGES_G = (49,)
+_COUNTS_PER_GAUSS = (667,)
+_RATES_HZ = (10, 20, 50, 100)
+_MODES = (0x02, 0x04, 0x06, 0x08)  # continuous measurement mode 1..4
+_PERIODS_US = (100000, 50000, 20000, 10000)
+
+
+class AK09916(Magnetometer):
+    KIND = "ak09916"
+    OPTIONS = ("range", "rate", "delay_us", "timeout_us")
+    TABLES = (_RANGES_G, _RATES_HZ)
+    PER_CODE = (_PERIODS_US, _COUNTS_PER_GAUSS)
+    FLAGS = (_DOR, _DOR)  # DOR: a set was lost (.suspect: a repeat is then stale data)
+    REGISTERS = (_WIA1, _ST1, _DRDY, _HXL, _CNTL2)
+    ID = b"\x48\x09"
+
+    def __init__(self, i2c, address=0x0C, *, range=49, rate=100, delay_us=None,
+                 timeout_us=None):
+        self._blk = bytearray(8)       # HXL..HZH, TMPS, ST2: one transfer per sample
+        super().__init__(i2c, address, delay_us, timeout_us, range, rate)
+
+    @staticmethod
+    def _config_of(codes):
+        return (_MODES[codes[1]],)  # CNTL2
+
+    def _configure(self):
+        self._write_u8(_CNTL3, _SRST)
+        self._delay(_RESET_US)
+        self._write_u8(_CNTL2, self._want[0])
+        self._check_config()
+
+    def sample_into(self, buf):
+        """read_into() for callers already inside a guard: the data, TMPS and ST2 in one
+        transfer."""
+        status = self.wait(_ST1, _DRDY)
+        self.register = _HXL
+        d = self._blk
+        self._i2c.readfrom_mem_into(self.address, _HXL, d)
+        self.suspect = status & _DOR != 0
+        if status & _DOR:
+            self.skipped += 1
+        if d[7] & _HOFL:
+            self._buf[0:6] = d[0:6]
+            raw = self.held(0)
+            raise self.overflow(raw, "HOFL set (|X| + |Y| + |Z| of the field beyond 4912 uT: "
+                                     "a magnet close by?), raw %s" % (raw,))
+        i2cdevice.decode(d, buf, 0)

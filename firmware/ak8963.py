@@ -1,0 +1,120 @@
+"""AK8963 3-axis magnetometer (AKM), I2C address 0x0C: the compass inside the MPU-9250 and
+MPU-9255 (GY-9250, GY-91 breakouts), on the main bus once the IMU's I2C bypass is open.
+"""
+#     from machine import I2C, Pin
+#     from firmware.mpu9250 import MPU9250
+#     from firmware.ak8963 import AK8963
+#     i2c = I2C(0, scl=Pin(22), sda=Pin(21), freq=400000)
+#     MPU9250(i2c).enable_bypass()               # the AK8963 answers at 0x0C from now on
+#     x, y, z = AK8963(i2c).read()
+#
+# AK8963(i2c, address=0x0C, *, range=49, rate=100, delay_us=None, timeout_us=None)
+#   range  49: +-4912 uT, 16-bit output at 0.15 uT/LSB, 667 counts/G (666.7, rounded): the one
+#          range offered (the 14-bit output, 0.6 uT/LSB, is not)
+#   rate   output rate in Hz: 8 or 100 (continuous measurement mode 1 or 2)
+# read() -> (x, y, z) counts in the chip's axes, sensitivity-adjusted; read_into(buf) fills
+# buf[0..2] without allocating. .asa: the fuse ROM's ASAX, ASAY, ASAZ. .KIND 'ak8963',
+# .range_code 0, .counts_per_gauss, .skipped (reads whose ST1 said DOR: a set was lost),
+# .suspect (this read's DOR: the app then takes an exact repeat for stale data, as with the
+# QMC5883L's DOR: a live AK8963's 2-count noise makes one rare), config_ok() (CNTL1 read back).
+#
+# From the AK8963 datasheet (MS1356-E-02) and the MPU-9250 register map (RM-MPU-9250A-00,
+# section 5; docs/hardware.md):
+# - A read polls ST1 for DRDY, then takes HXL..HZH and ST2 in one transfer: ST2 ends the read
+#   and frees the data registers for the next set (6.4.3.2; without it no new set arrives).
+# - ST2.HOFL: the field's |X| + |Y| + |Z| went beyond 4912 uT and the data are not correct:
+#   SensorOverflow.
+# - Sensitivity (the register map's ASA section): Hadj = H x ((ASA - 128) x 0.5 / 128 + 1) = H x (ASA + 128) / 256,
+#   here (H x (ASA + 128) + 128) >> 8: within half a count of the formula, every intermediate
+#   below 2**24 (tests/test_ak8963.py). An adjusted value beyond int16 (a field past 4139 uT
+#   at the largest ASA) is held at the rail, which the app's health check takes for what it is.
+# - A mode is set from power-down, 100 us after entering it: configure() powers down,
+#   reads the fuse ROM in its access mode, powers down, then starts the continuous mode.
+from firmware.compat import const
+
+from firmware.i2cdevice import Magnetometer
+
+# Registers
+_WIA = const(0x00)
+_ST1 = const(0x02)
+_HXL = const(0x03)         # X, Y, Z int16 LSB first in 0x03..0x08, then ST2 at 0x09
+_CNTL1 = const(0x0A)
+_ASAX = const(0x10)        # ASAX, ASAY, ASAZ in 0x10..0x12 (fuse ROM access mode only)
+
+# Bit fields
+_DRDY = const(0x01)        # ST1 bit0
+_DOR = const(0x02)         # ST1 bit1: a set was skipped before this one
+_HOFL = const(0x08)        # ST2 bit3
+_BIT16 = const(0x10)       # CNTL1 BIT: 16-bit output
+_POWER_DOWN = const(0x00)
+_FUSE_ROM = const(0x0F)
+_TWAT_US = const(100)      # power-down -> another mode (docs/hardware.md)
+
+_RANGES_G = (49,)
+_COUNTS_PER_GAUSS = (667,)
+_RATES_HZ = (8, 100)
+_MODES = (0x02, 0x06)      # continuous measurement mode 1, 2
+_PERIODS_US = (125000, 10000)
+
+
+class AK8963(Magnetometer):
+    KIND = "ak8963"
+    OPTIONS = ("range", "rate", "delay_us", "timeout_us")
+    TABLES = (_RANGES_G, _RATES_HZ)
+    PER_CODE = (_PERIODS_US, _COUNTS_PER_GAUSS)
+    FLAGS = (_DOR, _DOR)  # DOR: a set was lost (.suspect: a repeat is then stale data)
+    REGISTERS = (_WIA, _ST1, _DRDY, _HXL, _CNTL1)
+    ID = b"\x48"
+
+    def __init__(self, i2c, address=0x0C, *, range=49, rate=100, delay_us=None,
+                 timeout_us=None):
+        self._blk = bytearray(7)       # HXL..HZH and ST2: one transfer per sample
+        self.asa = (128, 128, 128)
+        super().__init__(i2c, address, delay_us, timeout_us, range, rate)
+
+    @staticmethod
+    def _config_of(codes):
+        return (_BIT16 | _MODES[codes[1]],)  # CNTL1
+
+    def _configure(self):
+        self._write_u8(_CNTL1, _POWER_DOWN)
+        self._delay(_TWAT_US)
+        self._write_u8(_CNTL1, _FUSE_ROM)
+        self._read_into(_ASAX, memoryview(self._buf)[0:3])
+        b = self._buf
+        self.asa = (b[0], b[1], b[2])
+        self._k = (b[0] + 128, b[1] + 128, b[2] + 128)
+        self._write_u8(_CNTL1, _POWER_DOWN)
+        self._delay(_TWAT_US)
+        self._write_u8(_CNTL1, self._want[0])
+        self._check_config()
+
+    def sample_into(self, buf):
+        """read_into() for callers already inside a guard: the data and ST2 in one transfer,
+        then the fuse ROM's sensitivity applied."""
+        status = self.wait(_ST1, _DRDY)
+        self.register = _HXL
+        d = self._blk
+        self._i2c.readfrom_mem_into(self.address, _HXL, d)
+        self.suspect = status & _DOR != 0
+        if status & _DOR:
+            self.skipped += 1
+        if d[6] & _HOFL:
+            self._hofl()
+        k = self._k
+        v = d[1] << 8 | d[0]
+        v = ((v - 0x10000 if v & 0x8000 else v) * k[0] + 128) >> 8
+        buf[0] = 32767 if v > 32767 else (-32768 if v < -32768 else v)
+        v = d[3] << 8 | d[2]
+        v = ((v - 0x10000 if v & 0x8000 else v) * k[1] + 128) >> 8
+        buf[1] = 32767 if v > 32767 else (-32768 if v < -32768 else v)
+        v = d[5] << 8 | d[4]
+        v = ((v - 0x10000 if v & 0x8000 else v) * k[2] + 128) >> 8
+        buf[2] = 32767 if v > 32767 else (-32768 if v < -32768 else v)
+
+    def _hofl(self):
+        d = self._blk
+        self._buf[0:6] = d[0:6]
+        raw = self.held(0)
+        raise self.overflow(raw, "HOFL set (|X| + |Y| + |Z| of the field beyond 4912 uT: a "
+                                 "magnet close by?), raw %s" % (raw,))
