@@ -84,6 +84,6 @@ class AK09916(Magnetometer):
         if d[7] & _HOFL:
             self._buf[0:6] = d[0:6]
             raw = self.held(0)
-            raise self.overflow(raw, "HOFL set (|X| + |Y| + |Z| of the field beyond 4912 uT: "
-                                     "a magnet close by?), raw %s" % (raw,))
+            raise self.overflow(raw, "HOFL set (a magnetic sensor overflow: a magnet close "
+                                     "by?), raw %s" % (raw,))
         i2cdevice.decode(d, buf, 0)

@@ -9,27 +9,19 @@ MPU-9255 (GY-9250, GY-91 breakouts), on the main bus once the IMU's I2C bypass i
 #     x, y, z = AK8963(i2c).read()
 #
 # AK8963(i2c, address=0x0C, *, range=49, rate=100, delay_us=None, timeout_us=None)
-#   range  49: +-4912 uT, 16-bit output at 0.15 uT/LSB, 667 counts/G (666.7, rounded): the one
-#          range offered (the 14-bit output, 0.6 uT/LSB, is not)
-#   rate   output rate in Hz: 8 or 100 (continuous measurement mode 1 or 2)
-# read() -> (x, y, z) counts in the chip's axes, sensitivity-adjusted; read_into(buf) fills
-# buf[0..2] without allocating. .asa: the fuse ROM's ASAX, ASAY, ASAZ. .KIND 'ak8963',
-# .range_code 0, .counts_per_gauss, .skipped (reads whose ST1 said DOR: a set was lost),
-# .suspect (this read's DOR: the app then takes an exact repeat for stale data, as with the
-# QMC5883L's DOR: a live AK8963's 2-count noise makes one rare), config_ok() (CNTL1 read back).
-#
-# From the AK8963 datasheet (MS1356-E-02) and the MPU-9250 register map (RM-MPU-9250A-00,
-# section 5; docs/hardware.md):
-# - A read polls ST1 for DRDY, then takes HXL..HZH and ST2 in one transfer: ST2 ends the read
-#   and frees the data registers for the next set (6.4.3.2; without it no new set arrives).
-# - ST2.HOFL: the field's |X| + |Y| + |Z| went beyond 4912 uT and the data are not correct:
-#   SensorOverflow.
-# - Sensitivity (the register map's ASA section): Hadj = H x ((ASA - 128) x 0.5 / 128 + 1) = H x (ASA + 128) / 256,
-#   here (H x (ASA + 128) + 128) >> 8: within half a count of the formula, every intermediate
-#   below 2**24 (tests/test_ak8963.py). An adjusted value beyond int16 (a field past 4139 uT
-#   at the largest ASA) is held at the rail, which the app's health check takes for what it is.
-# - A mode is set from power-down, 100 us after entering it: configure() powers down,
-#   reads the fuse ROM in its access mode, powers down, then starts the continuous mode.
+#   range 49: +-4912 uT, 16-bit output at 0.15 uT/LSB, 667 counts/G (666.7 rounded), the one
+#   range offered; rate: 8 or 100 Hz (continuous measurement mode 1 or 2)
+# read(), read_into(buf) (no allocation): counts in the chip's axes, sensitivity-adjusted.
+# .asa: the fuse ROM's ASAX..ASAZ; .skipped: reads whose ST1 said DOR (a set was lost);
+# .suspect: this read's DOR (the app then takes an exact repeat for stale data: a live
+# AK8963's noise makes one rare); config_ok(): CNTL1 read back. docs/hardware.md has the
+# registers and their sources. A read polls ST1, then takes HXL..HZH and ST2 in one transfer:
+# ST2 ends the read and frees the data registers for the next set (datasheet 6.4.3.2).
+# ST2.HOFL (a magnetic sensor overflow): SensorOverflow. The fuse-ROM sensitivity,
+# Hadj = H x ((ASA - 128) x 0.5 / 128 + 1), is (H x (ASA + 128) + 128) >> 8 here: within half
+# a count, every intermediate below 2**24 (tests/test_ak8963.py); beyond int16 it is held at
+# the rail, which the app's health check takes for what it is. configure() powers down, waits
+# 100 us, reads the fuse ROM in its mode, powers down, waits, starts the continuous mode.
 from firmware.compat import const
 
 from firmware.i2cdevice import Magnetometer
@@ -116,5 +108,5 @@ class AK8963(Magnetometer):
         d = self._blk
         self._buf[0:6] = d[0:6]
         raw = self.held(0)
-        raise self.overflow(raw, "HOFL set (|X| + |Y| + |Z| of the field beyond 4912 uT: a "
-                                 "magnet close by?), raw %s" % (raw,))
+        raise self.overflow(raw, "HOFL set (a magnetic sensor overflow: a magnet close by?), "
+                                 "raw %s" % (raw,))
