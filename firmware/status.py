@@ -24,8 +24,8 @@ from firmware.hints import HINTS
 _QUIET_HINT_US = const(3000000)  # no new direction for 3 s before "planar"
 _STATUS_INTERFERENCE = "interference"  # firmware.app.STATUS_INTERFERENCE
 _LINE_MAX = const(400)  # bytes: the longest line (a jump, the location, a hint) fits
-# the heap the calibration program completes from (.mpy, x86-32 build, boards/main.py: 124-128 KB
-# in make bench's runs when it was set, docs/install.md; budgets.py board_calibrate_mpy)
+# the heap the calibration program completes from (.mpy, x86-32, boards/main.py; make bench's
+# figure in docs/benchmarks.md, at most 4 KB below it: tests/test_program_need.py)
 PROGRAM_NEED_KB = const(128)
 _buf = bytearray(_LINE_MAX)
 _mv = memoryview(_buf)
