@@ -105,6 +105,14 @@ def _need_kb():
         return "?"
 
 
+def _smaller():
+    """What needs less heap than this install: .mpy files than .py sources, and a frozen or
+    ROMFS build (its bytecode in flash) than .mpy files (docs/install.md)."""
+    if compiled_here(sys.modules.get(__name__)):
+        return "use .mpy files (make deploy), a frozen or a ROMFS build"
+    return "use a frozen or a ROMFS build (docs/install.md)"
+
+
 def run_program(i2c, why):
     """The calibration program alone (firmware/calibrate/program.py), then a restart: into
     the heading with its fit, or, when it could not run (said why), without running it again."""
@@ -120,9 +128,9 @@ def run_program(i2c, why):
         if p.run() is not None:
             restart()  # into the heading, with the calibration just saved
         print("eCompass: the calibration program ran out of memory (%s KB free at a solve): "
-              "it needs ~%s KB of heap; use .mpy files or a frozen build, or calibrate on the "
-              "desktop or in the browser (docs/calibration.md)"
-              % (p.free_at_solve // 1024 if p.free_at_solve else "?", _need_kb()))
+              "it needs ~%s KB of heap; %s, or calibrate on the desktop or in the browser "
+              "(docs/calibration.md)"
+              % (p.free_at_solve // 1024 if p.free_at_solve else "?", _need_kb(), _smaller()))
     except ImportError:
         print("eCompass: cannot calibrate on the board: install package-calibrate.json "
               "(or calibrate on the desktop: docs/calibration.md)")
@@ -130,8 +138,8 @@ def run_program(i2c, why):
     except MemoryError:
         p = Program = None
         print("eCompass: the calibration program needs ~%s KB of heap, more than this board "
-              "has: use .mpy files or a frozen build, or calibrate on the desktop or in the "
-              "browser (docs/calibration.md)" % _need_kb())
+              "has: %s, or calibrate on the desktop or in the browser (docs/calibration.md)"
+              % (_need_kb(), _smaller()))
     p = Program = None
     _request("skip")
     restart()  # a clean heap for the heading

@@ -30,3 +30,24 @@ def test_the_reader_finds_a_drifted_figure():
            "| what mip installs | 124.0 KB | RP2040 | 92.0 KB |\n"
     kb = measured_first_calibration_kb(page)
     assert kb == 136.0 and not kb <= PROGRAM_NEED_KB
+
+
+def test_a_board_short_of_heap_is_told_what_needs_less(tmp_path):
+    """From .mpy files at 96 KB (an ESP32's ~110 KB less the port's own), the program says its
+    figure and points at what needs less heap than .mpy files: a frozen or ROMFS build."""
+    import pytest
+    from host_sim.cli import bench
+    from tests import mp
+    if not mp.TIERS["x86-32"].available:
+        pytest.skip("x86-32 tier: %s" % mp.TIERS["x86-32"].reason)
+    session = str(tmp_path / "session.bin")
+    bench.write_session(session, smoke=False)
+    install = bench.board_install(str(tmp_path / "mpy"), "mpy")
+    store = tmp_path / "store"
+    store.mkdir()
+    r = bench.board_run(install, session, 96, str(store))
+    assert not r["traceback"], r["stderr"]
+    said = [ln for ln in r["lines"] if "calibration program" in ln and "KB of heap" in ln]
+    assert said, r["lines"][:3]
+    assert "~%d KB" % PROGRAM_NEED_KB in said[0] and "ROMFS build" in said[0], said[0]
+    assert "use .mpy files" not in said[0], said[0]
