@@ -47,6 +47,13 @@ def test_the_program_gives_the_same_bits_on_every_interpreter(clean, tier):
     assert _run("clean", tier) == clean
 
 
+def test_the_solver_code_is_not_held_while_a_fit_is_saved():
+    # the acceptance gate loads the solver again after the solve let it go: it goes again
+    # (CPython; a board running from .py sources keeps it, not to compile it again)
+    held = _run("held", "cpython")
+    assert held and not any(held), held
+
+
 def test_a_store_that_cannot_be_written_is_never_shown_as_saved():
     case, payload, model, fe, samples, solves, done_us, saved_us, lines, verdict, reason, \
         save_errors, last = _run("save_fails", "cpython")

@@ -3,7 +3,8 @@
 # case ("clean"; "save_fails": every slot write fails; "stored": a good calibration stored,
 # renew=True). Prints one JSON line: [case, saved payload as hex or None, model, fit error,
 # samples, solves, done at (us), last save at (us), progress lines, mounting verdict, reason,
-# save errors, the last progress line].
+# save errors, the last progress line]. Case "held": the clean run, printing only whether the
+# solver's code was loaded at each save (it must not be where the board did not compile it).
 import json
 import sys
 
@@ -13,6 +14,8 @@ import app_world as W  # noqa: E402
 from firmware.calibrate.program import Program  # noqa: E402
 
 case = sys.argv[1] if len(sys.argv) > 1 else "clean"
+held = case == "held"
+case = "clean" if held else case
 b = W.make_sim("gy271", seed=3)
 fs = W.MemFs()
 if case == "stored":
@@ -24,8 +27,19 @@ lines = []
 p = Program(b.bus, "/", mag_axes=W.MAG_AXES, accel_axes=W.ACCEL_AXES, fs=fs,
             ticks_us_=b.clock.ticks_us, delay_us=b.sleep_us, report=lines.append,
             renew=case == "stored")
+at_save = []
+if held:
+    _save = p._save
+
+    def _spy(*a):
+        at_save.append("firmware.calibrate.solve" in sys.modules)
+        return _save(*a)
+    p._save = _spy
 cal = p.run(limit_s=90)
 s = p.saved
+if held:
+    print(json.dumps(at_save))
+    sys.exit(0)
 print(json.dumps([case, s.to_bytes().hex() if s is not None else None,
                   cal.model if cal is not None else None,
                   cal.fit_error if cal is not None else None, p.collector.calibrator.count,
