@@ -1,0 +1,225 @@
+"""Every measured figure a page quotes agrees with the bench output it comes from.
+
+`make bench` writes its figures between markers (`<!-- bench:begin -->` in docs/benchmarks.md,
+`boards`, `by-board`, `logs`, `gyro`, `soak` blocks in other pages; `make run` the `run` block of
+docs/design.md: WRITERS). Outside those blocks a page
+either points at them or quotes one of their figures; this test finds each quoted figure with a
+unit and fails unless (a) a bench block holds the same value in the same unit, at the rounding
+the page shows, or (b) it is a fact that is not a measurement of ours, told apart by the rules
+and the short list below. No bench run: the blocks are bench's recorded output.
+
+What is checked: heap and file sizes (KB, B, bytes), interned names, times (ms, us, ns), and
+angles and percentages quoted with decimals (integers in deg / % are thresholds and scenario
+settings: 5 deg, +-3 %). Not checked: seconds (periods, timeouts, scenario lengths), and the
+angles of the pages in SCENARIO_PAGES, which quote the scenario runs those pages name rather
+than bench. CHANGELOG.md is exempt: each entry is a dated record of a past release; docs/
+pages are not (a "what moved it" note quotes the figure of today or points at benchmarks.md).
+"""
+import glob
+import os
+import re
+
+from tests import mp
+
+PAGES = (["README.md"] + sorted(glob.glob(os.path.join(mp.ROOT, "docs", "*.md")))
+         + sorted(glob.glob(os.path.join(mp.ROOT, "examples", "*.py"))))
+BENCH_PAGE = "docs/benchmarks.md"
+
+# Pages whose times, angles and percentages are datasheet or protocol facts, or the results
+# of the scenario runs and tests each names beside the figure (a soak seed, tests/test_web.py):
+# only their sizes and names are checked here.
+SCENARIO_PAGES = {"docs/faults.md", "docs/gyro.md", "docs/motioncal.md", "docs/hardware.md",
+                  "docs/location.md", "docs/accuracy.md", "docs/api.md", "docs/chips.md",
+                  "docs/web.md", "docs/quality.md", "docs/references.md",
+                  "examples/check_axes.py", "examples/gyro_heading.py"}
+# Status and progress lines quoted as code are the simulated board's output:
+# tests/test_readme.py and tests/test_calibration_doc.py hold them to a run.
+TRANSCRIPT = re.compile(r"`[^`]*\| [^`]*`?|^[^`]*\| [^`]*`|^(heading|calibrating:) .*\|")
+
+UNITS = {"KB": "size", "kB": "size", "B": "size", "bytes": "size", "names": "names",
+         "ms": "time", "us": "time", "\u00b5s": "time", "ns": "time", "deg": "angle",
+         "\u00b0": "angle", "%": "pct"}
+_NUM = r"\d{1,3}(?:,\d{3})+(?:\.\d+)?|\d+(?:\.\d+)?"
+_UNIT = r"(KB|kB|bytes|B|names|ms|us|\u00b5s|ns|deg|\u00b0|%)"
+FIGURE = re.compile(r"(?<![\w.\-+/])((?:%s)(?:\s*(?:/|-|->|to|and|or)\s*(?:%s))*)\s*%s(?![\w/])"
+                    % (_NUM, _NUM, _UNIT))
+NUM = re.compile(_NUM)
+# a bound, a goal or an input, not a result: "goal <= 1 KB", "budget 57.0 KB", "+-1.5 %",
+# "at most 300 characters", "below 1/8"
+BOUND = re.compile(r"(goal|budget|<=|>=|<|>|\+-|at most|at least|up to|less than|more than|"
+                   r"below|above|under|limit|bound|default|every|each|per)\s*$")
+
+# Facts that are not measurements of ours: (page, figure as written, where it comes from).
+ALLOW = [
+    ("*", "68 bytes", "MotionCal's calibration packet: its wire format (docs/motioncal.md)"),
+    ("docs/quick_calibration.md", "63.5 deg", "the scenario's place (quickcal.ZURICH): its dip"),
+    ("docs/quick_calibration.md", "6.9 deg", "computed: 4 x 0.03 rad across the field"),
+    ("docs/design.md", "100 \u00b5s", "firmware/circuitpython/busio_i2c.py's lock poll, a setting"),
+    ("docs/field_model.md", "12 bytes", "a table record: 6 int16 (the format)"),
+    ("docs/field_model.md", "7.5 deg", "the table's grid step: a design choice"),
+    ("docs/field_model.md", "97.5 deg", "the grid's rows: 7.5 deg steps and a pad row"),
+    ("docs/field_model.md", "172.5 deg", "the grid's last column: 360 - 7.5 deg"),
+    ("docs/field_model.md", "9,104 B", "10 deg grid's table: 32 + 21 x 36 x 12 B (computed)"),
+    ("docs/field_model.md", "11,072 B", "9 deg grid's table: 32 + 23 x 40 x 12 B (computed)"),
+    ("docs/field_model.md", "0.27 %", "grid study, rejected 10 deg grid: measured once"),
+    ("docs/field_model.md", "0.19 %", "grid study, rejected 9 deg grid: measured once"),
+]
+
+
+# The blocks a command writes, and the command: only these are a source.
+WRITERS = {"bench": "make bench (host_sim/cli/bench.py)", "soak": "make bench / make soak",
+           "boards": "make bench", "by-board": "make bench", "gyro": "make bench",
+           "logs": "make bench (host_sim/cli/benchmarks/accuracy.py)",
+           "run": "make run (host_sim/cli/run.py)"}
+
+
+def _rel(path):
+    return os.path.relpath(path, mp.ROOT).replace(os.sep, "/")
+
+
+def blocks(text):
+    """(inside, line) for each line: inside is True within a block a command writes."""
+    depth = 0
+    for line in text.splitlines():
+        m = re.search(r"<!-- ([\w-]+):begin -->", line)
+        if m:
+            assert m.group(1) in WRITERS, "no command writes the block %r" % m.group(1)
+            depth += 1
+        yield depth > 0, line
+        if re.search(r"<!-- [\w-]+:end -->", line):
+            depth -= 1
+
+
+def figures(line):
+    """(text, [values], decimals, unit) for each figure with a unit on the line."""
+    for m in FIGURE.finditer(line):
+        nums, unit = m.group(1), m.group(2)
+        vals = [n.replace(",", "") for n in NUM.findall(nums)]
+        if unit == "B" and any("." in v for v in vals):
+            continue  # "2.5 B": a multiple of the field B, not bytes
+        yield m.group(0), [float(v) for v in vals], [len(v.split(".")[1]) if "." in v else 0
+                                                       for v in vals], unit, m.start()
+
+
+NORM = {"kB": "KB", "bytes": "B", "\u00b5s": "us", "\u00b0": "deg"}
+
+
+class Source:
+    """Bench output: each number with the units its line (or its table's header) names."""
+
+    def __init__(self, texts):
+        self.rows = []
+        for text in texts:
+            header = ""
+            for inside, line in blocks(text):
+                if not inside:
+                    continue
+                if not line.startswith("|"):
+                    header = ""
+                elif not header:
+                    header = line
+                units = {NORM.get(u, u) for u in
+                         re.findall(r"(?<![\w])%s(?![\w])" % _UNIT, line + " " + header)}
+                for n in NUM.findall(line):
+                    self.rows.append((float(n.replace(",", "")), units))
+
+    def holds(self, value, decimals, unit):
+        unit = NORM.get(unit, unit)
+        tol = 0.5 * 10 ** -decimals + 1e-9
+        for n, units in self.rows:
+            if unit in units and abs(n - value) <= tol:
+                return True
+            # a KB figure may round a figure bench gives in B
+            if unit == "KB" and "B" in units and n > 1024 and abs(n / 1024 - value) <= tol:
+                return True
+        return False
+
+
+def allowed(page, text, allow):
+    return any(p in ("*", page) and f == text for p, f, _ in allow)
+
+
+def cells(line, header):
+    """Figures of a table row whose column header names the unit: | RMS deg | ... | 0.22 |."""
+    heads = header.split("|")
+    for i, cell in enumerate(line.split("|")):
+        m = re.fullmatch(r"\s*\**(%s)\**\s*" % _NUM, cell)
+        units = re.findall(r"(?<![\w])%s(?![\w])|\[(B)\]" % _UNIT, heads[i]) \
+            if i < len(heads) else []
+        if m and units:  # the header's last unit: "95 % of seeds within deg" is in deg
+            v = m.group(1).replace(",", "")
+            yield (m.group(1), [float(v)], [len(v.split(".")[1]) if "." in v else 0],
+                   units[-1][0] or units[-1][1], 0)
+
+
+def check(pages, source, allow=ALLOW):
+    """Lines "page:line: figure" for each quoted measured figure bench does not hold."""
+    bad = []
+    for page, text in pages:
+        header = ""
+        for no, (inside, line) in enumerate(blocks(text), 1):
+            if inside:
+                continue
+            table = line.strip().startswith("|") and line.strip().endswith("|")
+            header = (header or line) if table else ""
+            found = list(figures(line))
+            if table and header is not line:
+                found += list(cells(line, header))
+            for fig, vals, decs, unit, at in found:
+                kind = UNITS[unit]
+                if kind not in ("size", "names") and page in SCENARIO_PAGES:
+                    continue
+                if kind in ("angle", "pct") and not any(decs):
+                    continue
+                if not table and TRANSCRIPT.search(line):
+                    continue
+                if BOUND.search(line[:at]) or allowed(page, fig, allow):
+                    continue
+                if all(source.holds(v, d, unit) for v, d in zip(vals, decs)):
+                    continue
+                bad.append("%s:%d: %s" % (page, no, fig))
+    return bad
+
+
+def _pages():
+    return [(_rel(p), open(os.path.join(mp.ROOT, p), encoding="utf-8").read()) for p in PAGES]
+
+
+def test_every_quoted_figure_is_what_bench_wrote():
+    pages = _pages()
+    source = Source(text for _, text in pages)
+    bad = check(pages, source)
+    assert not bad, "figures no bench block holds (quote it from docs/benchmarks.md, point " \
+                    "there, or list a non-measured fact in ALLOW):\n" + "\n".join(bad)
+
+
+BENCH = """<!-- bench:begin -->
+| item | CPython | MicroPython unix | ratio / goal | verdict |
+|---|---|---|---|---|
+| 8 field model heap, x86-32: open model / per query / import [B] |  | 432 / 372 / 9344 | goal <= 1 KB | met |
+| 4 budget: smallest heap, boot + first calibration (.romfs) |  | 82.5 KB | budget <= 100.0 KB | within |
+| 3 solve model 10, 300 samples [ms] | 2.92 | 3.70 | goal <= 100 ms (unix) | met |
+<!-- bench:end -->
+"""
+
+
+def test_a_drifted_figure_fails_with_its_page_and_line():
+    source = Source([BENCH])
+    page = ("the model holds 432 B open and 372 B per query (9.1 KB to import);\n"
+            "a first calibration from ROMFS needs 82.5 KB, a solve 3.70 ms.\n"
+            "drifted: 368 B per query and 87.3 KB, a solve 3.9 ms; 96 KB\n"
+            "a goal <= 12 KB and +-1.5 % are not results; about 110 KB free\n")
+    bad = check([("docs/x.md", page)], source, allow=[])
+    assert bad == ["docs/x.md:3: 368 B", "docs/x.md:3: 87.3 KB", "docs/x.md:3: 3.9 ms",
+                   "docs/x.md:3: 96 KB", "docs/x.md:4: 110 KB"], bad
+    # a fact listed as not ours passes, on its page or on every page
+    assert check([("docs/x.md", page)], source, allow=[("*", "110 KB", "nominal")]) == bad[:4]
+    # a table's cells take the unit of their column's header
+    table = "| setup | RMS deg | heap [B] |\n|---|---|---|\n| a | 0.79 | 9344 |\n| b | 0.80 | 9345 |\n"
+    assert check([("docs/x.md", table)], Source([BENCH.replace("<!-- bench:end", "| q | 0.79 deg |\n<!-- bench:end")])) == \
+        ["docs/x.md:4: 0.80", "docs/x.md:4: 9345"]
+    # a figure inside a bench block of the page is bench's own
+    assert check([("docs/x.md", "<!-- gyro:begin -->\n96 KB\n<!-- gyro:end -->\n")], source) == []
+    # a decimal angle is checked outside the scenario pages only
+    assert check([("docs/x.md", "off by 2.7 deg\n")], source) == ["docs/x.md:1: 2.7 deg"]
+    assert check([("docs/faults.md", "off by 2.7 deg\n")], source) == []
