@@ -70,7 +70,8 @@ ALLOW = [
 WRITERS = {"bench": "make bench (host_sim/cli/bench.py)", "soak": "make bench / make soak",
            "boards": "make bench", "by-board": "make bench", "gyro": "make bench",
            "logs": "make bench (host_sim/cli/benchmarks/accuracy.py)",
-           "run": "make run (host_sim/cli/run.py)"}
+           "run": "make run (host_sim/cli/run.py)",
+           "soak-run": "make soak (host_sim/cli/soak.py --doc)"}
 
 
 def _rel(path):
@@ -231,3 +232,23 @@ def test_a_drifted_figure_fails_with_its_page_and_line():
     # a decimal angle is checked outside the scenario pages only
     assert check([("docs/x.md", "off by 2.7 deg\n")], source) == ["docs/x.md:1: 2.7 deg"]
     assert check([("docs/faults.md", "off by 2.7 deg\n")], source) == []
+
+
+def test_make_soak_writes_the_table_docs_faults_md_quotes(tmp_path):
+    # docs/faults.md's campaign table is the soak-run block `make soak` writes (--doc)
+    text = open(os.path.join(mp.ROOT, "docs", "faults.md"), encoding="utf-8").read()
+    assert "<!-- soak-run:begin -->\n\n    soak: 600 sessions x 60 s, seed 1\n" in text
+    assert "--doc docs/faults.md" in open(os.path.join(mp.ROOT, "Makefile")).read()
+    from host_sim.cli import soak
+    page = tmp_path / "page.md"
+    page.write_text("before\n<!-- soak-run:begin -->\nold\n<!-- soak-run:end -->\nafter\n")
+    assert soak.main(["--sessions", "2", "--seconds", "5", "--clean", "2",
+                      "--doc", str(page)]) == 0
+    got = page.read_text()
+    assert "old" not in got and got.startswith("before\n") and got.endswith("after\n")
+    body = got.split("<!-- soak-run:begin -->\n\n")[1].split("\n\n<!-- soak-run:end -->")[0]
+    lines = [ln[4:] for ln in body.splitlines()]
+    assert lines[0] == "soak: 2 sessions x 5 s, seed 1" and lines[-1] == "goals: all met", lines
+    # a page without the markers is refused before the campaign runs
+    page.write_text("no markers\n")
+    assert soak.main(["--sessions", "2", "--seconds", "5", "--doc", str(page)]) == 2
