@@ -21,7 +21,7 @@ import re
 
 from tests import mp
 
-PAGES = (["README.md"] + sorted(glob.glob(os.path.join(mp.ROOT, "docs", "*.md")))
+PAGES = ([os.path.join(mp.ROOT, "README.md")] + sorted(glob.glob(os.path.join(mp.ROOT, "docs", "*.md")))
          + sorted(glob.glob(os.path.join(mp.ROOT, "examples", "*.py"))))
 
 # Pages whose times, angles and percentages are datasheet or protocol facts, or the results
@@ -93,7 +93,7 @@ def blocks(text):
 
 
 def figures(line):
-    """(text, [values], decimals, unit) for each figure with a unit on the line."""
+    """(text, [values], [decimals], unit, column) for each figure with a unit on the line."""
     for m in FIGURE.finditer(line):
         nums, unit = m.group(1), m.group(2)
         vals = [n.replace(",", "") for n in NUM.findall(nums)]
@@ -188,12 +188,14 @@ def check(pages, source, allow=ALLOW, used=None):
 
 
 def _pages():
-    return [(_rel(p), open(os.path.join(mp.ROOT, p), encoding="utf-8").read()) for p in PAGES]
+    return [(_rel(p), open(p, encoding="utf-8").read()) for p in PAGES]
 
 
 def test_every_quoted_figure_is_what_bench_wrote():
     pages = _pages()
+    assert {"README.md", "docs/design.md", "docs/field_model.md"} <= {p for p, _ in pages}
     source = Source(text for _, text in pages)
+    assert len(source.rows) > 1000 and source.holds(0.035, 3, "deg")  # bench's tables read
     used = set()
     bad = check(pages, source, used=used)
     assert not bad, "figures no bench block holds (quote it from docs/benchmarks.md, point " \
