@@ -68,7 +68,7 @@ ALLOW = [
 
 
 # The blocks a command writes, and the command: only these are a source.
-WRITERS = {"bench": "make bench (host_sim/cli/bench.py)", "soak": "make bench / make soak",
+WRITERS = {"bench": "make bench (host_sim/cli/bench.py)", "soak": "make bench (--soak-only)",
            "boards": "make bench", "by-board": "make bench", "gyro": "make bench",
            "logs": "make bench (host_sim/cli/benchmarks/accuracy.py)",
            "run": "make run (host_sim/cli/run.py)",
