@@ -102,9 +102,9 @@ fuzz: $(STAMP)  ## hypothesis properties with many more examples
 bench: $(STAMP) tiers  ## speed, memory, accuracy; writes docs/benchmarks.md
 	$(PY) -m host_sim bench
 
-soak: $(STAMP)  ## the seeded fault campaign (docs/faults.md), then the mounting check's: minutes; fails on a missed goal
+soak: $(STAMP)  ## the seeded fault campaign (writes its table into docs/faults.md), then the mounting check's: minutes; fails on a missed goal
 	rc=0; \
-	$(PY) -m host_sim soak --sessions 600 --seconds 60 --seed 1 || rc=$$?; \
+	$(PY) -m host_sim soak --sessions 600 --seconds 60 --seed 1 --doc docs/faults.md || rc=$$?; \
 	$(PY) -m host_sim.cli.mounting --sessions 600 --seconds 40 --seed 1 || rc=$$?; \
 	exit $$rc
 

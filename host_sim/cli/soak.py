@@ -353,6 +353,9 @@ def parser():
     p.option("--gyro", "flag", help="the apps run the gyro-aided heading (use_gyro)")
     p.option("--akm", "flag", help="the boards with an AKM magnetometer (AKM_SETUPS)")
     p.option("--json", "flag", help="the figures as one JSON object")
+    p.option("--doc", "path", metavar="PAGE",
+             help="also write the report into PAGE between its soak-run markers\n"
+                  "(make soak: docs/faults.md, so the page quotes this run)")
     p.epilog = ("goals (docs/faults.md), checked on the sessions run:\n"
                 + "".join("  - %s\n" % g for g in GOALS)
                 + "exit status: 0 every goal met; 1 a goal failed (the report's last line, or\n"
@@ -367,6 +370,8 @@ def body(opts):
     if only is not None and max(only) >= n + clean:
         raise UsageError("--only %d: this campaign's sessions are 0..%d (%d with faults, then "
                          "%d fault-free)" % (max(only), n + clean - 1, n, clean))
+    if opts["doc"]:
+        write_doc(opts["doc"], None)  # the markers are there before minutes of campaign
     st = campaign(n, opts["seconds"], opts["seed"], clean, opts["gyro"], only,
                   AKM_SETUPS if opts["akm"] else SETUPS)
     if opts["json"]:
@@ -374,7 +379,30 @@ def body(opts):
     else:
         for line in report(st):
             print(line)
+    if opts["doc"]:
+        write_doc(opts["doc"], report(st))
     return 1 if st["goals_failed"] else 0
+
+
+DOC_BEGIN, DOC_END = "<!-- soak-run:begin -->", "<!-- soak-run:end -->"
+
+
+def write_doc(path, lines):
+    """Put the report's lines, indented as a block, between the page's soak-run markers
+    (lines None: only check that the page has them)."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            text = f.read()
+    except OSError as e:
+        raise UsageError("--doc %s: %s" % (path, e.strerror))
+    if DOC_BEGIN not in text or DOC_END not in text:
+        raise UsageError("--doc %s: the page has no %s ... %s markers" % (path, DOC_BEGIN,
+                                                                          DOC_END))
+    if lines is None:
+        return
+    a, b = text.index(DOC_BEGIN) + len(DOC_BEGIN), text.index(DOC_END)
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(text[:a] + "\n\n" + "".join("    %s\n" % ln for ln in lines) + "\n" + text[b:])
 
 
 def main(argv):
