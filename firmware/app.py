@@ -32,8 +32,8 @@ there is no good calibration yet, collect and solve one in the background.
 #
 # Memory (docs/design.md#memory): this class is the core a calibrated board keeps. What it
 # needs once in a while is imported for that and dropped after it (firmware.compat.drop): its
-# construction (firmware/appsetup.py), the store's load and save (firmware/persist.py with
-# firmware/slots.py), the calibration session (firmware/calibrate/session.py with the calibrator, the
+# construction (firmware/app_setup.py), the store's load and save (firmware/app_persist.py with
+# firmware/store_slots.py), the calibration session (firmware/calibrate/session.py with the calibrator, the
 # sample buffer, the moment sums, the solver and the history), which ends once a good fit is
 # saved and the board brings no new direction, and the status line (firmware/status.py).
 # tests/test_layout.py checks which modules a board holds.
@@ -135,7 +135,7 @@ _FIELD_TOL_PCT = const(10)    # interference window floor, % (firmware.compass's
 _FIELD_TOL_MAX_PCT = const(50)
 _FIT_SIGMAS = const(3)        # window >= 3 x the fit's RMS radial error
 _US_PER_S = const(1000000)
-_LOAD_NO_MEMORY = "no_memory"  # firmware.persist.LOAD_NO_MEMORY
+_LOAD_NO_MEMORY = "no_memory"  # firmware.app_persist.LOAD_NO_MEMORY
 _LOAD_RETRY_US = const(5000000)  # a load (or the heading line) that found no room: again in 5 s
 _RETRY_PAUSE_US = const(5000)   # the pause of a step while the app itself does not fit
 _CAL_RETRY_US = const(60000000)  # a session that found no room: again in 60 s
@@ -219,7 +219,7 @@ class CompassApp:
 
     location = None  # a firmware.field.location.Location after set_location()
     # the documented state, here too so that it exists while the heap could not hold the app
-    # (.no_memory "start"): each is set again by the constructor (firmware/appsetup.py)
+    # (.no_memory "start"): each is set again by the constructor (firmware/app_setup.py)
     calibration = UNCALIBRATED
     compass = None
     collector = None
@@ -269,12 +269,12 @@ class CompassApp:
             self._wrap = ticks_us is None
 
     def _build(self, args):
-        from firmware import appsetup  # construction only: dropped when the app is made
+        from firmware import app_setup  # construction only: dropped when the app is made
         try:
-            appsetup.setup(self, *args)
+            app_setup.setup(self, *args)
         finally:
-            appsetup = None
-            drop("appsetup", "devinit")  # the drivers' start-up and error texts too
+            app_setup = None
+            drop("app_setup", "devinit")  # the drivers' start-up and error texts too
         self._args = None
         self.no_memory = None
         self._use(self._load())
@@ -291,30 +291,30 @@ class CompassApp:
         if learn or learn is None and not self._good_enough(self.calibration):
             self.calibrate()
 
-    # --- storage (firmware/persist.py, loaded for each use) ---------------------------
+    # --- storage (firmware/app_persist.py, loaded for each use) ---------------------------
     def _load(self):
         try:
-            from firmware import persist
-            cal = persist.load(self)
+            from firmware import app_persist
+            cal = app_persist.load(self)
         except MemoryError:  # no room for the store's code: not "uncalibrated" (_retry)
             from firmware.calibration import UNCALIBRATED
             self.load_reason = _LOAD_NO_MEMORY
             cal = UNCALIBRATED
         persist = None
-        drop("persist", "slots")
+        drop("app_persist", "store_slots")
         return cal
 
     def _save(self, dip_only=False):
         try:
-            from firmware import persist
-            persist.save(self, dip_only)
+            from firmware import app_persist
+            app_persist.save(self, dip_only)
         except MemoryError:  # no room for the store's code: as a failed save (retried)
             self.save_errors += 1
             self.save_reason = _LOAD_NO_MEMORY
             self._unsaved = True
             self._save_wait_us = 0
         persist = None
-        drop("persist", "slots")
+        drop("app_persist", "store_slots")
 
     # --- calibration in force ---------------------------------------------------------
     def _good_enough(self, cal):
@@ -434,14 +434,14 @@ class CompassApp:
         # max_uncertainty_cdeg). Returns the Attitude (.attitude); ValueError when there is no
         # MPU6050.
         try:
-            from firmware.gyro.gyrosetup import attach
+            from firmware.gyro.attitude_setup import attach
             from firmware.gyro import attitude
         except ImportError:
             raise ImportError("use_gyro() needs the gyro part: install package-gyro.json")
         attitude.use_kernels(None if self.fast else False)  # the app's kernel set
         a = attach(self, attitude.Attitude, options)
         attach = None
-        drop("gyro.gyrosetup")
+        drop("gyro.attitude_setup")
         self._gyro_options = options if options else ()
         return a
 

@@ -32,12 +32,12 @@
 # sign-extended by hand. tests/test_fast.py compares every function with its original on the
 # interpreters that have the emitter, over the real logs and the int16 extremes.
 #
-# Tables: firmware/kang_tables.py's atan and sine tables, the array('i') trig.py indexes too,
+# Tables: firmware/trig_tables.py's atan and sine tables, the array('i') trig.py indexes too,
 # loaded with ptr32 (every entry is non-negative, so the unix port's unsigned load changes
 # nothing).
 import micropython
 
-from firmware.kang_tables import ATAN_T, SIN_T
+from firmware.trig_tables import ATAN_T, SIN_T
 
 _AT = ATAN_T
 _ST = SIN_T

@@ -1,7 +1,7 @@
 """The heading line's field checks: the dip against the calibration's (DipCheck) and the spells
 of a field that moved (FieldWatch). Loaded with the heading line."""
 #     from firmware.fieldwatch import FieldWatch
-#     w = FieldWatch(compass, body)   # app.watch (firmware/appsetup.py); w.dip: its DipCheck
+#     w = FieldWatch(compass, body)   # app.watch (firmware/app_setup.py); w.dip: its DipCheck
 #
 # - DipCheck: the dip (inclination, the angle between the field and the horizontal) is a
 #   property of the place, like |B|: rotating the board changes neither. A magnet near the

@@ -4,10 +4,10 @@ after (firmware.compat.drop): a board whose store holds no verdict never loads i
 """
 #     from firmware import mountnote
 #     mountnote.save(app)        # after a check that said ok or wrong (firmware/calibrate/session.py)
-#     mountnote.load(app, data)  # at boot, the file's bytes, once a record loaded (persist.py)
+#     mountnote.load(app, data)  # at boot, the file's bytes, once a record loaded (app_persist.py)
 #
-# (firmware/persist.py and session.py import it by a string, not by an import statement, so
-# that a board that never needs it interns none of its names: see persist.py load.)
+# (firmware/app_persist.py and session.py import it by a string, not by an import statement, so
+# that a board that never needs it interns none of its names: see app_persist.py load.)
 #
 # Why. The calibration is fitted in the chip's own axes, so it is saved, and loads at the next
 # boot, whatever MAG_AXES says; only a calibration session checks the axis settings. Without the
@@ -19,7 +19,7 @@ after (firmware.compat.drop): a board whose store holds no verdict never loads i
 #     wrong qmc5883l x,-y,-z -x,y,z y,x,-z 167cb8ea
 #
 # the verdict, the magnetometer (its driver's KIND), the MAG_AXES and ACCEL_AXES judged, the
-# MAG_AXES the data say, then the CRC-32 (hex, firmware/slots.py crc32) of the line before its
+# MAG_AXES the data say, then the CRC-32 (hex, firmware/store_slots.py crc32) of the line before its
 # last space. save(): a check that says wrong writes it (unless the file holds that line
 # already: no write for nothing), one that says ok removes it. The calibration record's format
 # (firmware/store.py) is untouched: every firmware reads the record as before, and a store
@@ -42,10 +42,10 @@ after (firmware.compat.drop): a board whose store holds no verdict never loads i
 from firmware.axes import AxisMap
 from firmware.compat import const
 
-NAME = "_mounting.txt"    # after the store's prefix (persist.py and session.py hold it too)
+NAME = "_mounting.txt"    # after the store's prefix (app_persist.py and session.py hold it too)
 _WRONG = "wrong"          # firmware.calibrate.mountcheck.WRONG: the only verdict written
 _OK = "ok"                # firmware.calibrate.mountcheck.OK
-_LINE_MAX = const(80)   # bytes read (persist.py too): a line has at most 59 (a 16-byte
+_LINE_MAX = const(80)   # bytes read (app_persist.py too): a line has at most 59 (a 16-byte
 #                           KIND, MAG_AXES "-x,-y,-z"); as long or longer is no line
 _STATUS = 'check MAG_AXES: the data say "%s"'  # as firmware.calibrate.mountcheck.judge says it
 
@@ -72,7 +72,7 @@ def save(app):
         if kept is not None:
             st.fs.remove(path)
         return
-    from firmware.slots import crc32
+    from firmware.store_slots import crc32
     line = "%s %s %s %s %s" % (_WRONG, app.mag.KIND, app._mag_map.spec, app._acc_map.spec, said)
     line = ("%s %08x\n" % (line, crc32(line.encode()))).encode()
     if kept == line:
@@ -110,7 +110,7 @@ def _parse(data, kind, accel, det):
     i = data.rfind(b" ")
     if i < 0 or len(data) >= _LINE_MAX or data[-1:] != b"\n":
         return None  # torn (no newline yet), or longer than any line
-    from firmware.slots import crc32
+    from firmware.store_slots import crc32
     try:
         if int(data[i + 1:-1], 16) != crc32(data[:i]):
             return None

@@ -47,7 +47,7 @@
 # slot that becomes readable again cannot win with an older record - unless every slot was
 # unreadable when the store object was made, the one case where no number is known.
 #
-# Refusals carry a reason (StoreError.reason), one of the REASON_* names of firmware/slots.py
+# Refusals carry a reason (StoreError.reason), one of the REASON_* names of firmware/store_slots.py
 # (which holds the format and the slot code; this module is the small front a board keeps).
 
 
@@ -78,7 +78,7 @@ class CalStore:
 
     def __init__(self, directory="/", name="ecompass", sensor="qmc5883l", range_code=0, fs=None,
                  validate=None):
-        from firmware.slots import check_sensor
+        from firmware.store_slots import check_sensor
         check_sensor(sensor, range_code)
         self.sensor = sensor
         self.range_code = range_code
@@ -98,7 +98,7 @@ class CalStore:
 
     def load(self):
         """The newest usable payload (bytes); StoreError(reason) if no slot has one."""
-        from firmware.slots import load
+        from firmware.store_slots import load
         return load(self)
 
     def save(self, payload):
@@ -108,10 +108,10 @@ class CalStore:
         # the one written. A slot that cannot be opened is passed over for the next one; when
         # none opens, the last OSError is raised (StoreError('no_slot') if there was none to
         # try: no slot but the current record's).
-        from firmware.slots import save
+        from firmware.store_slots import save
         return save(self, payload)
 
     def erase(self):
         """Remove every slot, the current record's last, so a cut in between leaves it."""
-        from firmware.slots import erase
+        from firmware.store_slots import erase
         erase(self)

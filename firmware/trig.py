@@ -20,7 +20,7 @@
 # tests/intcheck over the input space) and nothing is allocated.
 from firmware.compat import const
 from firmware.fixedpoint import isqrt, rdiv  # noqa: F401 - isqrt is part of the kernel set
-from firmware.kang_tables import ATAN_T, SIN_T
+from firmware.trig_tables import ATAN_T, SIN_T
 
 KANG_PER_TURN = const(65536)
 _KANG_45 = const(8192)

@@ -17,13 +17,13 @@ DRIVERS = sorted({row.split()[5].decode() for row in CHIPS})
 PIPELINE = ["compat", "errors", "fixedpoint", "i2cdevice", "detect"] + DRIVERS + [
             "axes", "calibrate.samples", "calibrate.accum",
             "calibrate.solve", "calibration", "calibrate.acceptance", "calibrate.calibrator",
-            "kang_tables", "trig", "compass", "store", "slots", "calibrate.history", "health",
+            "trig_tables", "trig", "compass", "store", "store_slots", "calibrate.history", "health",
             "fieldwatch", "app", "fast",
             # the app's capabilities, each loaded for its job and dropped after it (boot,
             # construction, the drivers' start-up and error texts, the store's load and save,
             # the calibration session, calibration mode where the heap holds one job at a
             # time, the status line)
-            "boot", "appsetup", "devinit", "persist", "calibrate.session", "status", "hints",
+            "boot", "app_setup", "devinit", "app_persist", "calibrate.session", "status", "hints",
             # the calibration program, and what a board's main.py runs
             "calibrate.program", "runner"]
 CALIBRATION_MACHINERY = {"firmware.calibrate.calibrator", "firmware.calibrate.solve", "firmware.calibrate.accum",
@@ -31,7 +31,7 @@ CALIBRATION_MACHINERY = {"firmware.calibrate.calibrator", "firmware.calibrate.so
                          "firmware.calibrate.history"}
 # what a board booted from a stored calibration holds while it shows headings (docs/design.md)
 CORE = {"firmware." + m for m in ("app", "axes", "calibration", "compass", "compat", "errors",
-                                  "fieldwatch", "fixedpoint", "health", "i2cdevice", "kang_tables",
+                                  "fieldwatch", "fixedpoint", "health", "i2cdevice", "trig_tables",
                                   "mpu6050", "qmc5883l", "store", "trig")}
 
 
@@ -54,7 +54,7 @@ def _imports(path, package, lazy=True):
     """Every module `path` imports (module level, and inside functions when lazy), as dotted
     names."""
     tree = ast.parse(open(path).read(), path)
-    # a module imported by a string held in a name (firmware/persist.py, session.py:
+    # a module imported by a string held in a name (firmware/app_persist.py, session.py:
     # name = "firmware.mountnote"; __import__(name, ...)): the strings such names hold
     held = {n.targets[0].id: n.value.value for n in ast.walk(tree)
             if isinstance(n, ast.Assign) and isinstance(n.targets[0], ast.Name)
@@ -98,7 +98,7 @@ def test_firmware_reads_as_the_pipeline_one_module_per_job():
                                 "field.location", "field.quickcal", "accuracy",
                                 "calfile.calimport", "circuitpython.busio_i2c",
                                 "gyro.attitude", "gyro.attitude_plain", "gyro.attitude_fast",
-                                "gyro.gyrosetup", "calibrate.mounting", "calibrate.mountcheck",
+                                "gyro.attitude_setup", "calibrate.mounting", "calibrate.mountcheck",
                                 "mountnote"} == set(PIPELINE)
 
 
@@ -291,3 +291,4 @@ def test_firmware_docstrings_are_short_longer_text_is_comments():
                 if d is not None and len(d) > DOCSTRING_MAX:
                     long_.append("%s:%s (%d chars)" % (m, getattr(n, "lineno", 1), len(d)))
     assert not long_, long_
+

@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from firmware.store import CalStore
-from firmware.slots import encode_record
+from firmware.store_slots import encode_record
 from firmware.errors import BusError, DataReadyTimeout, SensorOverflow
 from firmware.calibration import Calibration
 

@@ -47,7 +47,7 @@ from firmware.calibration import MINMAX, PAYLOAD_SIZE, Calibration
 from firmware.compat import const
 from firmware.errors import StoreError
 from firmware.fixedpoint import isqrt
-from firmware.slots import decode_record, encode_record
+from firmware.store_slots import decode_record, encode_record
 
 ENTRIES = const(8)          # entries in the ring
 MIN_STATS = const(4)        # reference values before mean +- _K_SIGMA sigma replaces the wide limits

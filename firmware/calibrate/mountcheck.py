@@ -12,7 +12,7 @@ a calibration is accepted and dropped after the check (firmware.compat.drop).
 # rotation R (a chip turned against the other, a wrong sign), the angle measured is the one
 # between R b and g, and it swings by tens of degrees as the board turns. Of the 24 rotations
 # among the signed permutations, applied after the map in use (so every candidate keeps its
-# handedness, which is the chip's: firmware/appsetup.py refuses another), a calibration dance
+# handedness, which is the chip's: firmware/app_setup.py refuses another), a calibration dance
 # that turns the board through many directions leaves one steady: the one that relates the
 # magnetometer to the accelerometer. Which way is forward, and up from down for both chips
 # together, the data cannot tell (examples/check_axes.py asks for poses); the check names the
@@ -174,7 +174,7 @@ def check(pairs, cal, mag_axes, accel_axes):
             n += 1
     trig = None
     if not loaded:
-        drop("trig", "kang_tables")
+        drop("trig", "trig_tables")
     best = second = 0x3FFFFFFF
     kb = 0
     for r in range(24):

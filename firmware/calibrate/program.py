@@ -131,7 +131,7 @@ class Program:
         except Exception:  # noqa: BLE001 - none, torn, unreadable, no room: nothing to beat
             return UNCALIBRATED
         finally:
-            drop("slots")  # the store's slot code: again for the save
+            drop("store_slots")  # the store's slot code: again for the save
 
     def done(self):
         """True once a good-enough fit is saved and read back, and no better one came for
@@ -330,7 +330,7 @@ class Program:
             except Exception as e:  # noqa: BLE001 - OSError, StoreError: tried again
                 self.reason = "save failed: %s" % (e,)
             self.save_errors += 1
-        drop("slots")
+        drop("store_slots")
         if self.saved is None:
             return
         self.reason = None
@@ -339,13 +339,13 @@ class Program:
             history.keep(self, cal, history.FLAG_ACCEPTED | (
                 history.FLAG_BASELINE if jump is not None else 0))
             history = None
-            drop("calibrate.history", "slots")
+            drop("calibrate.history", "store_slots")
         if self.mounting is not None:
             try:
                 __import__("firmware.mountnote", None, None, ("save",)).save(self)
             except (OSError, MemoryError):
                 pass  # the verdict is not kept: the next calibration checks again
-            drop("mountnote", "slots")
+            drop("mountnote", "store_slots")
 
     # --- what firmware.calibrate.history's judge() and keep() read -----------------------
     @property

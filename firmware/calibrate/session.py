@@ -122,7 +122,7 @@ def mount_check(app):
     # the status while it names another MAG_AXES. Then the session's pairs go: a board short of
     # heap loads the check's code as seldom as that, and the next session checks afresh.
     # mountnote's code is loaded for a wrong setting, and for a right one only when a verdict
-    # file is there to remove, by a string as firmware/persist.py load loads it: no name is
+    # file is there to remove, by a string as firmware/app_persist.py load loads it: no name is
     # interned for it otherwise (a function of its own would intern its name too).
     c = app.collector
     p = c.pairs
@@ -151,7 +151,7 @@ def mount_check(app):
         pass  # no room now: the next fit, or the session's end, checks again
     except OSError:
         pass  # the verdict could not be kept: the same
-    drop("calibrate.mountcheck", name[9:], "slots")
+    drop("calibrate.mountcheck", name[9:], "store_slots")
 
 
 def history_check(app, cal):

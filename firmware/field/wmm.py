@@ -45,7 +45,7 @@
 # on MicroPython), the per-node sums stay below 2**30 (32-bit small ints).
 try:
     from binascii import crc32 as _crc32
-except ImportError:  # a port without binascii.crc32: firmware.slots', imported when needed
+except ImportError:  # a port without binascii.crc32: firmware.store_slots', imported when needed
     _crc32 = None
 
 from firmware.compat import const
@@ -225,7 +225,7 @@ class FieldModel:
             if _crc32 is not None:
                 crc = _crc32(mv[:n], crc)
             else:
-                from firmware.slots import crc32_int
+                from firmware.store_slots import crc32_int
                 crc = crc32_int(mv[:n], crc)
             left -= n
         return crc  # unsigned, as binascii.crc32 and crc32_int return it

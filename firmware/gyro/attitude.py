@@ -247,10 +247,10 @@ class Attitude:
 
     def __init__(self, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g,
                  **options):
-        from firmware.gyro.gyrosetup import init  # construction only: dropped after it
+        from firmware.gyro.attitude_setup import init  # construction only: dropped after it
         init(self, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g, options)
         init = None
-        drop("gyro.gyrosetup")
+        drop("gyro.attitude_setup")
         self._use(_UNKNOWN_CDPS)
 
     # results

@@ -1,6 +1,6 @@
 """A CompassApp's calibration in the store: load at boot, save after each change, retry a
 failed save. Imported for each of those and dropped again (firmware.compat.drop), with the
-store's slot code (firmware/slots.py): a running board rarely saves.
+store's slot code (firmware/store_slots.py): a running board rarely saves.
 """
 # load(app)    -> the stored Calibration, or UNCALIBRATED with the reason in app.load_reason:
 #              the newest slot whose record is intact AND whose payload Calibration.from_bytes
