@@ -7,7 +7,7 @@ store's slot code (firmware/store_slots.py): a running board rarely saves.
 #              accepts (the store skips a torn, unreadable or meaningless slot and falls back to
 #              an older one).
 # save(app, dip_only)  the calibration in force, with the dip it measures when known
-#              (firmware/health.py DipCheck). A failed save (OSError, StoreError, MemoryError)
+#              (firmware/fieldwatch.py DipCheck). A failed save (OSError, StoreError, MemoryError)
 #              is counted in app.save_errors, never raises, and is retried every
 #              _SAVE_RETRY_US by CompassApp. dip_only: the fit in force again, now with its dip
 #              (not counted in app.stored).

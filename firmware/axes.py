@@ -4,17 +4,9 @@
 #     mag_map.apply(corrected, b)        # allocation-free; src and dst may be the same buffer
 #     apply(mag_map.m, corrected, b)     # the same, as a function (firmware.fast has its mirror)
 #
-# A spec names, for body x, y and z in turn, the sensor axis (and sign) that points that way:
-# "x,-y,-z", "-y, x, z", or a tuple ("x", "-y", "-z"). Parsing raises ValueError naming the
-# spec. A board's specs live in boards/ (boards/breakouts.py derives them for common breakouts).
-#
-# .det is +1 for a rotation and -1 for a mirror image. A magnetometer's map is a rotation (chip
-# and body frames are both right-handed), a mirror only for a chip whose datasheet draws its
-# axes as a mirror of its accelerometer's (the driver's MIRROR; docs/chips.md). An
-# accelerometer's map to AN4248's sign is a mirror:
-# the chip reads +1 g on an axis pointing up (specific force), AN4248 wants +1 g on z down, so
-# the rotation is followed by a negation.
-
+# A spec names, for body x, y and z in turn, the sensor axis (and sign) that points that way;
+# parsing raises ValueError naming it. .det: +1 rotation, -1 mirror. Specs per board: boards/;
+# why an accelerometer's map is a mirror: docs/design.md (module notes, axes).
 from array import array
 
 _AXES = "xyz"

@@ -292,3 +292,97 @@ def test_firmware_docstrings_are_short_longer_text_is_comments():
                     long_.append("%s:%s (%d chars)" % (m, getattr(n, "lineno", 1), len(d)))
     assert not long_, long_
 
+
+def _dropped():
+    """Every module a drop() call in firmware/ or boards/ names by a string constant."""
+    out = set()
+    for folder in ("firmware", "boards"):
+        for dirpath, _, files in os.walk(os.path.join(ROOT, folder)):
+            for f in files:
+                if not f.endswith(".py"):
+                    continue
+                path = os.path.join(dirpath, f)
+                for n in ast.walk(ast.parse(open(path).read(), path)):
+                    if (isinstance(n, ast.Call) and isinstance(n.func, ast.Name)
+                            and n.func.id == "drop"):
+                        out.update(a.value for a in n.args
+                                   if isinstance(a, ast.Constant) and isinstance(a.value, str))
+    return out
+
+
+# Modules with a job of their own that one module alone imports: what runner.py boots a board
+# with, and the field model location.py evaluates. Every other dropped module that one module
+# alone imports is that module's cold companion.
+OWN_JOB = {"boot", "field.wmm"}
+# The one companion with a shorter name, measured: any i2cdevice_<job> (i2cdevice_init, _boot,
+# _up) raised the heap a finished session leaves (tests/test_budgets.py, after_session_slack_mpy)
+# from 4.4 to 5.3 KB on the x86-32 build, over its 5 KB budget (docs/design.md, names).
+SHORT = {"devinit": "i2cdevice"}
+
+
+def test_cold_companions_are_named_owner_underscore_job():
+    # A module loaded for one job of another module and dropped after it (construction, a
+    # save, a chip's start-up) is named <owner>_<job>, beside its owner in its folder
+    # (app_setup, app_persist, store_slots, gyro/attitude_setup, and devinit: SHORT; the kernels
+    # attitude_plain / attitude_fast and trig_tables follow the same rule): docs/design.md, names.
+    g = _graph()
+    mods = set(g)
+    importers = {m: {o for o in g if m in g[o]} for m in mods}
+    dropped = _dropped()
+    assert {"app_setup", "app_persist", "store_slots", "gyro.attitude_setup"} | set(SHORT) \
+        <= dropped, sorted(dropped)
+    for m in sorted(mods):
+        folder, _, base = m.rpartition(".")
+        owner = (folder + "." if folder else "") + base.split("_")[0]
+        if "_" in base and owner in mods:  # named for a sibling: that sibling loads it
+            assert owner in importers[m], (m, "is not loaded by", owner)
+    for m in sorted(dropped & mods - OWN_JOB - set(DRIVERS)):  # a driver: detect's table names it
+        folder = m.rpartition(".")[0]
+        only = importers[m]
+        if len(only) == 1 and next(iter(only)).rpartition(".")[0] == folder:
+            owner = next(iter(only))
+            assert m.startswith(owner + "_") or SHORT.get(m) == owner, (m, "companion of", owner)
+
+
+OPENING_MAX = 15
+
+
+def _opening_lines(path):
+    """Lines of a module's opening block: the comments before its docstring, the docstring, and
+    the comments after it up to the first line of code (blank lines not counted)."""
+    lines = open(path).read().split("\n")
+    n = 0
+
+    def comments(i):
+        c = 0
+        while i < len(lines) and (lines[i].startswith("#") or not lines[i].strip()):
+            c += lines[i].startswith("#")
+            i += 1
+        return i, c
+
+    i, n = comments(0)
+    if i < len(lines) and lines[i].lstrip().startswith(('"""', "'''")):
+        q = lines[i].lstrip()[:3]
+        j = i
+        if not (lines[i].count(q) >= 2 and len(lines[i].strip()) > 3):
+            j = i + 1
+            while q not in lines[j]:
+                j += 1
+        n += j - i + 1
+        i, c = comments(j + 1)
+        n += c
+    return n
+
+
+def test_every_module_opens_with_at_most_15_lines():
+    # what it is for, how to use it, where the reasoning is (docs/design.md, module notes;
+    # docs/api.md): the reasoning lives once, in docs/
+    long_ = {m: _opening_lines(_path(m)) for m in _modules(FW)}
+    assert not {m: k for m, k in long_.items() if k > OPENING_MAX}, long_
+    assert max(long_.values()) > 5  # the count sees comment lines
+
+
+def test_the_opening_count_sees_a_docstring_and_the_comments_after_it(tmp_path):
+    p = tmp_path / "m.py"
+    p.write_text('# one\n"""two\nthree\n"""\n# five\n\n# six\nimport os\n# not counted\n')
+    assert _opening_lines(str(p)) == 6

@@ -282,7 +282,7 @@ def test_a_magnet_near_the_board_raises_interference_and_is_not_fed(good):
     def each(a):
         if a.compass.interference:
             assert a.calibrator.count == seen[-1]  # a flagged sample is not fed
-        if a.status == "interference":  # (flagged, or held: firmware/health.py FieldWatch)
+        if a.status == "interference":  # (flagged, or held: firmware/fieldwatch.py FieldWatch)
             assert a.progress()["interference"]
         seen.append(a.calibrator.count)
         if 6300000 <= b.clock.now_us <= 9700000:

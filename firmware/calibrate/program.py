@@ -27,7 +27,7 @@ _SHORT_GIVE_UP = const(3)  # solves or steps in a row short of heap: the program
 
 
 class Program:
-    # See the module's opening comment. Attributes: mag, accel, store, collector, status,
+    # See docs/design.md, module notes. Attributes: mag, accel, store, collector, status,
     # reason (why run() returned None), samples, bad (samples refused by the checks), reinits,
     # saved (the Calibration saved and read back), saved_us, save_errors, short (solves in a
     # row without room), free_at_solve, mounting ((verdict, MAG_AXES) or None).

@@ -4,23 +4,8 @@ history, save; then leave. Imported by CompassApp.calibrate(), dropped when the 
 #     app.calibrate()            # starts one (imports this module and the calibration machinery)
 #     app.collector              # firmware.calibrate.calibrator.Collector while it runs, None after
 #
-# A session ends once a calibration good enough to boot without collecting
-# (CompassApp._good_enough: the configured model, fit error within 5 %) is in force and saved,
-# nothing is pending, the app does not relearn, and the samples have stopped bringing new
-# directions: a solve has run on every sample kept and none came for _DONE_QUIET_US (the
-# user has stopped turning the board, or the buffer holds what the motion offers). Until
-# then every solve may replace the fit with a better one. app.learn=True keeps it running. At the end
-# the collector, the history and the modules of the calibration machinery are dropped
-# (firmware.compat.drop), so the board's heap returns to what showing a heading needs
-# (docs/design.md, memory; docs/benchmarks.md measures it).
-#
-# The steps (CompassApp._step calls solve() when a solve is running or due):
-#   solve    a few slices of the running solve (firmware.calibrate.calibrator.Collector.slice): each at
-#            most solve.SLICE_OPS long-int operations; a step runs period / 4 ms of them.
-#   accept   a calibration the Calibrator accepted (sour grapes: it beat the current one) is
-#            judged against the history of accepted calibrations (firmware/calibrate/history.py): inside
-#            its limits it is put in force and saved; outside it is kept as .pending ("hardware
-#            changed?") and not put in force until accept_change().
+# When a session ends and what leaves with it: docs/design.md#memory; its steps (solve,
+# accept): docs/design.md (module notes, session).
 from firmware.compat import const, drop, drop_part, kernels
 
 _DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
