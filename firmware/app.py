@@ -11,7 +11,7 @@ there is no good calibration yet, collect and solve one in the background.
 # step's named stages, interference, storage and history, and what is loaded when: the app in
 # docs/design.md (module notes) and docs/design.md#memory.
 from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED
-from firmware.compass import FLAG_NO_GRAVITY
+from firmware.compass import FIELD_TOL_PCT, FLAG_NO_GRAVITY
 from firmware.compat import const, drop, drop_part, free_bytes, ticks_diff
 from firmware.errors import SensorOverflow, DataReadyTimeout
 from firmware.health import SPELL_FIELD, SPELL_JUMP
@@ -46,7 +46,6 @@ _REINIT_MAX_SHIFT = const(4)  # failed re-inits back off to every 2**4 x _REINIT
 _STALE_US = const(30000000)   # 30 s of interference: the calibration no longer fits the board
 _SAVE_RETRY_US = const(60000000)  # a failed save is retried after 60 s
 _ERROR_BACKOFF_US = const(20000)  # after a bus error: do not hammer a dead bus
-_FIELD_TOL_PCT = const(10)    # interference window floor, % (firmware.compass's default)
 _FIELD_TOL_MAX_PCT = const(50)
 _FIT_SIGMAS = const(3)        # window >= 3 x the fit's RMS radial error
 _US_PER_S = const(1000000)
@@ -246,8 +245,8 @@ class CompassApp:
         self._k = cal.k  # _heading's
         self.watch.use(cal)
         tol = _FIT_SIGMAS * cal.fit_error // 100
-        if tol < _FIELD_TOL_PCT:
-            tol = _FIELD_TOL_PCT
+        if tol < FIELD_TOL_PCT:  # the interference window's floor: the compass's default
+            tol = FIELD_TOL_PCT
         elif tol > _FIELD_TOL_MAX_PCT:
             tol = _FIELD_TOL_MAX_PCT
         self.compass.set_field(cal.field_out if cal.model is not None else 0, tol)

@@ -9,7 +9,7 @@
 # why an accelerometer's map is a mirror: docs/design.md (module notes, axes).
 from array import array
 
-_AXES = "xyz"
+AXES = "xyz"
 
 
 def apply(m, src, dst):
@@ -53,16 +53,16 @@ class AxisMap:
             n = p[:1] == "-"
             if p[:1] in "+-":
                 p = p[1:].strip()
-            if len(p) != 1 or p not in _AXES:
+            if len(p) != 1 or p not in AXES:
                 raise ValueError("axis map %r: %r is not one of x, y, z (with an optional sign)"
                                  % (spec, p))
-            if _AXES.index(p) in axis:
+            if AXES.index(p) in axis:
                 raise ValueError("axis map %r: sensor axis %s used twice" % (spec, p))
-            axis.append(_AXES.index(p))
+            axis.append(AXES.index(p))
             neg.append(n)
         self.axis = tuple(axis)
         self.sign = tuple(-1 if n else 1 for n in neg)
-        self.spec = ",".join(("-" if n else "") + _AXES[a] for a, n in zip(axis, neg))
+        self.spec = ",".join(("-" if n else "") + AXES[a] for a, n in zip(axis, neg))
         self.m = array("b", (axis[0], axis[1], axis[2], 1 if neg[0] else 0, 1 if neg[1] else 0,
                              1 if neg[2] else 0))  # apply()'s argument
         # determinant of a signed permutation: product of signs times the permutation's parity
@@ -86,7 +86,7 @@ class AxisMap:
         """The map body -> sensor (the transpose)."""
         parts = ["", "", ""]
         for i in range(3):
-            parts[self.axis[i]] = ("-" if self.sign[i] < 0 else "") + _AXES[i]
+            parts[self.axis[i]] = ("-" if self.sign[i] < 0 else "") + AXES[i]
         return AxisMap(",".join(parts))
 
     def __eq__(self, other):

@@ -18,7 +18,7 @@ _Q15_ONE = const(32768)
 _ROUND15 = const(0x4000)  # half of 2**15: round a Q15 product to nearest
 _DIP_LIMIT_KANG = const(13653)  # 75 deg: heading unreliable beyond this inclination (AN4248 sec. 6)
 _GIMBAL_PITCH_KANG = const(14564)  # 80 deg: roll noise x 1/cos(80 deg) = 5.8 (gimbal lock at 90)
-_FIELD_TOL_PCT = const(10)  # +-10 %: twice the |B| spread MotionCal accepts (variance < 4.5 %)
+FIELD_TOL_PCT = const(10)  # +-10 %: twice the |B| spread MotionCal accepts (variance < 4.5 %)
 _NO_LIMIT = const(0x3FFFFFFF)  # field window when no reference field is set
 
 # The working state of one Compass, array('i') (the steps below read and write it):
@@ -202,7 +202,7 @@ class Compass:
     # dip_high, gimbal. A failed update leaves the last good values and sets only flags.
     # With g None the board is taken as level: pitch = roll = 0, and dip assumes it too.
 
-    def __init__(self, field=0, declination_kang=0, field_tol_pct=_FIELD_TOL_PCT):
+    def __init__(self, field=0, declination_kang=0, field_tol_pct=FIELD_TOL_PCT):
         self.declination_kang = declination_kang
         self.heading_kang = 0
         self._failed = 0  # FLAG_NO_FIELD / FLAG_NO_GRAVITY after a failed update, else 0

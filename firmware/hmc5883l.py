@@ -53,6 +53,7 @@ class HMC5883L(Magnetometer):
     FLAGS = (_LOCK, 0)  # LOCK still set when RDY rises: the data registers hold an old set
     REGISTERS = (_ID_A, _STATUS, _RDY, _DATA, _CRA)
     ID = b"H43"
+    OVERFLOW = _OVERFLOW  # the sample checks and the collector take it for a saturated axis
 
     def __init__(self, i2c, address=0x1E, *, gain=1, rate=15, averaging=8, delay_us=None,
                  timeout_us=None):

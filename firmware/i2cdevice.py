@@ -8,9 +8,10 @@
 # Device(i2c, address, period_us, delay_us=None, timeout_us=None); Magnetometer(Device): the
 # scaffolding the magnetometer drivers share (see the class). The arguments, why the guard is a
 # `with` block, and the unguarded calls the app uses: docs/design.md (module notes, i2cdevice).
-from firmware.compat import pick, ticks_diff, ticks_us
+from firmware.compat import const, pick, ticks_diff, ticks_us
 from firmware.errors import BusError, DataReadyTimeout, SensorNotFound
 
+DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: its users assume 50 Hz
 _OURS = (BusError, DataReadyTimeout, SensorNotFound)  # already say what happened (a module
 #                                                      constant: a literal tuple is built per use)
 

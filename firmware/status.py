@@ -11,7 +11,6 @@ half second (boards/main.py), imported at the first report.
 from firmware.compat import const, free_bytes
 from firmware.hints import HINTS
 
-_QUIET_HINT_US = const(3000000)  # no new direction for 3 s before "planar"
 _STATUS_INTERFERENCE = "interference"  # firmware.app.STATUS_INTERFERENCE
 _LINE_MAX = const(400)  # bytes: the longest line (a jump, the location, a hint) fits
 # the heap the calibration program completes from (.mpy, x86-32 build, boards/main.py: 124-128 KB
@@ -154,7 +153,7 @@ def _story(app):
     reason = app.last_reason
     # "planar" only once the user has stopped adding new directions (the collector is quiet):
     # the first samples of a correct figure-8 lie near a plane too
-    if reason == "planar" and col.since_kept_us < _QUIET_HINT_US:
+    if reason == "planar" and col.since_kept_us < col.QUIET_US:
         reason = "too_few_samples"
     if reason and reason != "not_better":
         _sep()

@@ -386,3 +386,91 @@ def test_the_opening_count_sees_a_docstring_and_the_comments_after_it(tmp_path):
     p = tmp_path / "m.py"
     p.write_text('# one\n"""two\nthree\n"""\n# five\n\n# six\nimport os\n# not counted\n')
     assert _opening_lines(str(p)) == 6
+
+
+def _constants(m):
+    """{NAME: (value, comment)} of the module-level constants of firmware module m: NAME =
+    literal or NAME = const(literal), NAME in capitals (a leading _ allowed)."""
+    path = _path(m)
+    src = open(path).read()
+    lines = src.split("\n")
+    out = {}
+    for node in ast.parse(src, path).body:
+        if not (isinstance(node, ast.Assign) and len(node.targets) == 1
+                and isinstance(node.targets[0], ast.Name)):
+            continue
+        name, v = node.targets[0].id, node.value
+        if not re.fullmatch(r"_?[A-Z][A-Z0-9_]*", name):
+            continue
+        if (isinstance(v, ast.Call) and isinstance(v.func, ast.Name) and v.func.id == "const"
+                and len(v.args) == 1):
+            v = v.args[0]
+        try:
+            value = ast.literal_eval(v)
+        except ValueError:
+            continue  # computed, or a name of another module
+        if value is None:
+            continue  # module state set later (a kernel set)
+        comment = lines[node.lineno - 1].partition("#")[2]
+        out[name] = (value, comment)
+    return out
+
+
+# Copies kept on purpose, each with its reason; the test holds every copy equal to the others.
+KEPT_COPIES = {
+    # const() is inlined only where it is declared: imported, a number becomes a dictionary
+    # look-up at every use, in per-sample code (the heading's and the filter's state slots)
+    "_KANG_90": "inlined per sample", "_ROUND15": "inlined per sample",
+    # a heading-only board must not load the calibrator for its defaults (tests above)
+    "DEFAULT_CAPACITY": "calibrator not loaded", "SOLVE_EVERY": "calibrator not loaded",
+    # the same word in the vocabularies of different things: the WMM table file's, the
+    # calibration record's and MotionCal's packet refusals; the app's status and the field
+    # model's; a MotionCal packet and a stored record each 'bad_crc'
+    "REASON_BAD_CRC": "own vocabulary", "REASON_BAD_MAGIC": "own vocabulary",
+    "REASON_MISSING": "own vocabulary", "REASON_TRUNCATED": "own vocabulary",
+    "REASON_UNKNOWN_VERSION": "own vocabulary", "STATUS_OK": "own vocabulary",
+    "_OK": "own vocabulary",
+    # each module's own shift for its own bound (health: |a|^2 < 3 * 2**22; mounting: of a
+    # difference, < 3 * 2**24), equal by chance
+    "_G_SHIFT": "own bound",
+    # the field model's status word, where the field part is not loaded (accuracy, quickcal)
+    "_BLACKOUT": "field part not loaded",
+}
+# the gyro-aided heading's state slots: declared in each of its modules so that they are
+# inlined (tests/test_attitude.py checks the numbers agree)
+ATTITUDE = {"gyro.attitude", "gyro.attitude_plain", "gyro.attitude_setup"}
+
+
+def test_no_constant_is_declared_twice():
+    where = {}
+    for m in _modules(FW):
+        for name, (value, _) in _constants(m).items():
+            where.setdefault(name, []).append((m, value))
+    copies = []
+    for name, decl in sorted(where.items()):
+        mods = {m for m, _ in decl}
+        if len(mods) < 2:
+            continue
+        values = [v for _, v in decl]
+        if name in KEPT_COPIES:
+            assert all(v == values[0] for v in values), (name, decl)  # the copies agree
+            continue
+        same = [m for m, v in decl if values.count(v) > 1]
+        if len(same) < 2 or set(same) <= set(DRIVERS) or set(same) <= ATTITUDE:
+            continue  # a different value: another thing; drivers: each chip's datasheet
+        copies.append((name, decl))
+    assert not copies, copies
+
+
+def test_a_constant_that_names_its_home_agrees_with_it():
+    # `_X = "..."  # firmware.app.STATUS_X`: a copy where importing the home would load it
+    # (a cold module, or an import cycle); it must equal the home's value
+    consts = {m: _constants(m) for m in _modules(FW)}
+    checked = 0
+    for m, table in consts.items():
+        for name, (value, comment) in table.items():
+            for home, other in re.findall(r"firmware\.([a-z_.]+)\.([A-Z][A-Z0-9_]*)\b", comment):
+                if home in consts and other in consts[home]:
+                    assert consts[home][other][0] == value, (m, name, home, other)
+                    checked += 1
+    assert checked >= 4

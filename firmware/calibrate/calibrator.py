@@ -592,6 +592,7 @@ class Collector:
     #   .last_reason keeps saying what the configured model still lacks.
     # Attributes: calibrator, accepted, refused, solves, last_reason, last_detail, last_model,
     # relearning, job (the running solve or None), job_model.
+    QUIET_US = _QUIET_US  # no new direction for 3 s: the callers' "done" and "planar" waits too
 
     def __init__(self, model=10, capacity=DEFAULT_CAPACITY, counts_per_gauss=None,
                  current=None, solve_every=SOLVE_EVERY, fallback=True, overflow=None):

@@ -11,7 +11,7 @@ a calibration is accepted and dropped after the check (firmware.compat.drop).
 import sys
 from array import array
 
-from firmware.axes import AxisMap, apply
+from firmware.axes import AXES, AxisMap, apply
 from firmware.calibration import correct
 from firmware.compat import const, drop
 from firmware.fixedpoint import isqrt, rdiv
@@ -34,7 +34,6 @@ _ACC = const(15)           # the work array: unit b 0..2, unit g 3..5, products 
 _PERMS = b"\x00\x01\x02\x01\x02\x00\x02\x00\x01\x00\x02\x01\x01\x00\x02\x02\x01\x00"
 _SIGNS = b"\x00\x06\x05\x03\x00\x06\x05\x03\x00\x06\x05\x03\x07\x01\x02\x04\x07\x01\x02\x04" \
     b"\x07\x01\x02\x04"
-_AXES = "xyz"
 
 
 def _unit(t, w, o, trig):
@@ -100,7 +99,7 @@ def _spec(mm, k):
         j = _PERMS[p + i]
         if ((s >> i) & 1) ^ mm[3 + j]:
             out += "-"
-        out += _AXES[mm[j]]
+        out += AXES[mm[j]]
         if i < 2:
             out += ","
     return out

@@ -7,13 +7,11 @@ history, save; then leave. Imported by CompassApp.calibrate(), dropped when the 
 # When a session ends and what leaves with it: docs/design.md#memory; its steps (solve,
 # accept): docs/design.md (module notes, session).
 from firmware.compat import const, drop, drop_part, kernels
+from firmware.i2cdevice import DEFAULT_PERIOD_US
 
-_DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
-_HMC_OVERFLOW = const(-4096)  # the HMC5883L's overflow marker (its datasheet, data registers)
-_DONE_QUIET_US = const(3000000)  # no new direction for 3 s (the collector's quiet period)
-_FLAG_ACCEPTED = const(1)     # firmware.calibrate.history's entry flags
-_FLAG_PENDING = const(2)
-_FLAG_BASELINE = const(4)
+_FLAG_ACCEPTED = const(1)     # firmware.calibrate.history.FLAG_ACCEPTED
+_FLAG_PENDING = const(2)      # firmware.calibrate.history.FLAG_PENDING
+_FLAG_BASELINE = const(4)     # firmware.calibrate.history.FLAG_BASELINE
 # what a finished session leaves for CompassApp's counters (accepted, refused, ...)
 ENDED = ("accepted", "refused", "solves", "last_reason", "last_detail", "last_model")
 
@@ -27,11 +25,11 @@ def start(app, fast=True):
     c = Collector(model=app.model, capacity=app.capacity,
                   counts_per_gauss=app.mag.counts_per_gauss, current=app.calibration,
                   solve_every=app.solve_every, fallback=app.fallback,
-                  overflow=_HMC_OVERFLOW if app.mag.KIND == "hmc5883l" else None)
+                  overflow=getattr(app.mag, "OVERFLOW", None))
     if app.accel is not None:  # the mounting check's pairs (firmware/calibrate/mounting.py)
         from firmware.calibrate.mounting import Pairs
         c.pairs = Pairs(app.accel.counts_per_g,
-                        getattr(app.mag, "period_us", _DEFAULT_PERIOD_US))
+                        getattr(app.mag, "period_us", DEFAULT_PERIOD_US))
     return c
 
 
@@ -39,7 +37,7 @@ def solve(app):
     t = app._wall()
     c = app.collector
     if c.job is None:
-        app._slices_per_step = c.start(getattr(app.mag, "period_us", _DEFAULT_PERIOD_US))
+        app._slices_per_step = c.start(getattr(app.mag, "period_us", DEFAULT_PERIOD_US))
     n = app._slices_per_step
     while n and c.job is not None:
         cal = c.slice()
@@ -87,7 +85,7 @@ def end_if_done(app):
     history and the calibration machinery leave. True when it ended."""
     c = app.collector
     if (app.learn or app.pending is not None or app._unsaved or c.relearning
-            or c.job is not None or c.kept or c.since_kept_us < _DONE_QUIET_US
+            or c.job is not None or c.kept or c.since_kept_us < c.QUIET_US
             or not app._good_enough(app.calibration)):
         return False
     mount_check(app)  # once more with every pair kept, when no check could tell yet

@@ -24,7 +24,6 @@ QUICK_FIT_ERROR = const(1000)  # hundredths of a percent: a quick fit has no res
 POSE_SPREAD_PCT = const(10)    # poses' V within 10 % of |B| of their mean (3 % soft iron
 #                                moves a pose's V by <= 3 %, opposite poses apart by <= 6 %)
 _MAX_OFFSET_MG = const(1800)   # ArduPilot: offsets <= 1800 mG
-_IDENTITY_Q15 = (32767, 0, 0, 0, 32767, 0, 0, 0, 32767)  # Calibration's own identity
 _Q15 = const(32768)
 _R15 = const(16384)
 _BLACKOUT = "blackout zone"  # firmware.field.wmm.STATUS_BLACKOUT (not imported: field loads late)
@@ -116,7 +115,7 @@ class QuickCal:
                    "do a full calibration" % (len(self.poses), spread,
                                               rdiv(spread * 100, self.field), POSE_SPREAD_PCT))
         f = self.field
-        return Calibration(model=4, offset=v, invw=_IDENTITY_Q15, field=f,
+        return Calibration(model=4, offset=v, field=f,
                            field_out=rdiv(f * 32767, _Q15), fit_error=QUICK_FIT_ERROR,
                            samples=self.samples, coverage=0)
 

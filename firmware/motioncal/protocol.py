@@ -33,14 +33,11 @@ F32_DENORMAL = "denormal"       # decoded exactly: below 2**-126, 0 at any sensi
 F32_INF = "inf"
 F32_NAN = "nan"
 
-# calibration_fields() refusals (CalibrationRejected.reason); the shared names are
-# firmware/calibrate/acceptance.py's
+# calibration_fields() refusals (CalibrationRejected.reason) of its own; the field, offset and
+# soft-iron refusals are firmware/calibrate/acceptance.py's REASON_*
 REASON_BAD_CRC = "bad_crc"
 REASON_NOT_A_NUMBER = "not_a_number"
 REASON_NOT_POSITIVE_DEFINITE = "not_positive_definite"
-REASON_FIELD_OUT_OF_RANGE = "field_out_of_range"
-REASON_OFFSET_OUT_OF_RANGE = "offset_out_of_range"
-REASON_SOFT_IRON_OUT_OF_RANGE = "soft_iron_out_of_range"
 
 _INVW_FRAC_BITS = const(24)     # invW decoded in Q24: 2**-24 << one Q15 step
 _Q16 = const(65536)             # V and B decoded in Q16 uT
