@@ -1,51 +1,11 @@
-"""How far to trust the heading: an accuracy level 0-3 with Android SensorManager's meaning,
-so an app can ask the user to "move the board in a figure-8" at level <= 1.
-"""
+"""How far to trust the heading: an accuracy level 0-3 with Android SensorManager's meaning
+(0 UNRELIABLE .. 3 HIGH), so an app can ask for a figure-8 at level <= 1."""
 #     from firmware import accuracy
 #     level, why = accuracy.assess(app)          # CompassApp: app.accuracy, status_line(app)
 #     level, why = accuracy.level(model=10, fit_error=120, coverage=80, tilt=True)
 #
-# Levels (Android SensorManager): 0 UNRELIABLE (SENSOR_STATUS_UNRELIABLE), 1 LOW
-# (SENSOR_STATUS_ACCURACY_LOW), 2 MEDIUM, 3 HIGH.
-#
-# The table (docs/accuracy.md has it too, with the measured headings behind it): the first row
-# that applies gives the level and the reason.
-#
-#   level  reason            when
-#   0      no_heading        the last step gave no heading (bus error, timeout, overflow,
-#                            zero field or gravity)
-#   0      uncalibrated      no calibration in force
-#   0      mag_axes          the mounting check found MAG_AXES wrong for this board: the heading
-#                            is wrong once it tilts (status "check MAG_AXES: ...",
-#                            firmware/calibrate/mountcheck.py)
-#   2      gyro_held         use_gyro(): the field is not used (a magnet, a fast turn) and the
-#                            gyroscope holds the heading within its vouched uncertainty
-#                            (docs/gyro.md; status "gyro held")
-#   0      interference      the interference flag is up now (|b| or dip off the expected), or a
-#                            spell holds the status (firmware/health.py FieldWatch: a fast
-#                            change of |b| or dip, a heading jump, until the field is clean)
-#   0      blackout_zone     the field model says H < 2000 nT here (WMM's blackout zone)
-#   1      minmax            the min/max calibration (hard iron from the extremes, no fit)
-#   1      fit_error_high    fit error above GOOD_FIT_ERROR (5 %, MotionCal's "good" limit);
-#                            not for a quick calibration, whose fit error is a placeholder
-#   1      field_mismatch    the calibration's B is off the field model's |B| here by more than
-#                            firmware.calibrate.acceptance.FIELD_MATCH_PCT (made elsewhere, wrong range)
-#   2      quick             a quick calibration (model 4, coverage 0: hard iron from a known
-#                            heading): within 2 deg while soft iron is <= 3 %
-#                            (docs/quick_calibration.md)
-#   1      low_coverage      a fit over less than MIN_COVERAGE (35 %) of the sphere
-#   2      hard_iron_only    a 4-element fit (no soft-iron correction)
-#   2      no_tilt           no accelerometer: the heading is right only while the board is level
-#   2      tilt_extreme      pitch beyond 80 deg or dip beyond 75 deg (firmware.compass's flags)
-#   2      caution_zone      the field model says H < 6000 nT here (WMM's caution zone)
-#   2      fit_error_fair    a 7/10 fit with fit error above _HIGH_FIT_ERROR (3.5 %)
-#   2      coverage_fair     a 7/10 fit over less than _HIGH_COVERAGE (60 %) of the sphere
-#   3      high              a 7- or 10-element fit within 3.5 % over >= 60 % of the sphere,
-#                            tilt known, no flag up
-# Thresholds: GOOD_FIT_ERROR is MotionCal's 5 %; _HIGH_FIT_ERROR NXP's 3.5 % (the fit error at
-# which a higher-order model is trusted over a lower one, firmware.calibrate.acceptance); _HIGH_COVERAGE
-# 60 % of the 100 sphere regions (a fit over more than half the sphere; full figure-8s reach
-# 80-95 % in the simulator).
+# The table of levels and reasons, first row that applies, and its thresholds:
+# docs/accuracy.md (with the measured headings behind it).
 from firmware.calibration import GOOD_FIT_ERROR
 from firmware.compat import const
 
@@ -75,7 +35,7 @@ _F_CAUTION = const(128)
 
 def level(model=None, fit_error=0, coverage=0, heading=True, interference=False, tilt=True,
           extreme=False, zone=None, mismatch=False, held=False):
-    # (level 0..3, reason) for the state described; see the table of the module's opening comment.
+    # (level 0..3, reason) for the state described; see the table in docs/accuracy.md.
     # model: None, 'minmax', 4, 7, 10; fit_error hundredths of a percent; coverage %; heading:
     # the last step gave one; tilt: an accelerometer is in use; extreme: pitch > 80 deg or dip
     # > 75 deg; zone: the field model's status, or None; mismatch: the calibration's B is off
@@ -101,7 +61,7 @@ def _zone(zone):
 
 
 def _table(model, fit_error, coverage, f):
-    # the table of the module's opening comment, first row that applies; f: the conditions (_F_ bits)
+    # the table in docs/accuracy.md, first row that applies; f: the conditions (_F_ bits)
     if f & _F_NO_HEADING:
         return UNRELIABLE, "no_heading"
     if model is None:

@@ -8,19 +8,9 @@ the main bus once the IMU's I2C bypass is open.
 #     ICM20948(i2c, address=0x69).enable_bypass()  # the AK09916 answers at 0x0C from now on
 #     x, y, z = AK09916(i2c).read()
 #
-# AK09916(i2c, address=0x0C, *, range=49, rate=100, delay_us=None, timeout_us=None)
-#   range  49: +-4912 uT at 0.15 uT/LSB, 667 counts/G (666.7, rounded): its only range
-#   rate   output rate in Hz: 10, 20, 50, 100 (continuous measurement mode 1-4)
-# read() -> (x, y, z) counts in the chip's axes; read_into(buf) without allocating. .KIND
-# 'ak09916', .range_code 0, .counts_per_gauss, .skipped (reads whose ST1 said DOR), .suspect
-# (this read's DOR: an exact repeat is then stale data), config_ok() (CNTL2 read back).
-#
-# From the ICM-20948 datasheet (DS-000189 rev 1.3, section 13; docs/hardware.md): WIA1, WIA2
-# read 0x48 0x09; a read polls ST1 for DRDY, then takes HXL..HZH, TMPS and ST2 (0x11..0x18)
-# in one transfer: "be sure to read ST2 register at the end" (13.4), it ends the read; ST2.HOFL:
-# the data are not correct (SensorOverflow). Its sensitivity is trimmed inside the chip (no
-# fuse ROM). A mode is set from power-down, 100 us after entering it: configure() soft-resets
-# (CNTL3.SRST, every register to power-down), waits, then starts the continuous mode.
+# AK09916(i2c, address=0x0C, *, range=49, rate=100, delay_us=None, timeout_us=None): options
+# and attributes in docs/api.md (drivers); registers and sequences from the datasheet in
+# docs/hardware.md (AK09916).
 from firmware.compat import const
 
 from firmware import i2cdevice

@@ -8,20 +8,9 @@ MPU-9255 (GY-9250, GY-91 breakouts), on the main bus once the IMU's I2C bypass i
 #     MPU9250(i2c).enable_bypass()               # the AK8963 answers at 0x0C from now on
 #     x, y, z = AK8963(i2c).read()
 #
-# AK8963(i2c, address=0x0C, *, range=49, rate=100, delay_us=None, timeout_us=None)
-#   range 49: +-4912 uT, 16-bit output at 0.15 uT/LSB, 667 counts/G (666.7 rounded), the one
-#   range offered; rate: 8 or 100 Hz (continuous measurement mode 1 or 2)
-# read(), read_into(buf) (no allocation): counts in the chip's axes, sensitivity-adjusted.
-# .asa: the fuse ROM's ASAX..ASAZ; .skipped: reads whose ST1 said DOR (a set was lost);
-# .suspect: this read's DOR (the app then takes an exact repeat for stale data: a live
-# AK8963's noise makes one rare); config_ok(): CNTL1 read back. docs/hardware.md has the
-# registers and their sources. A read polls ST1, then takes HXL..HZH and ST2 in one transfer:
-# ST2 ends the read and frees the data registers for the next set (datasheet 6.4.3.2).
-# ST2.HOFL (a magnetic sensor overflow): SensorOverflow. The fuse-ROM sensitivity,
-# Hadj = H x ((ASA - 128) x 0.5 / 128 + 1), is (H x (ASA + 128) + 128) >> 8 here: within half
-# a count, every intermediate below 2**24 (tests/test_ak8963.py); beyond int16 it is held at
-# the rail, which the app's health check takes for what it is. configure() powers down, waits
-# 100 us, reads the fuse ROM in its mode, powers down, waits, starts the continuous mode.
+# AK8963(i2c, address=0x0C, *, range=49, rate=100, delay_us=None, timeout_us=None): options
+# and attributes in docs/api.md (drivers); registers, the fuse-ROM sensitivity and its integer
+# form in docs/hardware.md (AK8963).
 from firmware.compat import const
 
 from firmware.i2cdevice import Magnetometer

@@ -6,97 +6,12 @@ there is no good calibration yet, collect and solve one in the background.
 #     app = CompassApp(i2c, store=CalStore("/"), declination_cdeg=150)
 #     app.run(None, report=lambda a: print(status_line(a)), every_us=500000)
 #
-# CompassApp(i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z", model=10,
-#            declination_cdeg=0, store=None, delay_us=None, ticks_us=None, capacity=None,
-#            solve_every=25, fallback=True, reinit_after=5, mag_options=None, learn=None,
-#            fast=None)
-#   mag      a magnetometer driver; None: firmware.detect.detect(i2c, **mag_options)
-#   accel    an MPU6050 driver; None: detect.detect_accel(i2c); False: none (level board)
-#   store    a firmware.store.CalStore (bound to the magnetometer's kind and range), or None
-#   delay_us the drivers' delay (the simulator's bus.sleep_us); None: the port's sleep_us
-#   ticks_us the clock of the app's time (aging, timers): the port's ticks_us on a board (wrapping,
-#            compared with ticks_diff; firmware.compat), the simulator's clock on the host (plain
-#            ints)
-#   mag_options  driver options for detect(), e.g. {"range": 8}
-#   fallback     try 4 elements when the model lacks samples (firmware.calibrate.calibrator.Collector)
-#   reinit_after failed reads in a row before the drivers are re-initialised
-#   learn    None: collect unless the stored calibration is of the configured model with a fit
-#            error <= 5 % (and whenever the one in force goes stale); True: always collect;
-#            False: only after calibrate() or when the calibration goes stale
-#   fast     None: firmware/fast.py's kernels where the port has the native emitter, False:
-#            the plain functions (same bits; .fast says which is in use; the compass's kernel
-#            set is module-wide, firmware.compass.use_kernels)
-# step() reads one sample and does a bounded amount of other work; True when it produced a
-# heading; it never raises. run(n, report, every, every_us) calls step() n times (None: forever).
-# calibrate() starts collecting now (e.g. after a new mounting).
-#
-# Memory (docs/design.md#memory): this class is the core a calibrated board keeps. What it
-# needs once in a while is imported for that and dropped after it (firmware.compat.drop): its
-# construction (firmware/appsetup.py), the store's load and save (firmware/persist.py with
-# firmware/slots.py), the calibration session (firmware/calibrate/session.py with the calibrator, the
-# sample buffer, the moment sums, the solver and the history), which ends once a good fit is
-# saved and the board brings no new direction, and the status line (firmware/status.py).
-# tests/test_layout.py checks which modules a board holds.
-#
-# One step, as named steps (AN4246 / AN4248 pipeline):
-#   _clock    the app's time since the last step: aging and the timers below.
-#   _read     mag.read_into(raw) (+ accel): a bus error, a data-ready timeout, an overflow
-#             set .status and keep the last good heading (Hinch's fusion: "try to continue
-#             returning last good data"); reinit_after failures in a row re-initialise the
-#             drivers.
-#   _heading  correct (Calibration.k with InvW in Q15), map to the body frame, Compass.update:
-#             the heading (KANG) and its flags. Allocation-free (tests/scenarios/app_alloc.py).
-#   _check    the field against the calibration's (firmware/health.py FieldWatch): |B| and
-#             the dip in their windows, steady over the last samples, the heading not jumping;
-#             a flag starts a spell whose status lasts until the evidence says the field is
-#             clean again. Interference (a magnet, a motor, a steel table near the board)
-#             keeps the sample out of the fit; flags for _STALE_US mean the board's iron
-#             changed.
-#   _select   offer the raw sample to the collector (its SampleBuffer keeps new information).
-#   _solve    when a solve is running or due, a few slices of it: each slice is at most
-#             solve.SLICE_OPS (40) long-int operations (make bench estimates 1-2 ms on an
-#             RP2040), and a step runs period / 4 ms of them (at least one): 1 at 200 Hz, 5 at
-#             50 Hz - a quarter to half of the sample period on an RP2040 - so a solve (~400
-#             slices) takes ~2 s at any rate. Counted in slices, not time, so runs are
-#             repeatable on every interpreter. .worst_stall_us is the longest such step's
-#             solver work on the wall clock (never the simulated one).
-#   _accept   a calibration the Calibrator accepts (sour grapes: it must beat the current one,
-#             whose fit error ages) is put in force and saved to the store (.worst_save_us).
-#
-# Interference. The field magnitude is compared with the calibration's field_out within
-# max(10 %, 3 x its fit error) - the fit's own RMS radial error is no evidence of a magnet -
-# and, with an accelerometer, the dip with the calibration's dip within max(3 deg, 3 x its
-# fit error as an angle): the dip saved with the record, else learned from its first 0.5 s of
-# steady clean samples (.dip, firmware/health.py DipCheck; an accepted fit is saved at once,
-# and once more with its dip when it is learned). A fast change of |B| or the dip (a magnet
-# moving in) is interference too, and a heading that jumps by > 4 deg between two samples
-# (or by 4 deg plus 25 deg/s over two steps) while the tilt holds still is "heading jumped".
-# Any of these starts a spell (FieldWatch): the status stays until the field is back where it
-# was before, or the board has turned ~30 deg with clean samples for 2 s, or 10 s of clean
-# samples (docs/faults.md). If the flags
-# keep coming for _STALE_US (a spell never ended meanwhile) the calibration no longer
-# describes the board (its hard iron changed): collection restarts (.relearning) and any new
-# accepted fit replaces the stale one.
-#
-# Storage: load at start: the newest slot whose record is intact AND whose payload
-# Calibration.from_bytes accepts (the store skips a torn, unreadable or meaningless slot and
-# falls back to an older one); when none is usable, identity with the reason in .load_reason.
-# Save on every accept; a failed save (OSError, StoreError, MemoryError) is counted in
-# .save_errors, never stops the loop, and is retried every _SAVE_RETRY_US.
-#
-# History (firmware.calibrate.history, imported at the first accept): before an accepted calibration
-# replaces the one in force it is compared with the store's history of accepted calibrations.
-# Inside the limits, it is put in force, saved and, once saved, recorded. Outside, it is kept as evidence
-# (.pending, recorded as a pending entry) and NOT put in force: .status reads "hardware
-# changed?" (in place of ok or interference: the heading still uses the old calibration) and .change names the parameter as
-# (parameter, value, low, high). accept_change() puts it in force and starts a new baseline
-# (a new mounting); discard_change() drops it. A pending change lives in RAM: after a reboot
-# the old calibration is in force, the evidence is in the history, and the next fit that shows
-# the same jump is flagged again. .date_s: None, or a function returning the date in seconds
-# when the board knows it (e.g. after NTP), written with each entry. History errors are
-# counted in .history_errors (the last one in .history_reason) and never stop the loop.
+# step() reads one sample and does a bounded amount of other work (never raises); run() calls
+# it; calibrate() starts collecting now. Options and attributes: docs/api.md (the app). One
+# step's named stages, interference, storage and history, and what is loaded when: the app in
+# docs/design.md (module notes) and docs/design.md#memory.
 from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED
-from firmware.compass import FLAG_NO_GRAVITY
+from firmware.compass import FIELD_TOL_PCT, FLAG_NO_GRAVITY
 from firmware.compat import const, drop, drop_part, free_bytes, ticks_diff
 from firmware.errors import SensorOverflow, DataReadyTimeout
 from firmware.health import SPELL_FIELD, SPELL_JUMP
@@ -131,11 +46,10 @@ _REINIT_MAX_SHIFT = const(4)  # failed re-inits back off to every 2**4 x _REINIT
 _STALE_US = const(30000000)   # 30 s of interference: the calibration no longer fits the board
 _SAVE_RETRY_US = const(60000000)  # a failed save is retried after 60 s
 _ERROR_BACKOFF_US = const(20000)  # after a bus error: do not hammer a dead bus
-_FIELD_TOL_PCT = const(10)    # interference window floor, % (firmware.compass's default)
 _FIELD_TOL_MAX_PCT = const(50)
 _FIT_SIGMAS = const(3)        # window >= 3 x the fit's RMS radial error
 _US_PER_S = const(1000000)
-_LOAD_NO_MEMORY = "no_memory"  # firmware.persist.LOAD_NO_MEMORY
+_LOAD_NO_MEMORY = "no_memory"  # firmware.app_persist.LOAD_NO_MEMORY
 _LOAD_RETRY_US = const(5000000)  # a load (or the heading line) that found no room: again in 5 s
 _RETRY_PAUSE_US = const(5000)   # the pause of a step while the app itself does not fit
 _CAL_RETRY_US = const(60000000)  # a session that found no room: again in 60 s
@@ -211,15 +125,15 @@ def _collector_attr(name, default):
 
 
 class CompassApp:
-    # See the module's opening comment. Attributes after each step(): heading_kang, compass, raw,
+    # See docs/design.md, module notes. Attributes after each step(): heading_kang, compass, raw,
     # body, gravity, status, calibration, calibrator (None until collecting), collector,
     # last_reason, last_detail, accepted, refused, worst_stall_us, errors, stored,
     # save_errors, load_reason, reinits, relearning, fast, pending, change, history_errors,
-    # location, quick, accuracy, watch (firmware/health.py FieldWatch), dip (its DipCheck).
+    # location, quick, accuracy, watch (firmware/fieldwatch.py FieldWatch), dip (its DipCheck).
 
     location = None  # a firmware.field.location.Location after set_location()
     # the documented state, here too so that it exists while the heap could not hold the app
-    # (.no_memory "start"): each is set again by the constructor (firmware/appsetup.py)
+    # (.no_memory "start"): each is set again by the constructor (firmware/app_setup.py)
     calibration = UNCALIBRATED
     compass = None
     collector = None
@@ -269,12 +183,12 @@ class CompassApp:
             self._wrap = ticks_us is None
 
     def _build(self, args):
-        from firmware import appsetup  # construction only: dropped when the app is made
+        from firmware import app_setup  # construction only: dropped when the app is made
         try:
-            appsetup.setup(self, *args)
+            app_setup.setup(self, *args)
         finally:
-            appsetup = None
-            drop("appsetup", "devinit")  # the drivers' start-up and error texts too
+            app_setup = None
+            drop("app_setup", "devinit")  # the drivers' start-up and error texts too
         self._args = None
         self.no_memory = None
         self._use(self._load())
@@ -291,30 +205,30 @@ class CompassApp:
         if learn or learn is None and not self._good_enough(self.calibration):
             self.calibrate()
 
-    # --- storage (firmware/persist.py, loaded for each use) ---------------------------
+    # --- storage (firmware/app_persist.py, loaded for each use) ---------------------------
     def _load(self):
         try:
-            from firmware import persist
-            cal = persist.load(self)
+            from firmware import app_persist
+            cal = app_persist.load(self)
         except MemoryError:  # no room for the store's code: not "uncalibrated" (_retry)
             from firmware.calibration import UNCALIBRATED
             self.load_reason = _LOAD_NO_MEMORY
             cal = UNCALIBRATED
         persist = None
-        drop("persist", "slots")
+        drop("app_persist", "store_slots")
         return cal
 
     def _save(self, dip_only=False):
         try:
-            from firmware import persist
-            persist.save(self, dip_only)
+            from firmware import app_persist
+            app_persist.save(self, dip_only)
         except MemoryError:  # no room for the store's code: as a failed save (retried)
             self.save_errors += 1
             self.save_reason = _LOAD_NO_MEMORY
             self._unsaved = True
             self._save_wait_us = 0
         persist = None
-        drop("persist", "slots")
+        drop("app_persist", "store_slots")
 
     # --- calibration in force ---------------------------------------------------------
     def _good_enough(self, cal):
@@ -326,13 +240,13 @@ class CompassApp:
 
     def _use(self, cal):
         # another calibration: its dip (saved with it, else learned afresh), the short
-        # averages and any spell start over (firmware/health.py FieldWatch.use)
+        # averages and any spell start over (firmware/fieldwatch.py FieldWatch.use)
         self.calibration = cal
         self._k = cal.k  # _heading's
         self.watch.use(cal)
         tol = _FIT_SIGMAS * cal.fit_error // 100
-        if tol < _FIELD_TOL_PCT:
-            tol = _FIELD_TOL_PCT
+        if tol < FIELD_TOL_PCT:  # the interference window's floor: the compass's default
+            tol = FIELD_TOL_PCT
         elif tol > _FIELD_TOL_MAX_PCT:
             tol = _FIELD_TOL_MAX_PCT
         self.compass.set_field(cal.field_out if cal.model is not None else 0, tol)
@@ -434,14 +348,14 @@ class CompassApp:
         # max_uncertainty_cdeg). Returns the Attitude (.attitude); ValueError when there is no
         # MPU6050.
         try:
-            from firmware.gyro.gyrosetup import attach
+            from firmware.gyro.attitude_setup import attach
             from firmware.gyro import attitude
         except ImportError:
             raise ImportError("use_gyro() needs the gyro part: install package-gyro.json")
         attitude.use_kernels(None if self.fast else False)  # the app's kernel set
         a = attach(self, attitude.Attitude, options)
         attach = None
-        drop("gyro.gyrosetup")
+        drop("gyro.attitude_setup")
         self._gyro_options = options if options else ()
         return a
 

@@ -4,20 +4,12 @@
 #     mag_map.apply(corrected, b)        # allocation-free; src and dst may be the same buffer
 #     apply(mag_map.m, corrected, b)     # the same, as a function (firmware.fast has its mirror)
 #
-# A spec names, for body x, y and z in turn, the sensor axis (and sign) that points that way:
-# "x,-y,-z", "-y, x, z", or a tuple ("x", "-y", "-z"). Parsing raises ValueError naming the
-# spec. A board's specs live in boards/ (boards/breakouts.py derives them for common breakouts).
-#
-# .det is +1 for a rotation and -1 for a mirror image. A magnetometer's map is a rotation (chip
-# and body frames are both right-handed), a mirror only for a chip whose datasheet draws its
-# axes as a mirror of its accelerometer's (the driver's MIRROR; docs/chips.md). An
-# accelerometer's map to AN4248's sign is a mirror:
-# the chip reads +1 g on an axis pointing up (specific force), AN4248 wants +1 g on z down, so
-# the rotation is followed by a negation.
-
+# A spec names, for body x, y and z in turn, the sensor axis (and sign) that points that way;
+# parsing raises ValueError naming it. .det: +1 rotation, -1 mirror. Specs per board: boards/;
+# why an accelerometer's map is a mirror: docs/design.md (module notes, axes).
 from array import array
 
-_AXES = "xyz"
+AXES = "xyz"
 
 
 def apply(m, src, dst):
@@ -61,16 +53,16 @@ class AxisMap:
             n = p[:1] == "-"
             if p[:1] in "+-":
                 p = p[1:].strip()
-            if len(p) != 1 or p not in _AXES:
+            if len(p) != 1 or p not in AXES:
                 raise ValueError("axis map %r: %r is not one of x, y, z (with an optional sign)"
                                  % (spec, p))
-            if _AXES.index(p) in axis:
+            if AXES.index(p) in axis:
                 raise ValueError("axis map %r: sensor axis %s used twice" % (spec, p))
-            axis.append(_AXES.index(p))
+            axis.append(AXES.index(p))
             neg.append(n)
         self.axis = tuple(axis)
         self.sign = tuple(-1 if n else 1 for n in neg)
-        self.spec = ",".join(("-" if n else "") + _AXES[a] for a, n in zip(axis, neg))
+        self.spec = ",".join(("-" if n else "") + AXES[a] for a, n in zip(axis, neg))
         self.m = array("b", (axis[0], axis[1], axis[2], 1 if neg[0] else 0, 1 if neg[1] else 0,
                              1 if neg[2] else 0))  # apply()'s argument
         # determinant of a signed permutation: product of signs times the permutation's parity
@@ -94,7 +86,7 @@ class AxisMap:
         """The map body -> sensor (the transpose)."""
         parts = ["", "", ""]
         for i in range(3):
-            parts[self.axis[i]] = ("-" if self.sign[i] < 0 else "") + _AXES[i]
+            parts[self.axis[i]] = ("-" if self.sign[i] < 0 else "") + AXES[i]
         return AxisMap(",".join(parts))
 
     def __eq__(self, other):

@@ -60,7 +60,7 @@ def calibrated(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, m
     except Exception:  # noqa: BLE001 - none, torn, unreadable: not calibrated
         return False, mag
     finally:
-        drop("slots")
+        drop("store_slots")
     return cal.model == model and cal.fit_error <= GOOD_FIT_ERROR, mag
 
 

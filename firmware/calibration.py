@@ -6,29 +6,8 @@
 #     cal.correct(raw, out)             # out = InvW (raw - V) >> 15: allocation-free, small ints
 #     Calibration.from_bytes(cal.to_bytes()) == cal
 #
-# Calibration(model, offset, invw, field, field_out, fit_error, samples, coverage, dip_kang)
-#   model      None (uncalibrated identity), 'minmax', 4, 7 or 10 (AN4246's 4-, 7-, 10-element fits)
-#   offset     V, three int16 counts (AN4246 eq. 8: B_raw = W B + V)
-#   invw       InvW = W^-1, nine Q15 ints row-major; each row's absolute sum <= 32767
-#   field      B, the geomagnetic field strength in raw counts
-#   field_out  |correct(raw)| on the calibrated sphere, in counts (B through InvW's Q15 scale)
-#   fit_error  hundredths of a percent (AN4246 eq. 24, in NXP's normalisation)
-#   samples, coverage   held samples and percent of the sphere covered, at solve time
-#   dip_kang   the dip (inclination, KANG, down positive) this calibration measured where it
-#              was accepted (CompassApp learns it from its first clean samples and saves it
-#              with the record: firmware/health.py DipCheck), or None when not known. Stored
-#              in whole degrees; it is an observation of the place, not part of the fit:
-#              == compares the fits and ignores it.
-# Bad values raise ValueError naming the field. .k is InvW then V as array('h'), the argument
-# of correct(k, raw, out) and of its fast mirror firmware.fast.correct (same bits).
-#
-# correct(k, raw, out) writes InvW * sat16(raw - V) >> 15 (rounded) into out[0:3]: AN4246's
-# equation 10 in Q15. |InvW row| <= 32767 and |sat16| <= 32768 keep every partial sum below
-# 2**30 - 2**15, so it stays a small int on a 32-bit board, and the frame (three arguments, three
-# locals) stays within the 11 words MicroPython keeps on the C stack: nothing is allocated.
-#
-# to_bytes() / from_bytes(b): the 46-byte little-endian payload (firmware.store adds the record
-# header and CRC); from_bytes raises ValueError naming what is wrong.
+# The fields and their units: docs/api.md (calibration). Why correct() stays within small ints
+# and allocates nothing: docs/design.md (module notes, calibration).
 import struct
 from array import array
 

@@ -5,43 +5,9 @@
 #     h = compass.update(b, g)       # b: corrected field, g: accelerometer, both body frame
 #     print(kang_to_str(h), compass.interference, compass.dip_high, compass.gimbal)
 #
-# KANG (T. Judd): 65536 per turn, so angle arithmetic wraps like an int16 (0.0055 deg resolution).
-# Frame: AN4248 body frame, x forward, y right, z down; a level board's accelerometer reads +1 g
-# on z (docs/hardware.md, frames). b is Calibration.correct's output mapped to the body frame (firmware.axes);
-# g is the accelerometer in the same frame and sign. Both at any scale, components int16.
-#
-# heading(b, g=None, declination=0)
-#                heading in KANG 0..65535, clockwise from magnetic north plus declination (KANG,
-#                east positive); g None means a level board. ValueError for a zero b or g.
-# Compass        the same heading plus pitch, roll, field magnitude and dip, and the flags below,
-#                all updated in place: the per-sample path allocates nothing.
-# Compass.update runs one step, measure(), on an int array of working state that also holds the
-# windows and the results: orient (normalise, tilt or level, de-rotate, eq. 22), magnitude and
-# dip, then the flags (judge). Where the port has the native emitter it is firmware/fast.py's
-# viper mirror of the function here (same names, same signatures, same bits), which calls the
-# mirrors of the steps: one call from bytecode per sample. use_kernels() picks at import,
-# use_kernels(False) forces the plain ones, KERNELS says which set is in use.
-#
-# Flags (Compass.flags bits; the booleans mirror the first three):
-#   FLAG_INTERFERENCE  .interference: |b| is outside field * (1 +- field_tol_pct %) (or the
-#                      window set_window() gave), or the dip is outside the window set_dip() gave.
-#                      A magnet, a motor or a steel table adds to Earth's field (the heading
-#                      guide, docs/references.md); the heading is suspect. Off when no reference
-#                      field is set (field=0); the dip window is off until set_dip().
-#   FLAG_DIP_HIGH      .dip_high: |dip| > 75 deg. The horizontal field is < 26 % of B and the
-#                      heading noise grows by 1/cos(dip) (the heading guide: use another heading source).
-#   FLAG_GIMBAL        .gimbal: |pitch| > 80 deg. Roll comes from Gy, Gz ~ g cos(pitch), so its
-#                      noise (and the heading's) grows by >= 1/cos(80 deg) = 5.8; at +-90 deg
-#                      (gimbal lock) roll is taken as 0 and the heading stays defined.
-#   FLAG_NO_FIELD      b was (0, 0, 0): no heading; update() returns -1, the last good values stay.
-#   FLAG_NO_GRAVITY    g was (0, 0, 0) (free fall): likewise.
-#
-# Per-sample path (Compass.update and the trig steps it calls):
-# every intermediate stays below 2**30
-# (tests/test_heading.py drives tests/intcheck over the whole int16 input space) and nothing is
-# allocated, not even a call frame: MicroPython puts the frame of a function whose arguments,
-# locals and stack exceed 11 words on the heap (py/objfun.c VM_MAX_STATE_ON_STACK), so the work
-# is split into small methods that keep their state on the Compass object.
+# KANG: 65536 per turn. heading(b, g) is the one-shot form. The frame, the flags and why the
+# per-sample path is split into small methods: docs/design.md (module notes, compass); the API
+# in docs/api.md (heading).
 from array import array
 
 from firmware.compat import const, kernels
@@ -52,7 +18,7 @@ _Q15_ONE = const(32768)
 _ROUND15 = const(0x4000)  # half of 2**15: round a Q15 product to nearest
 _DIP_LIMIT_KANG = const(13653)  # 75 deg: heading unreliable beyond this inclination (AN4248 sec. 6)
 _GIMBAL_PITCH_KANG = const(14564)  # 80 deg: roll noise x 1/cos(80 deg) = 5.8 (gimbal lock at 90)
-_FIELD_TOL_PCT = const(10)  # +-10 %: twice the |B| spread MotionCal accepts (variance < 4.5 %)
+FIELD_TOL_PCT = const(10)  # +-10 %: twice the |B| spread MotionCal accepts (variance < 4.5 %)
 _NO_LIMIT = const(0x3FFFFFFF)  # field window when no reference field is set
 
 # The working state of one Compass, array('i') (the steps below read and write it):
@@ -236,7 +202,7 @@ class Compass:
     # dip_high, gimbal. A failed update leaves the last good values and sets only flags.
     # With g None the board is taken as level: pitch = roll = 0, and dip assumes it too.
 
-    def __init__(self, field=0, declination_kang=0, field_tol_pct=_FIELD_TOL_PCT):
+    def __init__(self, field=0, declination_kang=0, field_tol_pct=FIELD_TOL_PCT):
         self.declination_kang = declination_kang
         self.heading_kang = 0
         self._failed = 0  # FLAG_NO_FIELD / FLAG_NO_GRAVITY after a failed update, else 0
@@ -319,7 +285,7 @@ _PLAIN = Compass()  # scratch for heading(): one sample at a time, like the sens
 
 
 def heading(b, g=None, declination=0):
-    """Tilt-compensated heading in KANG 0..65535 (see the module's opening comment)."""
+    """Tilt-compensated heading in KANG 0..65535 (see docs/design.md, module notes)."""
     h = _orient(_PLAIN.st, b, g)
     if h < 0:
         if h == -1:

@@ -2,43 +2,10 @@
 
     from firmware.compat import const, ticks_us, ticks_diff, sleep_us, kernels
 """
-# const(x)          micropython.const on MicroPython (the constant costs no RAM); the identity
-#                   elsewhere (CPython, or a port built without it).
-# ticks_us()        time.ticks_us where the port has it, else None (CPython: the simulator
-#                   passes its own clock). ticks_diff(a, b) likewise: the wrapping difference.
-#                   CircuitPython (a micropython module, no time.ticks_us): time.monotonic_ns
-#                   in microseconds, wrapped to 30 bits as MicroPython's ticks are, with the same
-#                   wrapping ticks_diff (its monotonic_ns is a long int: each call allocates).
-# sleep_us(us)      time.sleep_us where it exists; on CircuitPython a busy wait on that clock
-#                   (its time.sleep takes float seconds); else a no-op (the simulator passes
-#                   its own).
-# wait_clock(delay_us)  (delay, measured) for a bounded wait (firmware/i2cdevice.py's data-ready
-#                   wait, firmware/circuitpython/busio_i2c.py's lock wait): None gives sleep_us, the wait
-#                   measured with ticks_us where the port has it; the simulator's delay_us gives
-#                   itself, the waited time then being the sum of the delays asked for.
-# wall_clock()      (now_us, diff) for measuring real time: ticks_us / ticks_diff on MicroPython,
-#                   perf_counter_ns on CPython (used only for stall figures, never for logic).
-# kernels()         the fast-path module firmware.fast (viper/native code with the same
-#                   functions and signatures as the plain ones) when this port has the native
-#                   emitter, else None. Plain modules never carry an emitter decorator: a port
-#                   without the emitter (CircuitPython, the WebAssembly port) rejects the emitter's
-#                   decorators at compile time, so that code lives in firmware/fast.py
-#                   and is only ever imported here, inside try/except. Set FAST = False before
-#                   the first call to force the plain path (tests compare the two).
-# pick(kn, name, plain)  the function `name` of kernel set kn (None: kernels()), or `plain`
-#                   when there is none (kn False or None): a module's use_kernels().
-# compiled_here(m)  True when MicroPython compiled module m from its .py source on this board
-#                   (not a .mpy file, nor frozen or ROMFS code): loading it again costs a
-#                   compile (firmware/calibrate/calibrator.py keeps the solver then; boards/main.py
-#                   says a board runs from sources).
-# free_bytes()      gc.mem_free() after a collection: the heap a job can have now; None where the
-#                   port does not tell (CPython): whether a calibration session fits beside the
-#                   heading (firmware/app.py SESSION_ROOM; docs/design.md, memory).
-# drop(*names)      forget the firmware modules `names` ("detect", "calibrator", ...): out of
-#                   sys.modules and off the firmware package, so their code and tables are
-#                   freed at the next collection once nothing else refers to them (a
-#                   capability that is done; docs/design.md, memory). The next import loads
-#                   the module afresh.
+# Also wait_clock(), wall_clock(), pick(), compiled_here(), free_bytes(), drop(), drop_part():
+# each function says what it gives. What each shim is on CPython, MicroPython, CircuitPython
+# and the WebAssembly port, and why emitter code lives only in firmware/fast.py:
+# docs/design.md (module notes, compat).
 import sys
 import time
 
@@ -91,7 +58,7 @@ sleep_us = sleep_us or _no_sleep
 
 
 def wait_clock(delay_us):
-    """(delay, measured): see the module's opening comment."""
+    """(delay, measured): see docs/design.md, module notes."""
     if delay_us is None:
         return sleep_us, ticks_us is not None
     return delay_us, False
@@ -184,7 +151,7 @@ def compiled_here(m):
 
 
 def free_bytes():
-    """gc.mem_free() after a collection, or None (see the module's opening comment)."""
+    """gc.mem_free() after a collection, or None (see docs/design.md, module notes)."""
     import gc
     f = getattr(gc, "mem_free", None)
     if f is None:

@@ -4,18 +4,11 @@
     from firmware.detect import detect
     mag = detect(I2C(0, scl=Pin(22), sda=Pin(21), freq=400000))  # any chip of CHIPS below
 """
-# detect(i2c, **options) scans the bus and tries the magnetometers CHIPS puts at each address
-# that answered, identifying each by its ID register, never by the address alone (0x0C is an
-# AK8963 or an AK09916, 0x1E more than one chip). When none answers but an accelerometer of
-# CHIPS does (0x68/0x69), it wakes it, opens its I2C bypass and looks again: a GY-87 keeps its
-# HMC5883L on the MPU6050's auxiliary bus, an MPU-9250 its AK8963, invisible until then. It
-# returns the configured driver; `options` go to the driver that takes them (CHIPS' options
-# field; every magnetometer: delay_us, timeout_us). A value the chip found does not support
-# raises ValueError. An empty bus or wrong IDs raise SensorNotFound naming every address tried,
-# what the scan found and what each known address answered.
-#
-# detect_accel(i2c, **options) returns the accelerometer's driver, or None when none answers
-# (a DS3231 RTC also sits at 0x68: a wrong WHO_AM_I there is "no accelerometer", not an error).
+# detect(i2c, **options) scans, tries the magnetometers CHIPS puts at each address that
+# answered (by ID register, never the address alone), opens an IMU's bypass when none answers,
+# and returns the configured driver, else SensorNotFound naming every address tried.
+# detect_accel(i2c, **options): the accelerometer's driver, or None. How: docs/design.md
+# (module notes, detect); the chip table: docs/chips.md.
 import sys
 
 from firmware.compat import const, drop
@@ -153,7 +146,7 @@ def _check_options(options):
 
 
 def detect(i2c, **options):
-    """Return the driver of the magnetometer on `i2c` (see the module's opening comment)."""
+    """Return the driver of the magnetometer on `i2c` (see docs/design.md, module notes)."""
     if options:
         _check_options(options)
     notes = []

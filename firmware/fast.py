@@ -2,42 +2,12 @@
 # Imported only through firmware.compat.kernels(), inside try/except: a port without the native
 # emitter (the WebAssembly port, CircuitPython) raises SyntaxError at compile time on
 # @micropython.viper, and then everything runs the plain functions. Where it imports, the app
-# and the Compass use these automatically; the results are the same bits.
-#
-#     plain (its home)                          mirror here
-#     calibration.correct(k, raw, out)          correct(k, raw, out)
-#     axes.apply(m, src, dst)                   apply(m, src, dst)
-#     compass.measure(st, b, g)                 measure(st, b, g)  (and its steps orient, level,
-#     compass.orient(st, b, g), magnitude(st),  orient(st, b, g), ...        tilt, derotate)
-#     dip(st), judge(st)                        magnitude(st), dip(st), judge(st)
-#     trig.norm14(src, dst, o)                  norm14(src, dst, o)
-#     trig.atan2(y, x), trig.sin(a), cos(a)     atan2(y, x), sin(a), cos(a)
-#     fixedpoint.isqrt(n)                       isqrt(n), for n < 2**30 (the compass's range;
-#                                               Newton's iteration: the same floor square root)
-#     samples.screen(b)                         screen(b)  (SampleBuffer.offer's rejection test:
-#                                               the newest sample, the own cell's hash chain,
-#                                               the neighbour cells; the same counters)
-#
-# Each computes what its plain original computes, bit for bit, and calls the mirrors of what
-# its original calls; most are written operation for operation, isqrt and norm14's shift search
-# in the form that suits native code (no division in the plain isqrt, no loop over a changing m
-# in native norm14). The orchestration (Compass.update, the app's step) is the plain code in
-# both paths. The compass's state `st` is its array('i') (ptr32 loads and stores;
-# a load is zero-extended on the 64-bit unix port, so every value read back, all below 2**16 in
-# magnitude, is sign-extended from 18 bits: ((v + 0x20000) & 0x3FFFF) - 0x20000, the same on a
-# 32-bit board). Viper ints are machine words
-# (32 bits on the boards, 64 on the unix port): every intermediate here is below 2**30 for int16
-# inputs, the bound tests/test_heading.py proves for the plain code, so the words never wrap.
-# `//` and `>>` have Python's floor semantics in viper; ptr16 loads are unsigned and are
-# sign-extended by hand. tests/test_fast.py compares every function with its original on the
-# interpreters that have the emitter, over the real logs and the int16 extremes.
-#
-# Tables: firmware/kang_tables.py's atan and sine tables, the array('i') trig.py indexes too,
-# loaded with ptr32 (every entry is non-negative, so the unix port's unsigned load changes
-# nothing).
+# and the Compass use these automatically; the results are the same bits (tests/test_fast.py).
+# Which plain function each mirrors, and how the words stay within 32 bits: docs/design.md
+# (module notes, fast).
 import micropython
 
-from firmware.kang_tables import ATAN_T, SIN_T
+from firmware.trig_tables import ATAN_T, SIN_T
 
 _AT = ATAN_T
 _ST = SIN_T

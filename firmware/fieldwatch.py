@@ -1,54 +1,10 @@
 """The heading line's field checks: the dip against the calibration's (DipCheck) and the spells
 of a field that moved (FieldWatch). Loaded with the heading line."""
 #     from firmware.fieldwatch import FieldWatch
-#     w = FieldWatch(compass, body)   # app.watch (firmware/appsetup.py); w.dip: its DipCheck
+#     w = FieldWatch(compass, body)   # app.watch (firmware/app_setup.py); w.dip: its DipCheck
 #
-# - DipCheck: the dip (inclination, the angle between the field and the horizontal) is a
-#   property of the place, like |B|: rotating the board changes neither. A magnet near the
-#   sensor that leaves |B| inside the interference window but turns the field's direction
-#   changes the dip, the one other rotation invariant of a (field, gravity) pair. The
-#   reference is the dip the calibration in force measures here: the one saved with it
-#   (Calibration.dip_kang), else the mean of its first steady stretch (_DIP_LEARN_US and at
-#   least _DIP_MIN_SAMPLES clean samples whose dip stays within _DIP_STEADY_KANG of their
-#   mean); then held: a sample more than DIP_TOL_KANG (3 deg) off it is interference.
-#   Why 3 deg: an error e in the field's direction splits between dip and azimuth, and at
-#   60 deg dip an azimuth error of e / 2 in the horizontal plane is a heading error of e, so
-#   a direction error that moves the heading by the documented 5 deg (docs/faults.md) moves
-#   the dip by ~2.5-3.5 deg; a tilt error from the accelerometer moves dip and heading the
-#   same way (AN4248: heading error ~ tilt error x tan(dip)). The sample noise is far below:
-#   the dip's standard deviation is 0.26 deg on the simulated GY-271 (QMC5883L 2 mG, MPU6050
-#   tilt noise) and 0.15 deg on the GY-87, so 3 deg is > 10 sigma. A calibration with a
-#   fit error e (its RMS radial error) bends directions by ~e radians: the tolerance is
-#   max(3 deg, 3 x e) as an angle, as the app's |B| window is max(10 %, 3 x e).
-# - FieldWatch: what one sample cannot show. Rotating the board changes neither |B| nor the
-#   dip, so either moving away from its average over the last ~8 samples (by more than
-#   max(4 %, 3 x e) or max(2 deg, 3 x e as an angle), > 10 and 7 sigma of their noise) is a field
-#   change, not a turn: a magnet moving in (a "shift"). A heading that moves more than 4 deg
-#   from one sample to the next while the tilt holds still (within 1 deg) and the board is
-#   within 45 deg of level is a "jump": a sample may be ~1.5 periods old when used, so such
-#   a heading lags the truth by ~6 deg, and a magnet moving in turns the heading without
-#   touching the tilt (consecutive headings differ by 0.43 deg RMS on the GY-271, at most 3.4
-#   deg in 120,000 fault-free samples). So is a move of more than 4 deg plus 25 deg/s of turn
-#   over two still steps (5 deg at 50 Hz): a magnet moving in over several samples at just
-#   under 4 deg each is seen by the second. A two-step change carries the noise of two
-#   headings, as a one-step change does, so the limit adds only the turn of the longer time
-#   (docs/faults.md). Any flag - the windows, the dip, a shift, a jump -
-#   starts a spell, and the status stays until the evidence says the field is clean again:
-#   a magnet carried with the board acts as a hard-iron offset (AN4246 eq. 5) and keeps |B|
-#   and the dip inside their windows at some orientations while the heading is tens of
-#   degrees off, showing only as the board turns. So a spell ends after _RETURN_US of clean
-#   samples whose field is back where it was at the last clean sample before the spell
-#   (within 4 % of B, the tilt within 2 deg: the board did not move and the magnet left), or
-#   after _CLEAN_US of clean
-#   samples once the body field has moved by B / 4 since the last flag (a turn of ~29 deg
-#   about the vertical at 60 deg dip, ~14 deg about a horizontal axis: an offset carried
-#   along would have moved |B| or the dip out of their windows), or after _HOLD_MAX_US of
-#   clean samples (a board held still gives no new evidence). The turn is measured on the
-#   field itself: an offset carried with the board adds the same vector to both samples and
-#   cancels in their difference.
-#
-# Allocation-free (tests/scenarios/app_alloc.py): every method keeps its frame within the 11
-# words MicroPython holds on the C stack, and all intermediates are small ints.
+# Why 3 deg of dip, what a shift and a jump are, and when a spell ends: docs/design.md (module
+# notes, fieldwatch) and docs/faults.md. Allocation-free (tests/scenarios/app_alloc.py).
 from array import array
 
 from firmware.compat import const
@@ -75,7 +31,7 @@ _LEARN_FIELD_PCT = const(3)     # the dip is learned from samples with |B| this 
 
 
 class DipCheck:
-    # The dip check of the module's opening comment. learn(dip, dt_us) on clean samples until
+    # The dip check (docs/design.md, module notes). learn(dip, dt_us) on clean samples until
     # .armed (True on the sample that arms it); set(ref) arms it with a known dip; off(dip)
     # True when armed and the dip is more than .tol off .ref (KANG); reset() when another
     # calibration is put in force. Small ints only: dips are within +-16384 KANG and the sums
@@ -138,7 +94,7 @@ class DipCheck:
 
 
 class FieldWatch:
-    # The spells of the module's opening comment, for one Compass `c` and the body-frame field
+    # The spells (docs/design.md, module notes), for one Compass `c` and the body-frame field
     # array `body` its update() used. use(cal) when a calibration is put in force (the same
     # one again keeps the state), restart() after a step without a sample or a gap: the next
     # sample starts the short averages afresh. sample(tilt, dt_us) after each compass update

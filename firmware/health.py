@@ -5,39 +5,9 @@
 #     h.mag_stale(raw)   # True: the same sample again, more times than noise allows
 #     h.tilt_ok(acc)     # False: |g| outside 0.75..1.25 g, or the same reading again
 #
-# What each check catches (docs/faults.md has the fault campaign's figures):
-# - saturated: an axis at +32767 / -32768 (QMC5883L, QMC5883P saturate there, hardware.md) or
-#   at the HMC5883L's ADC overflow code -4096. Such a value is a bound, not the field: it must
-#   neither give a heading nor reach a calibration fit.
-# - mag_stale: stale output registers that still look fresh (a QMC5883L whose data registers
-#   stopped taking new sets while DRDY/DOR keep rising, an HMC5883L held by its data-output
-#   LOCK, a chip returning zeros or any constant). A live magnetometer's noise - about 2 mG
-#   RMS per axis (QMC5883L datasheet 2 mG resolution; HMC5883L noise floor 2 mG) - makes an
-#   exact repeat of all three axes rare, so a run of repeats is the chip's fault, not the
-#   board holding still. The run that counts as stale depends on the noise in counts,
-#   sigma ~ counts_per_gauss / 500: a repeat of all three axes has a probability of about
-#   (1 / (3.5 sigma))^3 for sigma >= 1, so 2 repeats at 12000 counts/G (sigma 24), 3 at
-#   3000 (sigma 6), 8 at 1090 (HMC5883L default; sigma ~0.8 with 8-sample averaging, a
-#   repeat of all three ~4 %), each run below 1e-10 on a still board. Below 1000 counts/G
-#   the noise is under a count and a still board repeats legitimately: 32 repeats there.
-#   When the chip's status already hints at old data - QMC5883L DOR (a set was skipped),
-#   HMC5883L LOCK still set when RDY rises - one exact repeat is stale data.
-# - tilt_ok: the accelerometer must read about 1 g (a hand-held or vehicle compass moves
-#   slowly; AN4248's tilt formulas assume gravity is the only specific force). Outside
-#   0.75..1.25 g - free fall, a sensor asleep since a reset (zeros), 0xFF bytes read as
-#   (-1, -1, -1), a range changed behind the driver's back - no tilt is derived. An MPU6050
-#   that went to sleep keeps its last sample in the output registers, which is plausible
-#   but frozen: its noise, ~1.8 mg RMS = 30 counts at +-2 g and 21 Hz bandwidth (firmware/
-#   mpu6050.py), makes 3 exact repeats in a row (~1e-13) a frozen sensor.
-#
-# - DipCheck and FieldWatch, the field checks of the heading line (the dip against the
-#   calibration's, the spells of a field that moved): firmware/fieldwatch.py, which the
-#   heading line loads and the calibration program does not. Their shared constants are here:
-#   DIP_TOL_KANG, and SPELL_* (the app reads them).
-#
-# Allocation-free (tests/scenarios/app_alloc.py): every method keeps its frame within the 11
-# words MicroPython holds on the C stack, and all intermediates are small ints: |a| is
-# computed on a >> 4, so the squared norm stays below 3 * 2**22.
+# What each check catches and why its limits: docs/design.md (module notes, health); the fault
+# campaign's figures: docs/faults.md. The field checks are firmware/fieldwatch.py; the shared
+# constants (DIP_TOL_KANG, SPELL_*) are here. Allocation-free (tests/scenarios/app_alloc.py).
 from array import array
 
 from firmware.compat import const
@@ -79,7 +49,7 @@ def _run(p, v, n):
 
 
 class Health:
-    """The state of the per-sample checks (see the module's opening comment). overflow: the chip's
+    """The state of the per-sample checks (see docs/design.md, module notes). overflow: the chip's
     overflow code besides the int16 limits (HMC5883L -4096; else -32768)."""
 
     def __init__(self, counts_per_gauss=None, overflow=_SAT_LO, counts_per_g=16384):

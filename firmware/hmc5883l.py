@@ -5,23 +5,9 @@
     x, y, z = HMC5883L(I2C(0, scl=Pin(5), sda=Pin(4), freq=400000), gain=1).read()
 """
 # HMC5883L(i2c, address=0x1E, *, gain=1, rate=15, averaging=8, delay_us=None, timeout_us=None)
-#   gain       GN code 0..7: 1370, 1090 (default, +-1.3 G), 820, 660, 440, 390, 330, 230 counts/G
-#   rate       output rate in Hz: 3, 15, 30, 75 (0.75, 1.5 and 7.5 Hz are not integers: not offered)
-#   averaging  samples averaged per output: 1, 2, 4, 8
-# read() -> (x, y, z) raw counts in the chip's axes (the chip sends X, Z, Y; this reorders);
-# read_into(buf) fills buf[0..2] without allocating. set_gain(gain) changes the range.
-# .suspect: LOCK was set with RDY on the last read (the sample may be an old one).
-# config_ok(): the control registers read back (still configured as this driver wrote them?).
-# self_test() -> (passed, (x, y, z)): the datasheet's positive-bias test at gain 5.
-# .KIND 'hmc5883l', .range_code (GN), .counts_per_gauss.
-#
-# The first measurement after a gain change still uses the old gain (datasheet, CRB), and after a
-# write to CRA, CRB or MODE the first set arrives 2/rate later (datasheet, mode register). So after
-# any configuration the driver waits two output periods and throws one sample away: no sample it
-# returns was measured with the old gain.
-#
-# Errors: SensorNotFound (ID is not 'H43'), BusError, DataReadyTimeout, SensorOverflow (an axis
-# reads -4096, the ADC overflow marker, or anything outside the output range -2048..2047).
+# read() -> (x, y, z) raw counts in the chip's axes (the chip sends X, Z, Y; this reorders).
+# Options and attributes: docs/api.md (drivers). Why two periods are waited and one sample
+# thrown away after any configuration, and the errors: docs/design.md (module notes, hmc5883l).
 from firmware.compat import const
 
 from firmware.errors import SensorOverflow
@@ -67,6 +53,7 @@ class HMC5883L(Magnetometer):
     FLAGS = (_LOCK, 0)  # LOCK still set when RDY rises: the data registers hold an old set
     REGISTERS = (_ID_A, _STATUS, _RDY, _DATA, _CRA)
     ID = b"H43"
+    OVERFLOW = _OVERFLOW  # the sample checks and the collector take it for a saturated axis
 
     def __init__(self, i2c, address=0x1E, *, gain=1, rate=15, averaging=8, delay_us=None,
                  timeout_us=None):

@@ -5,41 +5,13 @@
 #                 self.wait(_STATUS, _DRDY)
 #                 self._read_into(_DATA, self._buf)
 #
-# Device(i2c, address, period_us, delay_us=None, timeout_us=None)
-#   i2c         machine.I2C / SoftI2C, or anything with readfrom_mem_into / writeto_mem / scan
-#               (the simulator's bus, firmware.circuitpython.busio_i2c's adapter for CircuitPython).
-#   period_us   the chip's output data period: sizes the default data-ready bound.
-#   delay_us    None on a board (time.sleep_us, waits measured with time.ticks_us); the
-#               simulator passes its bus.sleep_us, and the waited time is then the sum of the
-#               delays asked for (simulated time moves only when delay_us is called).
-#   timeout_us  the data-ready bound; default two periods + 10 ms.
-#
-# wait_ready(reg, mask) polls a status register until a bit of mask is set, within the bound,
-# else DataReadyTimeout(address, waited_us). Public driver methods run their bus transfers
-# inside `with self.guard:`, which turns a port's OSError (errno 19 ENODEV, 5 EIO, 110/116
-# ETIMEDOUT) into BusError naming address, register and errno. Why a `with` block and not
-# try/except: a bytecode frame with `except OSError as e` exceeds the 11 words MicroPython keeps
-# on the C stack (py/objfun.c VM_MAX_STATE_ON_STACK) and would come from the heap on every
-# sample; the `with` frame stays on the stack, so a read allocates nothing
-# (tests/scenarios/drivers_alloc.py).
-#
-# Magnetometer(Device): the scaffolding the magnetometer drivers share (options, ID probe,
-# configure with read-back, read with the status checked, config_ok(), read(), overflow
-# reports); each chip's file keeps its datasheet's facts and gives them as class attributes
-# (see the class).
-#
-# Callers that map bus errors themselves (the app's read guard, firmware/app.py) use the
-# unguarded sample_into(buf) / config_matches() inside their own `with` block: one guard per
-# step instead of one per transfer group (a `with` costs two method calls).
-#
-# option_code(chip, name, value, table): the register code of a keyword option.
-# int16x3_into(d, buf, msb): three int16, LSB first (QMC5883L, QMC5883P data blocks) or MSB
-# first (MPU6050), sign-extended by hand. The drivers call it as `decode`, which use_kernels()
-# points at its mirror in firmware/fast.py where the port has the native emitter (the same
-# bits; use_kernels(False): this one), as firmware.compass.use_kernels does for the heading.
-from firmware.compat import pick, ticks_diff, ticks_us
+# Device(i2c, address, period_us, delay_us=None, timeout_us=None); Magnetometer(Device): the
+# scaffolding the magnetometer drivers share (see the class). The arguments, why the guard is a
+# `with` block, and the unguarded calls the app uses: docs/design.md (module notes, i2cdevice).
+from firmware.compat import const, pick, ticks_diff, ticks_us
 from firmware.errors import BusError, DataReadyTimeout, SensorNotFound
 
+DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: its users assume 50 Hz
 _OURS = (BusError, DataReadyTimeout, SensorNotFound)  # already say what happened (a module
 #                                                      constant: a literal tuple is built per use)
 

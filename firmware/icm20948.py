@@ -7,25 +7,9 @@ magnetometer sits (firmware/ak09916.py). The same methods as firmware/mpu6050.py
 #     imu = ICM20948(I2C(0, scl=Pin(22), sda=Pin(21), freq=400000), address=0x69)
 #     ax, ay, az = imu.read_accel()
 #
-# ICM20948(i2c, address=0x68, *, accel_range=2, dlpf=24, gyro_range=500)  accel_range in g:
-#     2, 4, 8, 16 (16384 >> code counts/g); gyro_range in deg/s: 250, 500, 1000, 2000
-#     (.counts_per_dps_x10 1310, 655, 328, 164); dlpf: the accelerometer's low-pass filter in
-#     Hz, 246, 111, 50, 24, 12, 6 (ACCEL_DLPFCFG 1-6; the gyroscope's filter takes the same
-#     code: 152, 120, 51, 24, 12, 6 Hz). Datasheet DS-000189 rev 1.3: tables 1-2, sections 8-10.
-# read_accel() / read_accel_into(buf) / sample_into(buf): the accelerometer, counts in the
-# chip's axes, MSB first from 0x2D (bank 0); with .gyro_into set (use_gyro), one 14-byte burst
-# 0x2D..0x3A: accelerometer, gyroscope, temperature (.temp_raw; temp_cdeg(): T = raw / 333.87
-# + 21 C). read_all_into(acc, gyro), read_gyro(), data_ready() (INT_STATUS_1 bit0).
-# enable_bypass(): USER_CTRL.I2C_MST_EN cleared, INT_PIN_CFG.BYPASS_EN set: the AK09916 on the
-# main bus. config_ok(): awake with these ranges? (PWR_MGMT_1, ACCEL_CONFIG, GYRO_CONFIG_1).
-#
-# Banks: the registers come in four banks chosen by REG_BANK_SEL (0x7F, in every bank). The
-# data, power and bypass registers are in bank 0, the ranges and filters in bank 2. Every
-# method that selects bank 2 selects bank 0 again before it returns, so a read needs no
-# bank write; configure() starts by selecting bank 0 (a bus error between the two writes
-# would otherwise leave bank 2 selected, where the data registers read 0: an implausible
-# tilt, after which the app configures the chip again).
-# Errors: SensorNotFound (WHO_AM_I is not 0xEA), BusError.
+# ICM20948(i2c, address=0x68, *, accel_range=2, dlpf=24, gyro_range=500): docs/api.md
+# (drivers). Registers and their banks: docs/hardware.md (ICM-20948); why every method leaves
+# bank 0 selected: docs/design.md (module notes, icm20948).
 from firmware.compat import const
 
 from firmware.errors import SensorNotFound

@@ -5,27 +5,9 @@
     x, y, z = LIS2MDL(I2C(0, scl=Pin(5), sda=Pin(4), freq=400000)).read()
 """
 # LIS2MDL(i2c, address=0x1E, *, range=16, odr=20, delay_us=None, timeout_us=None)
-#   (the LSM303AGR has the same register map and ID at 0x1E, its accelerometer at 0x19)
-#   range  16 (gauss): the span of the counts this driver returns (see below)
-#   odr    output data rate in Hz: 10, 20, 50, 100 (CFG_REG_A ODR[3:2])
-# read() -> (x, y, z) counts in the chip's axes; read_into(buf) fills buf[0..2] without
-# allocating. .KIND 'lis2mdl', .range_code 0, .counts_per_gauss 2000, config_ok() (CFG_REG_A..C
-# read back), .skipped (reads whose STATUS had Zyxor: a set was overwritten before it was read).
-#
-# Counts: the chip's LSB is 1.5 mG (+-49.152 G in int16), 666.67 LSB/G, not an integer. The
-# driver returns 3 x the chip's value, 0.5 mG per count: 2000 counts/G exactly, and int16 holds
-# +-16.38 G of it (Earth's field is under 0.7 G). A reading beyond that raises SensorOverflow.
-#
-# Datasheet facts (docs/hardware.md, LIS2MDL / LSM303AGR): WHO_AM_I 0x4F reads 0x40; CFG_REG_A
-# 0x60 (COMP_TEMP_EN bit7, SOFT_RST bit5, LP bit4, ODR[3:2], MD[1:0] 00 continuous), CFG_REG_B
-# 0x61 (OFF_CANC bit1: the chip's set/reset offset cancellation each output), CFG_REG_C 0x62
-# (BDU bit4); STATUS 0x67 (Zyxda bit3, Zyxor bit7, an overrun); OUTX_L..OUTZ_H 0x68..0x6D LSB
-# first. The driver sets temperature compensation, offset cancellation and BDU, as ST's
-# reference example does, and reads with SUB(7) set (0x80 | register), as ST's example and
-# the micro:bit runtime do. The hard-iron offset registers 0x45..0x4A are left at their reset
-# value 0 (the soft reset clears them): the calibration is this firmware's.
-# Errors: SensorNotFound (wrong WHO_AM_I or no read-back), BusError, DataReadyTimeout,
-# SensorOverflow.
+# read() -> (x, y, z): 3 x the chip's value, 0.5 mG per count (2000 counts/G exactly).
+# Options and attributes: docs/api.md (drivers); registers: docs/hardware.md (LIS2MDL); the
+# counts and what the driver sets: docs/design.md (module notes, lis2mdl).
 from firmware.compat import const
 
 from firmware.i2cdevice import Magnetometer

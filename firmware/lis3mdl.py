@@ -5,23 +5,8 @@
     x, y, z = LIS3MDL(I2C(0, scl=Pin(5), sda=Pin(4), freq=400000), range=4).read()
 """
 # LIS3MDL(i2c, address=0x1C, *, range=4, odr=20, mode="uhp", delay_us=None, timeout_us=None)
-#   range  full scale in gauss: 4 (6842 counts/G), 8 (3421), 12 (2281), 16 (1711)
-#   odr    output data rate in Hz: 5, 10, 20, 40, 80 (DO field; FAST_ODR stays 0)
-#   mode   X/Y and Z operating mode: "lp", "mp", "hp", "uhp" (OM / OMZ; uhp has the lowest noise)
-# read() -> (x, y, z) raw counts in the chip's axes; read_into(buf) fills buf[0..2] without
-# allocating. .KIND 'lis3mdl', .range_code (FS field), .counts_per_gauss, config_ok()
-# (CTRL_REG1..5 read back), .skipped (reads whose STATUS had ZYXOR: a set was overwritten).
-#
-# Datasheet facts (docs/hardware.md, LIS3MDL): WHO_AM_I 0x0F reads 0x3D; CTRL_REG1..5 at
-# 0x20..0x24; STATUS 0x27 (ZYXDA bit3, ZYXOR bit7, an overrun, not a range flag); OUT_X_L..
-# OUT_Z_H 0x28..0x2D, LSB first; a multi-byte I2C transfer advances the register address only
-# when bit 7 of the sub-address is set (SUB(7)), so the block and the read-back use reg | 0x80.
-# BDU (CTRL_REG5 bit6) keeps a set's bytes together while it is read.
-#
-# The chip has no range-overflow status bit (ZYXOR is an overrun): an axis at the output's
-# limit (-32768 or 32767) is taken as saturated and raises SensorOverflow, never returned.
-# Errors: SensorNotFound (wrong WHO_AM_I, or the configuration does not read back), BusError,
-# DataReadyTimeout, SensorOverflow.
+# Options and attributes: docs/api.md (drivers); registers: docs/hardware.md (LIS3MDL); why an
+# axis at the rail is an overflow: docs/design.md (module notes, lis3mdl).
 from firmware.compat import const
 
 from firmware.i2cdevice import Magnetometer, decode

@@ -5,30 +5,9 @@
     x, y, z = MMC5603(I2C(0, scl=Pin(5), sda=Pin(4), freq=400000), range=4).read()
 """
 # MMC5603(i2c, address=0x30, *, range=4, bw=0, delay_us=None, timeout_us=None)
-#   range  span of the counts returned, gauss: 4 (8192 counts/G), 8 (4096), 16 (2048), 30 (1024)
-#   bw     the chip's bandwidth code 0..3: 6.6, 3.5, 2.0, 1.2 ms per measurement (code 0 the
-#          least noise); a sample takes two measurements
-# read() -> (x, y, z) counts in the chip's axes; read_into(buf) fills buf[0..2] without
-# allocating. .KIND 'mmc5603', .range_code, .counts_per_gauss, .offset (the last sample's
-# bridge offset, 16384 counts/G, [x, y, z]), config_ok() (the product ID reads 0x10).
-#
-# Each sample is commanded (datasheet, internal control 0): SET, take a measurement A; RESET,
-# take a measurement B. SET and RESET magnetise the sensor in opposite directions, so the
-# field's sign flips between A and B and the bridge offset does not: A = 524288 + H + O,
-# B = 524288 - H + O, and A - B = 2H. The null-field code 524288 and the offset (and its
-# drift with temperature) cancel exactly; (A + B) / 2 - 524288 is kept as .offset. H is in the
-# 20-bit output's 16384 counts/G. The driver returns H / 2**s (s = 1..4 by range, rounded half
-# up), so counts_per_gauss = 16384 >> s is exact; H beyond the range raises SensorOverflow, as
-# does a measurement on the 20-bit output's rails (0 or 1048575: the chip's +-32 G).
-#
-# Datasheet facts (docs/hardware.md, MMC5603NJ): Product_ID 0x39 reads 0x10; Xout0, Xout1
-# (bits 19:12, 11:4) at 0x00/0x01, Y 0x02/0x03, Z 0x04/0x05, bits 3:0 in the high nibbles of
-# 0x06..0x08; Status1 0x18 (Meas_m_done bit6); ODR 0x1A; internal control 0 0x1B (Take_meas_M
-# bit0, Do_Set bit3, Do_Reset bit4), 1 0x1C (BW[1:0], SW_RST bit7), 2 0x1D (Cmm_en bit4, for
-# continuous mode, which this driver does not use). The control registers are write-only, so
-# config_ok() cannot read a configuration back: the driver keeps none in the chip but BW,
-# written again by configure(); a chip reset leaves BW 0 (6.6 ms), which the data-ready wait
-# still covers. Errors: SensorNotFound, BusError, DataReadyTimeout, SensorOverflow.
+# Each sample is a SET and a RESET measurement whose difference cancels the bridge offset.
+# Options and attributes: docs/api.md (drivers); registers: docs/hardware.md (MMC5603NJ); the
+# arithmetic: docs/design.md (module notes, mmc5603).
 from firmware.compat import const
 
 from firmware.i2cdevice import Magnetometer

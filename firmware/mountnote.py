@@ -4,48 +4,18 @@ after (firmware.compat.drop): a board whose store holds no verdict never loads i
 """
 #     from firmware import mountnote
 #     mountnote.save(app)        # after a check that said ok or wrong (firmware/calibrate/session.py)
-#     mountnote.load(app, data)  # at boot, the file's bytes, once a record loaded (persist.py)
+#     mountnote.load(app, data)  # at boot, the file's bytes, once a record loaded (app_persist.py)
 #
-# (firmware/persist.py and session.py import it by a string, not by an import statement, so
-# that a board that never needs it interns none of its names: see persist.py load.)
-#
-# Why. The calibration is fitted in the chip's own axes, so it is saved, and loads at the next
-# boot, whatever MAG_AXES says; only a calibration session checks the axis settings. Without the
-# verdict a board rebooted with the same wrong MAG_AXES would say "ok" with a heading tens of
-# degrees off once tilted (docs/calibration.md, troubleshooting).
-#
-# The file, <store prefix>_mounting.txt (firmware/store.py CalStore.prefix), holds one line:
-#
-#     wrong qmc5883l x,-y,-z -x,y,z y,x,-z 167cb8ea
-#
-# the verdict, the magnetometer (its driver's KIND), the MAG_AXES and ACCEL_AXES judged, the
-# MAG_AXES the data say, then the CRC-32 (hex, firmware/slots.py crc32) of the line before its
-# last space. save(): a check that says wrong writes it (unless the file holds that line
-# already: no write for nothing), one that says ok removes it. The calibration record's format
-# (firmware/store.py) is untouched: every firmware reads the record as before, and a store
-# without this file loads as it always did. A power cut while the line is written leaves a
-# torn line, which reads as no verdict; it never touches the slots.
-#
-# load(): a line that is torn, corrupt, longer than any line, names another magnetometer or
-# another ACCEL_AXES, or names something that is no rotation where a MAG_AXES should be (no
-# mirror for ACCEL_AXES) is no verdict, never an error; the only exception out of it is
-# MemoryError. A line that applies:
-#   MAG_AXES in force is the one judged     app.mounting = ("wrong", said) and the status the
-#                                           check gave, 'check MAG_AXES: the data say "..."'
-#                                           (app._axes_status: in place of ok, accuracy 0)
-#   MAG_AXES in force is the one said       app.mounting = ("ok", said): the setting was
-#                                           changed as advised; the stored calibration is good
-#                                           (chip axes), its dip is learned afresh (it was
-#                                           measured through the wrong MAG_AXES)
-#   any other                               nothing said (only a calibration checks a setting);
-#                                           the dip is learned afresh too
+# app_persist.py and session.py import it by a string, so a board that never needs it interns
+# none of its names. Why the verdict is kept, the file's line and what load() makes of it:
+# docs/design.md (module notes, mountnote).
 from firmware.axes import AxisMap
 from firmware.compat import const
 
-NAME = "_mounting.txt"    # after the store's prefix (persist.py and session.py hold it too)
+NAME = "_mounting.txt"    # after the store's prefix (app_persist.py and session.py hold it too)
 _WRONG = "wrong"          # firmware.calibrate.mountcheck.WRONG: the only verdict written
 _OK = "ok"                # firmware.calibrate.mountcheck.OK
-_LINE_MAX = const(80)   # bytes read (persist.py too): a line has at most 59 (a 16-byte
+_LINE_MAX = const(80)   # bytes read (app_persist.py too): a line has at most 59 (a 16-byte
 #                           KIND, MAG_AXES "-x,-y,-z"); as long or longer is no line
 _STATUS = 'check MAG_AXES: the data say "%s"'  # as firmware.calibrate.mountcheck.judge says it
 
@@ -72,7 +42,7 @@ def save(app):
         if kept is not None:
             st.fs.remove(path)
         return
-    from firmware.slots import crc32
+    from firmware.store_slots import crc32
     line = "%s %s %s %s %s" % (_WRONG, app.mag.KIND, app._mag_map.spec, app._acc_map.spec, said)
     line = ("%s %08x\n" % (line, crc32(line.encode()))).encode()
     if kept == line:
@@ -86,9 +56,9 @@ def save(app):
 
 def load(app, data):
     # At boot: the verdict in data (the file's bytes, at most _LINE_MAX), when it applies to
-    # the settings in force (see the module's opening comment). True when it says the stored
+    # the settings in force (see docs/design.md, module notes). True when it says the stored
     # calibration was made through another MAG_AXES than the one in force: its dip (measured
-    # in the body frame, firmware/health.py DipCheck) is then no reference, and is learned
+    # in the body frame, firmware/fieldwatch.py DipCheck) is then no reference, and is learned
     # afresh.
     said = _parse(data, app.mag.KIND, app._acc_map.spec, app._mag_map.det)
     if said is None:
@@ -110,7 +80,7 @@ def _parse(data, kind, accel, det):
     i = data.rfind(b" ")
     if i < 0 or len(data) >= _LINE_MAX or data[-1:] != b"\n":
         return None  # torn (no newline yet), or longer than any line
-    from firmware.slots import crc32
+    from firmware.store_slots import crc32
     try:
         if int(data[i + 1:-1], 16) != crc32(data[:i]):
             return None

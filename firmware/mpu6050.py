@@ -7,25 +7,8 @@ for the compass, rotation rate for the gyro-aided heading (firmware/gyro/attitud
 #     ax, ay, az = imu.read_accel()
 #     gx, gy, gz = imu.read_gyro()          # counts; imu.counts_per_dps_x10 / 10 per deg/s
 #
-# MPU6050(i2c, address=0x68, *, accel_range=2, dlpf=21, gyro_range=500)  accel_range in g: 2,
-#     4, 8, 16; gyro_range in deg/s: 250, 500, 1000, 2000 (131, 65.5, 32.8, 16.4 counts per
-#     deg/s: .counts_per_dps_x10 is 1310, 655, 328, 164, product spec table 6.1);
-#     dlpf: the digital low-pass filter's bandwidth in Hz, 260 (off), 184, 94, 44, 21, 10, 5
-#     (the gyroscope's is 256, 188, 98, 42, 20, 10, 5 Hz at the same setting).
-#     The default 21 Hz cuts the noise from ~6.4 mg RMS (power-on, 260 Hz) to ~1.8 mg (400 ug/
-#     sqrt(Hz), datasheet) - at 60 deg dip 6 mg of tilt noise is ~0.6 deg of heading - with a lag
-#     of ~8 ms, nothing for a hand-held compass.
-# read_accel() -> (x, y, z) raw counts in the chip's axes (specific force: +1 g on an axis that
-# points up); read_accel_into(buf) fills buf[0..2] without allocating. .counts_per_g.
-# read_gyro() -> (x, y, z) raw counts in the chip's axes (right-hand rotation rate about each
-# axis); read_all_into(acc, gyro) reads accelerometer, temperature and gyroscope in one 14-byte
-# burst (one sample instant: the registers 0x3B..0x48 are one set) without allocating; the
-# temperature is then .temp_raw (temp_cdeg() in 0.01 C: register map 4.18, T = raw / 340 +
-# 36.53). data_ready() reads INT_STATUS.DATA_RDY_INT (cleared by the read).
-# config_ok() reads PWR_MGMT_1, ACCEL_CONFIG and GYRO_CONFIG back (awake, these ranges?).
-# enable_bypass() connects the auxiliary I2C bus to the main one (GY-87/GY-86: the magnetometer
-# sits there). The constructor wakes the chip and sets the range; it leaves the bypass alone.
-# Errors: SensorNotFound (WHO_AM_I is not 0x68), BusError.
+# MPU6050(i2c, address=0x68, *, accel_range=2, dlpf=21, gyro_range=500): the options, the
+# methods and why the 21 Hz filter: docs/api.md (drivers, each driver's options).
 from firmware.compat import const
 
 from firmware.errors import SensorNotFound

@@ -5,20 +5,9 @@
     x, y, z = QMC5883L(I2C(0, scl=Pin(22), sda=Pin(21), freq=400000), range=8).read()
 """
 # QMC5883L(i2c, address=0x0D, *, range=2, odr=50, osr=512, delay_us=None, timeout_us=None)
-#   range  full scale in gauss: 2 (12000 counts/G) or 8 (3000 counts/G)
-#   odr    output data rate in Hz: 10, 50, 100, 200;  osr  oversampling 512, 256, 128, 64
-#   delay_us, timeout_us: the bounded data-ready wait (see firmware.i2cdevice)
-# read() -> (x, y, z) raw counts in the chip's axes; read_into(buf) fills buf[0..2] without
-# allocating (a list or array('h'/'i')). .KIND 'qmc5883l', .range_code (RNG field, 0/1),
-# .counts_per_gauss, config_ok() (CTRL1 read back: still configured?), .skipped (reads that found DOR set: at least one sample set was lost each).
-#
-# Identification: the ID register 0x0D reads 0xFF, which is also what a bus with nothing driving
-# SDA returns, so 0xFF alone proves little. The probe also soft-resets the chip and requires CTRL1
-# to read back standby (MODE = 00; an undriven bus reads 0xFF, MODE = 11), then requires the
-# configuration written to CTRL1 to read back unchanged.
-#
-# Errors: SensorNotFound (probe), BusError (any transfer), DataReadyTimeout (DRDY never set),
-# SensorOverflow (OVL: the six data bytes are still read first, to release the data lock).
+# read() -> (x, y, z) raw counts in the chip's axes; read_into(buf) without allocating.
+# Options and attributes: docs/api.md (drivers); how the probe tells the chip from an undriven
+# bus, and the errors: docs/design.md (module notes, qmc5883l).
 from firmware.compat import const
 
 from firmware.errors import SensorNotFound

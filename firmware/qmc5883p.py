@@ -5,16 +5,8 @@
     x, y, z = QMC5883P(I2C(0, scl=Pin(5), sda=Pin(4), freq=400000), range=8).read()
 """
 # QMC5883P(i2c, address=0x2C, *, range=8, odr=50, osr=8, dsr=1, delay_us=None, timeout_us=None)
-#   range  full scale in gauss: 2 (15000 counts/G), 8 (3750), 12 (2500), 30 (1000)
-#   odr    output data rate in Hz: 10, 50, 100, 200
-#   osr    OSR1 filter ratio 8, 4, 2, 1;  dsr  OSR2 down-sampling ratio 1, 2, 4, 8
-# read() -> (x, y, z) raw counts in the chip's axes; read_into(buf) fills buf[0..2] without
-# allocating. .KIND 'qmc5883p', .range_code (RNG field), .counts_per_gauss.
-#
-# Register layout from hardware.md (sources disagree on some details of this clone: the
-# "axis sign" write to 0x29 is left out, since they cannot agree which register it is).
-# The ID register 0x00 reads 0x80; the configuration must also read back.
-# Errors: SensorNotFound, BusError, DataReadyTimeout, SensorOverflow (status OVFL).
+# Options and attributes: docs/api.md (drivers); the register layout and what the sources
+# disagree on: docs/design.md (module notes, qmc5883p).
 from firmware.compat import const
 
 from firmware.i2cdevice import Magnetometer

@@ -187,7 +187,7 @@ def _boot():
             wait_s(2)
         except MemoryError:  # not even the app fits: say so, and what to do, and try again
             start = status_line = status_view = None
-            drop("app", "boot", "detect", "appsetup", "devinit", "store", "persist", "slots")
+            drop("app", "boot", "detect", "app_setup", "devinit", "store", "app_persist", "store_slots")
             print("eCompass: out of memory at boot (%d KB free): use the .mpy or frozen "
                   "install (docs/design.md, memory)" % free_kb())
             wait_s(5)

@@ -4,24 +4,13 @@ half second (boards/main.py), imported at the first report.
     from firmware.app import status_line   # a thin front: it imports this module
     print(status_line(app))
 """
-# progress(app)  the calibration's state as a dict (coverage, samples, model, fit error, the
-#                last refusal, counters, status, interference, store and history figures).
-# view(app)      one readable line, written into a buffer this module holds (_LINE_MAX bytes):
-#                a memoryview of it, valid until the next call. It allocates nothing but that
-#                view (16 bytes on a 32-bit port, in every state; tests/test_status_line.py
-#                holds it at 64), so a board printing it every half second leaves no garbage
-#                (boards/main.py writes it).
-#                The line: heading (marked when not tilt-compensated), status and flags, the
-#                calibration's stage in words (collecting with its coverage, solving, saved
-#                once, calibrated, and what to do when a fit is refused), the gyro-aided
-#                heading's source (use_gyro: on field, or held for how long and how well),
-#                what the heap could not hold, accuracy (firmware/accuracy.py), location.
-#                docs/calibration.md explains every field.
-# line(app)      the same line as a str.
+# progress(app) the calibration's state as a dict; view(app) one line in a buffer this module
+# holds (a memoryview, valid until the next call: it allocates nothing else); line(app) the
+# same as a str. What the line says: docs/calibration.md; why it allocates 16 bytes:
+# docs/design.md (memory).
 from firmware.compat import const, free_bytes
 from firmware.hints import HINTS
 
-_QUIET_HINT_US = const(3000000)  # no new direction for 3 s before "planar"
 _STATUS_INTERFERENCE = "interference"  # firmware.app.STATUS_INTERFERENCE
 _LINE_MAX = const(400)  # bytes: the longest line (a jump, the location, a hint) fits
 # the heap the calibration program completes from (.mpy, x86-32, boards/main.py; make bench's
@@ -164,7 +153,7 @@ def _story(app):
     reason = app.last_reason
     # "planar" only once the user has stopped adding new directions (the collector is quiet):
     # the first samples of a correct figure-8 lie near a plane too
-    if reason == "planar" and col.since_kept_us < _QUIET_HINT_US:
+    if reason == "planar" and col.since_kept_us < col.QUIET_US:
         reason = "too_few_samples"
     if reason and reason != "not_better":
         _sep()

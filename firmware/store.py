@@ -4,53 +4,10 @@
     store.save(cal.to_bytes())                    # returns the record's sequence number
     cal = Calibration.from_bytes(store.load())    # or StoreError with .reason
 """
-# The payload (model, V, InvW, B, fit error) is opaque here: Calibration.to_bytes() owns it.
-# This module owns the record around it (little-endian):
-#
-#     offset size
-#      0     4   magic b'eCAL'
-#      4     1   format version (1)
-#      5     1   header length (32 in version 1)
-#      6     2   payload length
-#      8    16   sensor kind, ASCII, NUL-padded ('qmc5883l', 'hmc5883l', ...)
-#     24     1   range code of the sensor (the driver's .range_code)
-#     25     3   reserved, 0
-#     28     4   sequence number (newest wins)
-#     32     n   payload
-#     32+n   4   CRC-32 (IEEE, as binascii.crc32 / zlib.crc32) of every byte before it
-#
-# Bytes 0-7, the sequence number at 28-31 (when the header has 32 bytes or more) and the CRC
-# trailer are the same in every version, so a record of a newer version is still recognised
-# intact and refused as 'unknown_version', not as garbage, and save() numbers past it.
-#
-# Power safety: two slot files, <name>_a.cal and <name>_b.cal, and a spare, <name>_c.cal.
-# save() writes the whole new record, with a higher sequence number, into a slot that does NOT
-# hold the record load() would return now (the other of a and b; the spare only when that one
-# cannot be read or written), then reads it back. Whatever a power cut leaves in that slot (nothing, a
-# prefix, a torn tail of zeros or garbage, the old bytes), its CRC fails or its sequence number
-# is older, so load() returns the previous calibration; once the record is complete, load()
-# returns the new one. The scheme relies only on (1) a write to one file never altering
-# another file's committed bytes, and (2) CRC-32 catching a torn record (it detects every error
-# burst up to 32 bits, and any other corruption with probability 1 - 2**-32). It does not rely
-# on rename being atomic (true on LittleFS, not on FAT), nor on a write being atomic (true of
-# neither: LittleFS commits a file at close/sync, FAT writes in place).
-#
-# Faulty slots. A slot that cannot be read (EIO, a directory where the file should be) is
-# skipped like a torn one (reason io_error): load() returns the newest valid record of the
-# others, and save() writes to a healthy slot - the spare stands in for a or b, so a record
-# is still never written over the current one. A slot whose write or read-back failed is tried
-# last by later saves of the same session. `validate` (set by the app to
-# Calibration.from_bytes) judges what an intact payload means: a record it refuses with
-# ValueError is skipped as bad_payload, so a record with an impossible field or of an unknown
-# payload version never hides an intact older one. save() numbers past every unreadable slot
-# too (one more per such slot: records are numbered one past the newest visible one), so a
-# slot that becomes readable again cannot win with an older record - unless every slot was
-# unreadable when the store object was made, the one case where no number is known.
-#
-# Refusals carry a reason (StoreError.reason), one of the REASON_* names of firmware/slots.py
-# (which holds the format and the slot code; this module is the small front a board keeps).
-
-
+# The payload is Calibration.to_bytes()'s; this module owns the record around it and the
+# slots. The record's layout, the power-safety argument and faulty slots: docs/design.md
+# (module notes, store). The format and slot code are firmware/store_slots.py, loaded for each
+# operation: this module is the small front a board keeps.
 import os
 
 
@@ -78,7 +35,7 @@ class CalStore:
 
     def __init__(self, directory="/", name="ecompass", sensor="qmc5883l", range_code=0, fs=None,
                  validate=None):
-        from firmware.slots import check_sensor
+        from firmware.store_slots import check_sensor
         check_sensor(sensor, range_code)
         self.sensor = sensor
         self.range_code = range_code
@@ -98,7 +55,7 @@ class CalStore:
 
     def load(self):
         """The newest usable payload (bytes); StoreError(reason) if no slot has one."""
-        from firmware.slots import load
+        from firmware.store_slots import load
         return load(self)
 
     def save(self, payload):
@@ -108,10 +65,10 @@ class CalStore:
         # the one written. A slot that cannot be opened is passed over for the next one; when
         # none opens, the last OSError is raised (StoreError('no_slot') if there was none to
         # try: no slot but the current record's).
-        from firmware.slots import save
+        from firmware.store_slots import save
         return save(self, payload)
 
     def erase(self):
         """Remove every slot, the current record's last, so a cut in between leaves it."""
-        from firmware.slots import erase
+        from firmware.store_slots import erase
         erase(self)

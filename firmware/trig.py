@@ -4,23 +4,13 @@
     a = atan2(y, x)            # int16 KANG, within 1 KANG of the exact angle
     print(kang_to_str(a & 0xFFFF))
 """
-# KANG (T. Judd): 65536 per turn, so angle arithmetic wraps like an int16 (0.0055 deg resolution).
-# atan2(y, x)    int16 KANG in [-32768, 32767] (-32768 is 180 deg), within 1 KANG of the exact
-#                angle for every int16 pair; atan2(0, 0) is 0, as math.atan2.
-# sin(a), cos(a) Q15 in [-32767, 32767] within 1 count of the exact value, for any int a
-#                (+-1.0 saturates to +-32767 so a result always fits an int16).
-# norm14(src, dst, o) dst[o:o+3] = src scaled by 2**k so that its largest |component| lies in
-#                [2**13, 2**14]; returns k (ZERO_VECTOR for (0, 0, 0)): a common shift keeps the
-#                direction and leaves room for a Q15 factor below 2**30.
-# isqrt(n)       firmware.fixedpoint's, here too so that a kernel set (this module, or its
-#                fast mirror firmware.fast) offers every step the compass uses.
-# kang_to_cdeg(a), cdeg_to_kang(c), kang_to_str(a, signed=False)   display helpers.
-#
-# Every intermediate stays below 2**30 for int16 inputs (tests/test_heading.py drives
-# tests/intcheck over the input space) and nothing is allocated.
+# atan2(y, x), sin(a), cos(a) (Q15), norm14(src, dst, o), isqrt(n) (fixedpoint's, so a kernel
+# set offers every step the compass uses), kang_to_cdeg, cdeg_to_kang, kang_to_str. Their
+# ranges and accuracy: docs/api.md (heading). Every intermediate stays below 2**30 for int16
+# inputs (tests/test_heading.py) and nothing is allocated.
 from firmware.compat import const
 from firmware.fixedpoint import isqrt, rdiv  # noqa: F401 - isqrt is part of the kernel set
-from firmware.kang_tables import ATAN_T, SIN_T
+from firmware.trig_tables import ATAN_T, SIN_T
 
 KANG_PER_TURN = const(65536)
 _KANG_45 = const(8192)

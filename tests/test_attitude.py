@@ -300,7 +300,7 @@ def test_the_slot_numbers_agree_across_the_filters_modules():
         with open("firmware/gyro/%s.py" % name) as f:
             return dict(re.findall(r"^(_[A-Z_0-9]+) = const\((\d+)\)", f.read(), re.M))
     main = slots("attitude")
-    for other in ("attitude_plain", "gyrosetup"):
+    for other in ("attitude_plain", "attitude_setup"):
         o = slots(other)
         common = set(main) & set(o) - {"_TIMES", "_UNKNOWN_CDPS", "_SETTLE_US",
                                        "_BIAS_MAX", "_CHUNK_US", "_ONE28", "_M14"}

@@ -110,9 +110,9 @@ def test_the_calibration_program_holds_only_what_calibrating_needs_at_its_solvin
     r = bench.program_profile(b["session"], b["mpy"])
     assert "error" not in r and r["complete"], r
     held = set(r["peak_modules"])
-    assert not held & {"app", "appsetup", "compass", "fast", "trig", "kang_tables", "status",
-                       "accuracy", "fieldwatch", "detect", "devinit", "boot", "persist",
-                       "slots", "calibrate.history", "calibrate.session"}, held
+    assert not held & {"app", "app_setup", "compass", "fast", "trig", "trig_tables", "status",
+                       "accuracy", "fieldwatch", "detect", "devinit", "boot", "app_persist",
+                       "store_slots", "calibrate.history", "calibrate.session"}, held
     assert {"calibrate.calibrator", "calibrate.samples", "calibrate.accum",
             "calibrate.program"} <= held, held
     assert r["peak_solving"] <= BUDGETS["program_peak_mpy"], r["peak_solving"]

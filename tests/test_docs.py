@@ -149,8 +149,8 @@ def dead_links(files):
 def test_github_slugs():
     assert slug("Offline calibration of a log (`python -m host_sim calibrate`)") == \
         "offline-calibration-of-a-log-python--m-host_sim-calibrate"
-    assert slug("Storage (`firmware/store.py`, `firmware/slots.py`)") == \
-        "storage-firmwarestorepy-firmwareslotspy"
+    assert slug("Storage (`firmware/store.py`, `firmware/store_slots.py`)") == \
+        "storage-firmwarestorepy-firmwarestore_slotspy"
     assert slug("`make run`: the story on the simulated board") == \
         "make-run-the-story-on-the-simulated-board"
 

@@ -167,7 +167,7 @@ def test_a_brown_out_of_the_magnetometer_is_re_initialised(good):
     assert set(seen) - {"ok"} <= {"timeout", "sensor reset"}
 
 
-# --- 4. a magnet near the board (firmware/health.py DipCheck, FieldWatch) -------------------
+# --- 4. a magnet near the board (firmware/fieldwatch.py DipCheck, FieldWatch) -------------------
 def _rotate(v, k, deg):
     # v turned by deg about the unit axis k (Rodrigues)
     c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))

@@ -17,13 +17,13 @@ DRIVERS = sorted({row.split()[5].decode() for row in CHIPS})
 PIPELINE = ["compat", "errors", "fixedpoint", "i2cdevice", "detect"] + DRIVERS + [
             "axes", "calibrate.samples", "calibrate.accum",
             "calibrate.solve", "calibration", "calibrate.acceptance", "calibrate.calibrator",
-            "kang_tables", "trig", "compass", "store", "slots", "calibrate.history", "health",
+            "trig_tables", "trig", "compass", "store", "store_slots", "calibrate.history", "health",
             "fieldwatch", "app", "fast",
             # the app's capabilities, each loaded for its job and dropped after it (boot,
             # construction, the drivers' start-up and error texts, the store's load and save,
             # the calibration session, calibration mode where the heap holds one job at a
             # time, the status line)
-            "boot", "appsetup", "devinit", "persist", "calibrate.session", "status", "hints",
+            "boot", "app_setup", "devinit", "app_persist", "calibrate.session", "status", "hints",
             # the calibration program, and what a board's main.py runs
             "calibrate.program", "runner"]
 CALIBRATION_MACHINERY = {"firmware.calibrate.calibrator", "firmware.calibrate.solve", "firmware.calibrate.accum",
@@ -31,7 +31,7 @@ CALIBRATION_MACHINERY = {"firmware.calibrate.calibrator", "firmware.calibrate.so
                          "firmware.calibrate.history"}
 # what a board booted from a stored calibration holds while it shows headings (docs/design.md)
 CORE = {"firmware." + m for m in ("app", "axes", "calibration", "compass", "compat", "errors",
-                                  "fieldwatch", "fixedpoint", "health", "i2cdevice", "kang_tables",
+                                  "fieldwatch", "fixedpoint", "health", "i2cdevice", "trig_tables",
                                   "mpu6050", "qmc5883l", "store", "trig")}
 
 
@@ -54,7 +54,7 @@ def _imports(path, package, lazy=True):
     """Every module `path` imports (module level, and inside functions when lazy), as dotted
     names."""
     tree = ast.parse(open(path).read(), path)
-    # a module imported by a string held in a name (firmware/persist.py, session.py:
+    # a module imported by a string held in a name (firmware/app_persist.py, session.py:
     # name = "firmware.mountnote"; __import__(name, ...)): the strings such names hold
     held = {n.targets[0].id: n.value.value for n in ast.walk(tree)
             if isinstance(n, ast.Assign) and isinstance(n.targets[0], ast.Name)
@@ -98,7 +98,7 @@ def test_firmware_reads_as_the_pipeline_one_module_per_job():
                                 "field.location", "field.quickcal", "accuracy",
                                 "calfile.calimport", "circuitpython.busio_i2c",
                                 "gyro.attitude", "gyro.attitude_plain", "gyro.attitude_fast",
-                                "gyro.gyrosetup", "calibrate.mounting", "calibrate.mountcheck",
+                                "gyro.attitude_setup", "calibrate.mounting", "calibrate.mountcheck",
                                 "mountnote"} == set(PIPELINE)
 
 
@@ -291,3 +291,186 @@ def test_firmware_docstrings_are_short_longer_text_is_comments():
                 if d is not None and len(d) > DOCSTRING_MAX:
                     long_.append("%s:%s (%d chars)" % (m, getattr(n, "lineno", 1), len(d)))
     assert not long_, long_
+
+
+def _dropped():
+    """Every module a drop() call in firmware/ or boards/ names by a string constant."""
+    out = set()
+    for folder in ("firmware", "boards"):
+        for dirpath, _, files in os.walk(os.path.join(ROOT, folder)):
+            for f in files:
+                if not f.endswith(".py"):
+                    continue
+                path = os.path.join(dirpath, f)
+                for n in ast.walk(ast.parse(open(path).read(), path)):
+                    if (isinstance(n, ast.Call) and isinstance(n.func, ast.Name)
+                            and n.func.id == "drop"):
+                        out.update(a.value for a in n.args
+                                   if isinstance(a, ast.Constant) and isinstance(a.value, str))
+    return out
+
+
+# Modules with a job of their own that one module alone imports: what runner.py boots a board
+# with, and the field model location.py evaluates. Every other dropped module that one module
+# alone imports is that module's cold companion.
+OWN_JOB = {"boot", "field.wmm"}
+# The one companion with a shorter name, measured: any i2cdevice_<job> (i2cdevice_init, _boot,
+# _up) raised the heap a finished session leaves (tests/test_budgets.py, after_session_slack_mpy)
+# from 4.4 to 5.3 KB on the x86-32 build, over its 5 KB budget (docs/design.md, names).
+SHORT = {"devinit": "i2cdevice"}
+
+
+def test_cold_companions_are_named_owner_underscore_job():
+    # A module loaded for one job of another module and dropped after it (construction, a
+    # save, a chip's start-up) is named <owner>_<job>, beside its owner in its folder
+    # (app_setup, app_persist, store_slots, gyro/attitude_setup, and devinit: SHORT; the kernels
+    # attitude_plain / attitude_fast and trig_tables follow the same rule): docs/design.md, names.
+    g = _graph()
+    mods = set(g)
+    importers = {m: {o for o in g if m in g[o]} for m in mods}
+    dropped = _dropped()
+    assert {"app_setup", "app_persist", "store_slots", "gyro.attitude_setup"} | set(SHORT) \
+        <= dropped, sorted(dropped)
+    for m in sorted(mods):
+        folder, _, base = m.rpartition(".")
+        owner = (folder + "." if folder else "") + base.split("_")[0]
+        if "_" in base and owner in mods:  # named for a sibling: that sibling loads it
+            assert owner in importers[m], (m, "is not loaded by", owner)
+    for m in sorted(dropped & mods - OWN_JOB - set(DRIVERS)):  # a driver: detect's table names it
+        folder = m.rpartition(".")[0]
+        only = importers[m]
+        if len(only) == 1 and next(iter(only)).rpartition(".")[0] == folder:
+            owner = next(iter(only))
+            assert m.startswith(owner + "_") or SHORT.get(m) == owner, (m, "companion of", owner)
+
+
+OPENING_MAX = 15
+
+
+def _opening_lines(path):
+    """Lines of a module's opening block: the comments before its docstring, the docstring, and
+    the comments after it up to the first line of code (blank lines not counted)."""
+    lines = open(path).read().split("\n")
+    n = 0
+
+    def comments(i):
+        c = 0
+        while i < len(lines) and (lines[i].startswith("#") or not lines[i].strip()):
+            c += lines[i].startswith("#")
+            i += 1
+        return i, c
+
+    i, n = comments(0)
+    if i < len(lines) and lines[i].lstrip().startswith(('"""', "'''")):
+        q = lines[i].lstrip()[:3]
+        j = i
+        if not (lines[i].count(q) >= 2 and len(lines[i].strip()) > 3):
+            j = i + 1
+            while q not in lines[j]:
+                j += 1
+        n += j - i + 1
+        i, c = comments(j + 1)
+        n += c
+    return n
+
+
+def test_every_module_opens_with_at_most_15_lines():
+    # what it is for, how to use it, where the reasoning is (docs/design.md, module notes;
+    # docs/api.md): the reasoning lives once, in docs/
+    long_ = {m: _opening_lines(_path(m)) for m in _modules(FW)}
+    assert not {m: k for m, k in long_.items() if k > OPENING_MAX}, long_
+    assert max(long_.values()) > 5  # the count sees comment lines
+
+
+def test_the_opening_count_sees_a_docstring_and_the_comments_after_it(tmp_path):
+    p = tmp_path / "m.py"
+    p.write_text('# one\n"""two\nthree\n"""\n# five\n\n# six\nimport os\n# not counted\n')
+    assert _opening_lines(str(p)) == 6
+
+
+def _constants(m):
+    """{NAME: (value, comment)} of the module-level constants of firmware module m: NAME =
+    literal or NAME = const(literal), NAME in capitals (a leading _ allowed)."""
+    path = _path(m)
+    src = open(path).read()
+    lines = src.split("\n")
+    out = {}
+    for node in ast.parse(src, path).body:
+        if not (isinstance(node, ast.Assign) and len(node.targets) == 1
+                and isinstance(node.targets[0], ast.Name)):
+            continue
+        name, v = node.targets[0].id, node.value
+        if not re.fullmatch(r"_?[A-Z][A-Z0-9_]*", name):
+            continue
+        if (isinstance(v, ast.Call) and isinstance(v.func, ast.Name) and v.func.id == "const"
+                and len(v.args) == 1):
+            v = v.args[0]
+        try:
+            value = ast.literal_eval(v)
+        except ValueError:
+            continue  # computed, or a name of another module
+        if value is None:
+            continue  # module state set later (a kernel set)
+        comment = lines[node.lineno - 1].partition("#")[2]
+        out[name] = (value, comment)
+    return out
+
+
+# Copies kept on purpose, each with its reason; the test holds every copy equal to the others.
+KEPT_COPIES = {
+    # const() is inlined only where it is declared: imported, a number becomes a dictionary
+    # look-up at every use, in per-sample code (the heading's and the filter's state slots)
+    "_KANG_90": "inlined per sample", "_ROUND15": "inlined per sample",
+    # a heading-only board must not load the calibrator for its defaults (tests above)
+    "DEFAULT_CAPACITY": "calibrator not loaded", "SOLVE_EVERY": "calibrator not loaded",
+    # the same word in the vocabularies of different things: the WMM table file's, the
+    # calibration record's and MotionCal's packet refusals; the app's status and the field
+    # model's; a MotionCal packet and a stored record each 'bad_crc'
+    "REASON_BAD_CRC": "own vocabulary", "REASON_BAD_MAGIC": "own vocabulary",
+    "REASON_MISSING": "own vocabulary", "REASON_TRUNCATED": "own vocabulary",
+    "REASON_UNKNOWN_VERSION": "own vocabulary", "STATUS_OK": "own vocabulary",
+    "_OK": "own vocabulary",
+    # each module's own shift for its own bound (health: |a|^2 < 3 * 2**22; mounting: of a
+    # difference, < 3 * 2**24), equal by chance
+    "_G_SHIFT": "own bound",
+    # the field model's status word, where the field part is not loaded (accuracy, quickcal)
+    "_BLACKOUT": "field part not loaded",
+}
+# the gyro-aided heading's state slots: declared in each of its modules so that they are
+# inlined (tests/test_attitude.py checks the numbers agree)
+ATTITUDE = {"gyro.attitude", "gyro.attitude_plain", "gyro.attitude_setup"}
+
+
+def test_no_constant_is_declared_twice():
+    where = {}
+    for m in _modules(FW):
+        for name, (value, _) in _constants(m).items():
+            where.setdefault(name, []).append((m, value))
+    copies = []
+    for name, decl in sorted(where.items()):
+        mods = {m for m, _ in decl}
+        if len(mods) < 2:
+            continue
+        values = [v for _, v in decl]
+        if name in KEPT_COPIES:
+            assert all(v == values[0] for v in values), (name, decl)  # the copies agree
+            continue
+        same = [m for m, v in decl if values.count(v) > 1]
+        if len(same) < 2 or set(same) <= set(DRIVERS) or set(same) <= ATTITUDE:
+            continue  # a different value: another thing; drivers: each chip's datasheet
+        copies.append((name, decl))
+    assert not copies, copies
+
+
+def test_a_constant_that_names_its_home_agrees_with_it():
+    # `_X = "..."  # firmware.app.STATUS_X`: a copy where importing the home would load it
+    # (a cold module, or an import cycle); it must equal the home's value
+    consts = {m: _constants(m) for m in _modules(FW)}
+    checked = 0
+    for m, table in consts.items():
+        for name, (value, comment) in table.items():
+            for home, other in re.findall(r"firmware\.([a-z_.]+)\.([A-Z][A-Z0-9_]*)\b", comment):
+                if home in consts and other in consts[home]:
+                    assert consts[home][other][0] == value, (m, name, home, other)
+                    checked += 1
+    assert checked >= 4

@@ -11,6 +11,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
+from firmware.calibrate import acceptance
 from firmware.motioncal import protocol as mc
 from firmware.errors import CalibrationRejected
 from firmware.calibration import Calibration
@@ -298,11 +299,11 @@ def test_packet_calibration_corrects_motioncal_ellipsoid_to_a_sphere_of_field_ou
     (dict(invw=(-1, -1, -1, 0, 0, 0)), mc.REASON_NOT_POSITIVE_DEFINITE),
     (dict(invw=(1, 1, 1, 1, 0, 0)), mc.REASON_NOT_POSITIVE_DEFINITE),  # singular
     (dict(invw=(1, 1, 0.5, 0, 0, 0.9)), mc.REASON_NOT_POSITIVE_DEFINITE),
-    (dict(invw=(2.7, 0.5, 0.5, 0, 0, 0)), mc.REASON_SOFT_IRON_OUT_OF_RANGE),  # 5.4 : 1
-    (dict(B=9.9), mc.REASON_FIELD_OUT_OF_RANGE),
-    (dict(B=90.5), mc.REASON_FIELD_OUT_OF_RANGE),
-    (dict(V=(0, 0, 273.1)), mc.REASON_OFFSET_OUT_OF_RANGE),  # 32773 counts at 12000
-    (dict(V=(-273.1, 0, 0)), mc.REASON_OFFSET_OUT_OF_RANGE),
+    (dict(invw=(2.7, 0.5, 0.5, 0, 0, 0)), acceptance.REASON_SOFT_IRON_OUT_OF_RANGE),  # 5.4 : 1
+    (dict(B=9.9), acceptance.REASON_FIELD_OUT_OF_RANGE),
+    (dict(B=90.5), acceptance.REASON_FIELD_OUT_OF_RANGE),
+    (dict(V=(0, 0, 273.1)), acceptance.REASON_OFFSET_OUT_OF_RANGE),  # 32773 counts at 12000
+    (dict(V=(-273.1, 0, 0)), acceptance.REASON_OFFSET_OUT_OF_RANGE),
 ])
 def test_calibration_fields_refusals_name_their_reason(bad, reason):
     args = dict(V=(10.0, -20.0, 30.0), B=50.0, invw=(1.1, 0.95, 0.96, 0.02, -0.03, 0.01))
@@ -358,13 +359,13 @@ def test_random_packets_are_accepted_exactly_when_a_float_check_says_so(seed, cp
     if ev[0] <= 0:
         want = mc.REASON_NOT_POSITIVE_DEFINITE
     elif cond > 5:
-        want = mc.REASON_SOFT_IRON_OUT_OF_RANGE
+        want = acceptance.REASON_SOFT_IRON_OUT_OF_RANGE
     elif not 10 <= Bf <= 90:
-        want = mc.REASON_FIELD_OUT_OF_RANGE
+        want = acceptance.REASON_FIELD_OUT_OF_RANGE
     elif any(abs(o) > 32767.5 for o in off):
-        want = mc.REASON_OFFSET_OUT_OF_RANGE
+        want = acceptance.REASON_OFFSET_OUT_OF_RANGE
     elif fo < 16 or s < 0.125 or s > 2:
-        want = mc.REASON_FIELD_OUT_OF_RANGE
+        want = acceptance.REASON_FIELD_OUT_OF_RANGE
     else:
         want = None
     try:
@@ -439,7 +440,7 @@ def test_motioncal_same_bits_on_micropython_and_cpython():
     fields = by["fields"]["results"]
     assert sum(1 for f in fields if isinstance(f, list)) >= 2
     assert {f for f in fields if isinstance(f, str)} >= {
-        mc.REASON_NOT_POSITIVE_DEFINITE, mc.REASON_FIELD_OUT_OF_RANGE, mc.REASON_BAD_CRC}
+        mc.REASON_NOT_POSITIVE_DEFINITE, acceptance.REASON_FIELD_OUT_OF_RANGE, mc.REASON_BAD_CRC}
 
 
 def test_per_sample_path_allocates_nothing_on_micropython():

@@ -311,8 +311,8 @@ def test_the_session_holds_at_most_2_kb_for_the_check_on_a_32_bit_board(tmp_path
 
 def test_the_heading_path_never_loads_the_check():
     import ast
-    for name in ("app", "compass", "appsetup", "health", "calibration", "axes", "status",
-                 "accuracy", "store", "persist", "boot"):
+    for name in ("app", "compass", "app_setup", "health", "calibration", "axes", "status",
+                 "accuracy", "store", "app_persist", "boot"):
         src = open(os.path.join(mp.ROOT, "firmware", name + ".py")).read()
         for node in ast.walk(ast.parse(src)):
             if isinstance(node, ast.ImportFrom) and node.module:

@@ -1,5 +1,5 @@
 """The mounting check's verdict across a reboot (firmware/mountnote.py, read back by
-firmware/persist.py load): the calibration is fitted in the chip's own axes and saved whatever
+firmware/app_persist.py load): the calibration is fitted in the chip's own axes and saved whatever
 MAG_AXES says, so a board rebooted with the same wrong MAG_AXES must say so again, not "ok";
 with the MAG_AXES the data said it must give good headings; with any other, no stale warning.
 A torn, corrupt or foreign verdict file is no verdict and never costs the calibration; a
@@ -20,7 +20,7 @@ import pytest
 
 from firmware.app import CompassApp, status_line
 from firmware.calibration import Calibration
-from firmware.slots import decode_record
+from firmware.store_slots import decode_record
 from firmware.store import CalStore
 from host_sim import motion
 from host_sim.boards import make_board
@@ -346,14 +346,14 @@ def test_a_board_without_a_verdict_file_loads_nothing_for_it(danced):
 
 def test_the_boot_and_the_session_name_the_verdicts_code_by_strings_only():
     """MicroPython interns (for good: qstrs are never freed) the names of a module's import
-    statements when the module loads; firmware/persist.py loads at every boot and
+    statements when the module loads; firmware/app_persist.py loads at every boot and
     firmware/calibrate/session.py at every calibration, so they name firmware/mountnote.py and its
     file by strings of more than 10 characters, which stay strings. A calibrated board's heap
     after boot is then the same to the byte (tests/test_budgets.py), and no name is added to
     a qstr pool that a session leaves nearly full in a fragmented heap."""
     import ast
     from firmware import mountnote
-    for name in ("persist", "calibrate/session"):
+    for name in ("app_persist", "calibrate/session"):
         src = open(os.path.join(mp.ROOT, "firmware", name + ".py")).read()
         strings = []
         for node in ast.walk(ast.parse(src)):

@@ -42,7 +42,7 @@ def _calibrated_store():
 
 
 def test_a_load_short_of_memory_is_not_uncalibrated_and_is_tried_again(no_room_for):
-    no_room_for.names = {"persist"}
+    no_room_for.names = {"app_persist"}
     b = W.make_sim("gy271", m=motion.still(30.0, 10.0, 0.0), seed=4)
     app = W.make_app(b, store=_calibrated_store())
     assert app.load_reason == "no_memory" and app.no_memory == "load"
@@ -71,7 +71,7 @@ def test_no_room_for_a_session_says_what_calibrating_needs_and_keeps_the_heading
 
 def test_the_app_that_did_not_fit_keeps_stepping_says_so_and_is_made_when_there_is_room(
         no_room_for):
-    no_room_for.names = {"appsetup"}
+    no_room_for.names = {"app_setup"}
     b = W.make_sim("gy271", m=motion.still(30.0, 10.0, 0.0), seed=4)
     app = W.make_app(b, store=_calibrated_store())
     assert app.no_memory == "start" and app.step() is False
@@ -104,7 +104,7 @@ def test_iron_that_changed_with_no_room_for_a_session_asks_for_the_program(no_ro
 
 def test_every_documented_attribute_exists_while_the_app_did_not_fit(no_room_for):
     # docs/api.md's attributes and calls, on the app that tries again every 256 steps
-    no_room_for.names = {"appsetup"}
+    no_room_for.names = {"app_setup"}
     b = W.make_sim("gy271", m=motion.still(30.0, 10.0, 0.0), seed=4)
     app = W.make_app(b, store=CalStore("/", fs=W.MemFs()))
     assert app.no_memory == "start"

@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from firmware.store import CalStore
-from firmware.slots import encode_record
+from firmware.store_slots import encode_record
 from firmware.errors import BusError, DataReadyTimeout, SensorOverflow
 from firmware.calibration import Calibration
 
@@ -282,7 +282,7 @@ def test_a_magnet_near_the_board_raises_interference_and_is_not_fed(good):
     def each(a):
         if a.compass.interference:
             assert a.calibrator.count == seen[-1]  # a flagged sample is not fed
-        if a.status == "interference":  # (flagged, or held: firmware/health.py FieldWatch)
+        if a.status == "interference":  # (flagged, or held: firmware/fieldwatch.py FieldWatch)
             assert a.progress()["interference"]
         seen.append(a.calibrator.count)
         if 6300000 <= b.clock.now_us <= 9700000:

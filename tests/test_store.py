@@ -1,4 +1,4 @@
-"""firmware/store.py + firmware/slots.py: versioned, CRC-protected, power-safe calibration record.
+"""firmware/store.py + firmware/store_slots.py: versioned, CRC-protected, power-safe calibration record.
 
 The power-cut tests run every save on a fake filesystem that counts each file operation and
 each byte written, cut the power after k of them for every k, "reboot" and load: the result
@@ -12,9 +12,9 @@ import zlib
 import pytest
 from hypothesis import given, strategies as st
 
-from firmware import slots as calstore
+from firmware import store_slots as calstore
 from firmware.store import CalStore
-from firmware.slots import MAX_PAYLOAD, crc32, crc32_int, decode_record, encode_record
+from firmware.store_slots import MAX_PAYLOAD, crc32, crc32_int, decode_record, encode_record
 from firmware.errors import StoreError
 from tests import mp
 

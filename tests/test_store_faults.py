@@ -13,7 +13,7 @@ import pytest
 from firmware.calibration import Calibration
 from firmware.errors import StoreError
 from firmware.store import CalStore
-from firmware.slots import decode_record, encode_record
+from firmware.store_slots import decode_record, encode_record
 from tests import mp
 from tests.test_store import MODELS, FakeFs, PowerCut
 

@@ -3,17 +3,9 @@
 #     result = import_calibration("/calibration.json", store, mag)   # None: no file there
 #     print(result[1])                         # 'imported ...' or 'rejected ...: why'
 #
-# The file is what `python -m host_sim calibrate LOG.csv --sensor KIND --out FILE` writes
-# (one JSON object; its keys are described in docs/calibration.md). import_calibration checks
-# that it is that format and version, that it was made for this chip (`sensor` == mag.KIND) at
-# this range (`range_code` == mag.range_code), and that the record means something (the
-# Calibration constructor refuses a bad field with ValueError naming it) and that it meets the
-# board's own bar (firmware.calibrate.acceptance.check_calibration: plausible fields, InvW positive
-# definite within 5:1, offsets in range; a refusal names its reason). A valid file is saved
-# with the store's power-safe save() and renamed NAME.imported, so it is imported once; an
-# invalid one is renamed NAME.rejected and the store is left as it was. If the save itself fails
-# (a full or read-only filesystem), the file stays where it is and the next boot tries again.
-# Boot-time code: it may allocate; nothing here runs per sample.
+# A valid file is saved to the store and renamed NAME.imported (imported once); an invalid one
+# is renamed NAME.rejected; a failed save leaves it for the next boot. The checks: docs/api.md
+# (calibration import); the file's keys: docs/calibration.md. Boot-time code.
 import json
 import os
 

@@ -3,58 +3,10 @@
     from firmware.calibrate import acceptance
     acceptance.check_field(field_counts, counts_per_gauss)   # raises CalibrationRejected(reason)
 """
-# A fit is accepted only when it passes every check below, in this order (the calibrator runs
-# them as the solve reaches each quantity); each refusal raises
-# CalibrationRejected(REASON_*, detail) with the numbers in the detail:
-#   too_few_samples   fewer held samples than the model needs (MIN_SAMPLES).
-#   planar            the samples do not determine the model (Judd's degenerate ellipsoids):
-#                     singular normal equations, or a parameter whose degeneracy ratio rho
-#                     (firmware/calibrate/solve.py) is below its limit - e.g. a flat spin.
-#   singular          the solver broke down: the quadric is not an ellipsoid, or W^-1 did not
-#                     converge.
-#   offset_out_of_range  V outside int16 (correct() could not represent it; ArduPilot also
-#                     bounds offsets).
-#   low_coverage      fewer than MIN_COVERAGE percent of 100 equal-area sphere regions, seen
-#                     from the fitted centre V, hold a sample.
-#   soft_iron_out_of_range  the eigenvalues of W^-1 spread more than 5:1 (ArduPilot refuses
-#                     diagonal scalings outside 0.2 .. 5 for the same reason).
-#   field_out_of_range  B outside 10 .. 90 uT (NXP) when counts_per_gauss is known; else B below
-#                     _MIN_FIELD_COUNTS counts (too coarse to correct).
-#   field_mismatch    when the location is known (CompassApp.set_location): B differs from the
-#                     field model's |B| in counts by more than FIELD_MATCH_PCT (20 %) - the
-#                     sensor is not at the gain or range the driver reports, or a magnet was near
-#                     during the fit. ArduPilot's radius check is the same idea, looser: it bounds
-#                     the scale correction expected / fitted to 1/1.5 .. 1.5.
-#   fit_error_high    fit error above max_fit_error (hundredths of a percent).
-# The same bar for a calibration that comes from anywhere (check_calibration: a MotionCal
-# packet, a calibration file, a quick calibration, and each of the board's own fits before it
-# is put in force): V in int16 (offset_out_of_range); B and the output field of the correction
-# plausible (field_out_of_range: B 10 .. 90 uT at the sensor's gain; the output field at least
-# 1/8 of B and at most 2 B, and _MIN_FIELD_COUNTS - an InvW that scales the field to nothing
-# would switch the interference check off); InvW symmetric, positive definite, eigenvalues
-# within 5:1 and det(InvW) >= 2**-9 in Q15 (soft_iron_out_of_range: all zeros, minus the
-# identity, a huge diagonal scaled down). docs/faults.md lists every refusal.
-#   not_better        the current calibration's fit error, aged, is lower ("sour grapes", Judd);
-#                     a higher-order model gets through at <= 3.5 % (NXP), and a fit covering
-#                     15 points more of the sphere at up to 3/2 the aged fit error.
-#   inconsistent_samples  (10-element fits) the older and the newer half of the held samples
-#                     (in the order they were kept) disagree about the hard iron where they
-#                     saw the same directions: with the fit's shape and |B|, the change c
-#                     solves e = a_r + 2 b.c [newer half] (e = |b|^2 - B^2, the sphere
-#                     |b - c| = B linearised; a_r a free level per equal-area sphere region,
-#                     which absorbs any misfit that depends on the direction, so a half
-#                     covering part of the sphere is compared only where the other half was
-#                     too), and |c| is more than CONSISTENCY_PCT (3 %) of B - a fit between
-#                     the two states is ~1.5 % of B, ~1.7 deg of heading at 60 deg dip, off
-#                     either -, beyond the sample noise (chi-square of c above 16, the noise
-#                     from consecutive samples' differences), and the fit's largest error
-#                     (|c| / 2, what a mix moves the centre, above the fit's RMS residual;
-#                     else its fit error already says more). Fewer than 3 shared regions, or
-#                     shared regions near a plane: no verdict. The samples mix two hard-iron
-#                     states (a magnet for part of the collection, a relay or motor
-#                     switching) or a drifting one. The 4- and 7-element fits are not judged
-#                     this way. The collector then drops the held samples
-#                     (firmware.calibrate.calibrator.Collector): the next fit sees one state.
+# Every refusal raises CalibrationRejected(REASON_*, detail) with the numbers in the detail.
+# The checks in the order the calibrator runs them, each threshold's source, and the same bar
+# for a calibration from anywhere (check_calibration): docs/design.md (module notes,
+# acceptance); docs/faults.md lists every refusal.
 from firmware.calibration import MINMAX, ORDER
 from firmware.compat import const
 from firmware.errors import CalibrationRejected
@@ -270,7 +222,7 @@ def check_output_field(field, field_out):
 
 
 def check_calibration(cal, counts_per_gauss):
-    """The plausibility gate (the module's opening comment): CalibrationRejected(reason, detail) unless
+    """The plausibility gate (docs/design.md, module notes): CalibrationRejected(reason, detail) unless
     `cal` (a Calibration with a model) could be put in force on a sensor of
     counts_per_gauss (None: not known)."""
     if cal.model is None:

@@ -4,20 +4,9 @@
 #     m.sub(*evicted)           # the sample it dropped: its terms leave exactly
 #     m.s[m.index(2, 1, 0)]     # sum of dx**2 * dy over the held samples
 #
-# AN4246 eqs. 35-36 build X^T X and X^T Y of the 4-element fit from sums of products of the
-# samples. The 7- and 10-element ellipsoid fits (firmware/calibrate/solve.py) need products up to degree 4,
-# so this keeps all 35 moment sums  S[i, j, k] = sum(dx**i * dy**j * dz**k),  i + j + k <= 4,
-# over d = p - c, where c is a fixed integer reference centre (the first sample added after an
-# empty state). Every normal matrix, right-hand side and residual sum Y^T Y is a sum of these.
-#
-# Why exact integers: a sum that is updated by adding and later subtracting the same terms
-# must return to its batch value bit for bit, on every interpreter; floats cannot promise that.
-# Why a reference centre: it conditions the data (ArduPilot's int16 overflow came from raw
-# sums); d is at most a diameter of the measurement sphere, so the degree-4 sums stay a few
-# bits above 4 * log2(diameter) + log2(count). On a board these are long ints, which is fine:
-# add() runs only for a KEPT sample (rare once the buffer is spread over the sphere); the reject
-# path of SampleBuffer.offer allocates nothing. Every fit is invariant under translation (see
-# firmware/calibrate/solve.py), so the choice of c changes the size of the numbers, never the result.
+# The 35 sums S[i, j, k] = sum(dx**i * dy**j * dz**k), i + j + k <= 4, over d = p - c (c a fixed
+# reference centre) give every normal matrix of the 4-, 7- and 10-element fits (AN4246 eqs.
+# 35-36). Why exact integers and a reference centre: docs/design.md (module notes, accum).
 from firmware.compat import const
 
 NUM_MOMENTS = const(35)  # monomials of degree 0..4 in three variables

@@ -5,17 +5,9 @@
 #     c = cal.solve()                   # a Calibration, or raises CalibrationRejected(.reason)
 #     c.correct(raw, out)               # out = InvW (raw - V) >> 15
 #
-# Pipeline (AN4246): SampleBuffer (firmware/calibrate/samples.py, distance-separated) -> exact moment
-# sums (firmware/calibrate/accum.py, updated per kept/evicted sample) -> exact least squares and W^-1 =
-# A^1/2 (firmware/calibrate/solve.py) -> the named checks of firmware/calibrate/acceptance.py -> a Calibration
-# (firmware/calibration.py: offset V, InvW in Q15, field B). The min/max model (the classic
-# hobbyist method) takes the running extremes of every raw sample since clear(), as users know
-# it; its fit error and its geometry check use the held samples like the other models.
-#
-# solve_steps() is the same solve as a generator for the app's loop, bounded work per next():
-# at most solve.SLICE_OPS (40) operations on long ints (a few entries of the normal equations
-# or of one elimination row, a third of a 3x3 inverse, one power-iteration step...) or
-# samples.COVERAGE_CHUNK samples of the coverage count (tests/test_slices.py bounds both).
+# solve_steps() is the same solve as a generator, at most solve.SLICE_OPS long-int operations
+# per next() (tests/test_slices.py). The pipeline and the min/max model: docs/design.md (module
+# notes, calibrator); the API: docs/api.md (calibration).
 from array import array
 from sys import modules
 
@@ -94,7 +86,7 @@ def _check_int(name, v, lo, unit):
 
 
 class Calibrator:
-    """Collects samples and solves for a Calibration (see the module's opening comment)."""
+    """Collects samples and solves for a Calibration (see docs/design.md, module notes)."""
     # model: 'minmax', 4, 7, 10, or 'auto' (the highest model whose sample minimum is met).
     # capacity: samples held (DEFAULT_CAPACITY on a board; the desktop tool uses more).
     # separation: counts between held samples; None derives it from counts_per_gauss
@@ -602,6 +594,7 @@ class Collector:
     #   .last_reason keeps saying what the configured model still lacks.
     # Attributes: calibrator, accepted, refused, solves, last_reason, last_detail, last_model,
     # relearning, job (the running solve or None), job_model.
+    QUIET_US = _QUIET_US  # no new direction for 3 s: the callers' "done" and "planar" waits too
 
     def __init__(self, model=10, capacity=DEFAULT_CAPACITY, counts_per_gauss=None,
                  current=None, solve_every=SOLVE_EVERY, fallback=True, overflow=None):

@@ -1,53 +1,22 @@
-# A short history of accepted calibrations on the board, and the check of each new one
-# against it before it replaces the current one: a jump in a parameter's value, outside the
-# spread its history shows, reveals changed hardware (a magnet fixed near the sensor, another
-# chip, a new mounting) before it costs a wrong heading.
+# A short history of accepted calibrations on the board, and the check of each new one against
+# it: a jump outside the spread its history shows reveals changed hardware (a magnet fixed near
+# the sensor, another chip, a new mounting) before it costs a wrong heading.
 #
 #     from firmware.calibrate.history import History
 #     h = History(store)                   # files <store.prefix>_h0.cal .. _h7.cal
 #     jump = h.check(cal, current)         # None, or (parameter, value, low, high)
 #     h.record(cal, FLAG_ACCEPTED, date_s) # the entry's count
 #
-# firmware.app imports this module when it accepts a calibration, never on a board that only
-# reads headings (tests/test_layout.py).
-#
-# Entries. Each is a firmware.store record (magic, version, sensor kind, range code, CRC-32;
-# its sequence number is the entry's count) around a 54-byte payload, little-endian:
-#
-#     offset size
-#      0     46  Calibration.to_bytes()
-#     46      4  date in seconds of the board's clock when it knows the date, else 0
-#     50      1  flags: FLAG_ACCEPTED, FLAG_PENDING, FLAG_BASELINE
-#     51      3  reserved, 0
-#
-# Ring. Entry `count` lives in file count % ENTRIES, so a new entry replaces the oldest one's
-# file and nothing else: whatever a power cut leaves in that file, its CRC fails and the other
-# files' bytes are untouched (firmware.store's argument, one file per entry). The next count
-# is one past the newest intact entry, so a torn newest entry is written again. Within one
-# session (one History object) a refinement replaces the session's own entry in its file, so
-# the ring holds one entry per session and not a run of near-copies of one fit; a cut during
-# that rewrite loses only the session's entry, whose calibration the store keeps anyway.
-#
-# Limits. The reference entries are the accepted ones since the newest baseline (an accepted
-# hardware change, FLAG_BASELINE); with none of them, the calibration in force stands in. Per parameter:
-#   hard_iron_x/y/z  V, counts (AN4246 eq. 8)          any fitted model vs any; minmax vs minmax
-#   field            B, counts                          the same
-#   soft_iron_xx/yy/zz  InvW's diagonal, Q15            7 or 10 elements vs the same model
-#   fit_error        0.01 %, too high only               the same model
-# With MIN_STATS reference values or more, the limits are mean +- max(_K_SIGMA sigma, floor);
-# with fewer, mean +- a fixed wide half-width. Floors and widths of V and B are fractions of
-# the reference field B, so they hold at every range setting. Across models (a 4-element fit
-# against 10-element entries) V and B are widened by the larger fit error of the two, as a
-# radial RMS error in counts (fit error x B): a model without soft iron places V and B only
-# that well. Integers only: sums of squares
-# are long ints on a 32-bit port, computed once per accepted calibration, never per sample.
+# Imported at the first accepted fit, never on a board that only reads headings
+# (tests/test_layout.py). The entries, the ring of files and the limits per parameter:
+# docs/design.md (module notes, history).
 import struct
 
 from firmware.calibration import MINMAX, PAYLOAD_SIZE, Calibration
 from firmware.compat import const
 from firmware.errors import StoreError
 from firmware.fixedpoint import isqrt
-from firmware.slots import decode_record, encode_record
+from firmware.store_slots import decode_record, encode_record
 
 ENTRIES = const(8)          # entries in the ring
 MIN_STATS = const(4)        # reference values before mean +- _K_SIGMA sigma replaces the wide limits
@@ -149,7 +118,7 @@ def jump(cal, refs):
 
 
 class History:
-    """The ring of ENTRIES entries next to `store`'s slots (see the module's opening comment)."""
+    """The ring of ENTRIES entries next to `store`'s slots (see docs/design.md, module notes)."""
     # After read() or check(): .entries, a list of (count, flags, date_s, Calibration) oldest
     # first; .skipped, the number of files that hold no usable entry (missing, torn, another
     # sensor, unreadable). .own: the count of the entry this session wrote (None before).

@@ -5,50 +5,13 @@ a calibration is accepted and dropped after the check (firmware.compat.drop).
 #     v, axes, sigma, best = check(pairs, cal, "x,-y,-z", "-x,y,z")
 #     if v == WRONG: print('MAG_AXES = "%s"' % axes)     # v: "ok", "wrong", "spread", "unsteady"
 #
-# Why it works. Gravity and the Earth's field are fixed in the world, so the angle between them
-# (90 deg minus the dip) is the same in every orientation of the board. The calibrated field
-# (AN4246 eq. 10, firmware/calibration.py) through MAG_AXES and the accelerometer through
-# ACCEL_AXES are both in the body frame (firmware/axes.py); when the two maps disagree by a
-# rotation R (a chip turned against the other, a wrong sign), the angle measured is the one
-# between R b and g, and it swings by tens of degrees as the board turns. Of the 24 rotations
-# among the signed permutations, applied after the map in use (so every candidate keeps its
-# handedness, which is the chip's: firmware/appsetup.py refuses another), a calibration dance
-# that turns the board through many directions leaves one steady: the one that relates the
-# magnetometer to the accelerometer. Which way is forward, and up from down for both chips
-# together, the data cannot tell (examples/check_axes.py asks for poses); the check names the
-# MAG_AXES that agrees with the ACCEL_AXES in use.
-#
-# check() corrects each pair's field (firmware/calibrate/mounting.py Pairs) with the calibration
-# (calibration.correct), maps both vectors to the body frame (axes.apply), scales them to unit
-# vectors in Q14 and, for each of the 24 rotations R applied to the field, takes the cosine
-# c = (R b).g / |b||g| (the sine of the dip for the right one) in Q10. Its RMS spread over the
-# pairs, sigma, is near 0 for the right rotation (noise, fit residuals, a few degrees of chip
-# misalignment, an accelerometer a few percent off) and large for every wrong one once the
-# board has turned over (tests/test_mounting.py measures both on the simulator). The verdict:
-#   SPREAD    fewer than MIN_BINS bins filled, or a second rotation is nearly as steady (sigma
-#             below _UNSTEADY_Q10): the data do not single one out (turn the board over, not
-#             only around)
-#   UNSTEADY  no rotation is steady (sigma above _STEADY_Q10): a magnet, a shaking hand, a
-#             calibration that does not fit; nothing is said about the axes
-#   OK        the rotation in use is the steady one
-#   WRONG     another rotation is: axes is the MAG_AXES that makes it so, with the ACCEL_AXES
-#             in use
-# A right setting could give WRONG only if its own sigma were >= _UNSTEADY_Q10 while another's
-# were <= _STEADY_Q10, a factor of two apart.
-# check() returns (verdict, axes: the steadiest mapping's MAG_AXES, sigma: the spread of the
-# setting in use, best: the steadiest one's), the spreads in Q10 (1024 = 1). judge(app) runs
-# it for a CompassApp's calibration session (firmware/calibrate/session.py mount_check: after each fit
-# put in force until a check gives an answer, and at the session's end): app.mounting,
-# and the status shown in place of "ok" while the data name another MAG_AXES. norm14 comes
-# from firmware.trig, imported for the check; where the heading line's trig is not loaded (the
-# calibration program), it and its tables are let go again after it. check() allocates one work array of
-# 63 ints and the axes string (and parses spec strings when given them in place of
-# AxisMap.m arrays); 24 pairs x 24 rotations, once per accepted fit. Every intermediate stays
-# below 2**30 (tests/test_mounting.py drives tests/intcheck).
+# judge(app) runs it for a calibration session. Why a steady angle between field and gravity
+# names the right rotation, the verdicts and their limits: docs/design.md (module notes,
+# mountcheck). Every intermediate stays below 2**30 (tests/test_mounting.py).
 import sys
 from array import array
 
-from firmware.axes import AxisMap, apply
+from firmware.axes import AXES, AxisMap, apply
 from firmware.calibration import correct
 from firmware.compat import const, drop
 from firmware.fixedpoint import isqrt, rdiv
@@ -71,7 +34,6 @@ _ACC = const(15)           # the work array: unit b 0..2, unit g 3..5, products 
 _PERMS = b"\x00\x01\x02\x01\x02\x00\x02\x00\x01\x00\x02\x01\x01\x00\x02\x02\x01\x00"
 _SIGNS = b"\x00\x06\x05\x03\x00\x06\x05\x03\x00\x06\x05\x03\x07\x01\x02\x04\x07\x01\x02\x04" \
     b"\x07\x01\x02\x04"
-_AXES = "xyz"
 
 
 def _unit(t, w, o, trig):
@@ -137,7 +99,7 @@ def _spec(mm, k):
         j = _PERMS[p + i]
         if ((s >> i) & 1) ^ mm[3 + j]:
             out += "-"
-        out += _AXES[mm[j]]
+        out += AXES[mm[j]]
         if i < 2:
             out += ","
     return out
@@ -151,7 +113,7 @@ def _map(axes):
 
 
 def check(pairs, cal, mag_axes, accel_axes):
-    # (verdict, axes, sigma, best) for the pairs held (see the module's opening comment): verdict
+    # (verdict, axes, sigma, best) for the pairs held (see docs/design.md, module notes): verdict
     # OK, WRONG, SPREAD or UNSTEADY, axes the MAG_AXES of the steadiest mapping, sigma and best
     # the spreads (Q10) of the mapping in use and of the steadiest.
     # cal: a firmware.calibration.Calibration, or its .k; mag_axes, accel_axes: the maps in
@@ -174,7 +136,7 @@ def check(pairs, cal, mag_axes, accel_axes):
             n += 1
     trig = None
     if not loaded:
-        drop("trig", "kang_tables")
+        drop("trig", "trig_tables")
     best = second = 0x3FFFFFFF
     kb = 0
     for r in range(24):

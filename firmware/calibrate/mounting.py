@@ -5,23 +5,9 @@ collected while a calibration session runs; firmware/calibrate/mountcheck.py jud
 #     pairs = Pairs(accel.counts_per_g, mag.period_us)   # made by the calibration session
 #     pairs.feed(raw, acc)       # each step with a plausible accelerometer: both in chip counts
 #
-# Why (docs/calibration.md, troubleshooting): gravity and the Earth's field keep the same angle
-# between them (90 deg minus the dip) in every orientation; with axis settings that put the two
-# chips' vectors in the body frame turned against each other, the angle measured swings as the
-# board turns. To see that, the pairs must cover many orientations, and each must measure
-# gravity alone.
-#
-# Pairs keeps at most one pair per direction of gravity: BINS = 24 bins, the chip axis nearest
-# to gravity, its sign and the signs of the two others (a cone of 1/24 of the sphere each), so
-# a few seconds in one pose count once. A pair is a candidate only when the accelerometer reads
-# 1 g within about 10 % and has moved by less than a board turning one turn per second would
-# move it in one sample period; a bin keeps the stillest candidate it was offered: the
-# smallest score, the move since the previous step plus how far |a| is off 1 g (the least
-# linear acceleration from the hand). Held: .data, array('h'), per bin mag x, y, z, accel x,
-# y, z and the score (-1: empty; capped at 32767), then the previous step's accelerometer;
-# .count bins filled. 342 bytes; feed() allocates nothing (tests/scenarios/mounting_heap.py).
-# Intermediates stay below 2**30 for any int16 input (tests/test_mounting.py drives
-# tests/intcheck).
+# At most one pair per direction of gravity (BINS = 24), the stillest offered; 342 bytes, feed()
+# allocates nothing (tests/scenarios/mounting_heap.py). Why, and how a pair is chosen:
+# docs/design.md (module notes, mounting).
 from array import array
 
 from firmware.compat import const
@@ -43,7 +29,7 @@ _OFF_SHIFT = const(4)   # |a|^2 - g^2 >> 4 beside the move: 1 % off 1 g weighs a
 
 class Pairs:
     """Up to BINS (magnetometer raw, accelerometer raw) pairs, one per direction of gravity
-    (see the module's opening comment). counts_per_g: the accelerometer's 1 g; period_us: the sample
+    (see docs/design.md, module notes). counts_per_g: the accelerometer's 1 g; period_us: the sample
     period (firmware.calibrate.mountcheck.check() judges them)."""
 
     def __init__(self, counts_per_g=16384, period_us=20000):
@@ -64,7 +50,7 @@ class Pairs:
 
     def feed(self, raw, acc):
         """Offer one step's magnetometer and accelerometer samples (chip axes, counts); True
-        when a bin took the pair (see the module's opening comment)."""
+        when a bin took the pair (see docs/design.md, module notes)."""
         q = self._moved(acc)
         if q < 0:
             return False

@@ -15,19 +15,16 @@ from firmware.calibrate.calibrator import Collector, release_solver
 from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED, Calibration
 from firmware.compat import const, drop, free_bytes, ticks_diff, ticks_us
 from firmware.health import Health
+from firmware.i2cdevice import DEFAULT_PERIOD_US
 
-_HMC_OVERFLOW = const(-4096)  # the HMC5883L's overflow marker (its datasheet, data registers)
-_DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: 50 Hz
 _REINIT_AFTER = const(8)      # failed reads in a row before the chip is set up again
 _SAVE_TRIES = const(3)        # saves of one fit before the program says it cannot keep it
-_QUIET_HINT_US = const(3000000)  # no new direction for 3 s before "planar" is said
-_DONE_QUIET_US = const(3000000)  # a good fit kept, then no new direction for 3 s: done
 _DONE_AFTER_US = const(4000000)  # ... or no better fit for 4 s: the heading within 5 s
 _SHORT_GIVE_UP = const(3)  # solves or steps in a row short of heap: the program gives up
 
 
 class Program:
-    # See the module's opening comment. Attributes: mag, accel, store, collector, status,
+    # See docs/design.md, module notes. Attributes: mag, accel, store, collector, status,
     # reason (why run() returned None), samples, bad (samples refused by the checks), reinits,
     # saved (the Calibration saved and read back), saved_us, save_errors, short (solves in a
     # row without room), free_at_solve, mounting ((verdict, MAG_AXES) or None).
@@ -62,15 +59,15 @@ class Program:
                               validate=Calibration.from_bytes)
         self.current = self._stored()
         self.health = Health(mag.counts_per_gauss,
-                             _HMC_OVERFLOW if mag.KIND == "hmc5883l" else -32768,
+                             getattr(mag, "OVERFLOW", -32768),  # HMC5883L: -4096
                              accel.counts_per_g if accel is not None else 16384)
         self.collector = c = Collector(model=model, capacity=capacity,
                                        counts_per_gauss=mag.counts_per_gauss,
                                        current=self.current,
-                                       overflow=_HMC_OVERFLOW if mag.KIND == "hmc5883l" else None)
+                                       overflow=getattr(mag, "OVERFLOW", None))
         if renew:  # asked for: the stored fit is aged so that any good one replaces it
             c.calibrator.age(STALE_AGE_S)
-        self.period_us = getattr(mag, "period_us", _DEFAULT_PERIOD_US)
+        self.period_us = getattr(mag, "period_us", DEFAULT_PERIOD_US)
         if accel is not None:  # the mounting check's pairs (firmware/calibrate/mounting.py)
             from firmware.calibrate.mounting import Pairs
             c.pairs = Pairs(accel.counts_per_g, self.period_us)
@@ -131,7 +128,7 @@ class Program:
         except Exception:  # noqa: BLE001 - none, torn, unreadable, no room: nothing to beat
             return UNCALIBRATED
         finally:
-            drop("slots")  # the store's slot code: again for the save
+            drop("store_slots")  # the store's slot code: again for the save
 
     def done(self):
         """True once a good-enough fit is saved and read back, and no better one came for
@@ -139,7 +136,7 @@ class Program:
         session ends: firmware/calibrate/session.py)."""
         c = self.collector
         return (self.saved is not None and c.job is None
-                and (not c.kept and c.since_kept_us >= _DONE_QUIET_US
+                and (not c.kept and c.since_kept_us >= c.QUIET_US
                      or self._since_save >= _DONE_AFTER_US))
 
     def run(self, limit_s=None):
@@ -330,7 +327,7 @@ class Program:
             except Exception as e:  # noqa: BLE001 - OSError, StoreError: tried again
                 self.reason = "save failed: %s" % (e,)
             self.save_errors += 1
-        drop("slots")
+        drop("store_slots")
         if self.saved is None:
             return
         self.reason = None
@@ -339,13 +336,13 @@ class Program:
             history.keep(self, cal, history.FLAG_ACCEPTED | (
                 history.FLAG_BASELINE if jump is not None else 0))
             history = None
-            drop("calibrate.history", "slots")
+            drop("calibrate.history", "store_slots")
         if self.mounting is not None:
             try:
                 __import__("firmware.mountnote", None, None, ("save",)).save(self)
             except (OSError, MemoryError):
                 pass  # the verdict is not kept: the next calibration checks again
-            drop("mountnote", "slots")
+            drop("mountnote", "store_slots")
 
     # --- what firmware.calibrate.history's judge() and keep() read -----------------------
     @property
@@ -373,7 +370,7 @@ class Program:
             parts.append("model %s fit %d.%02d %%" % (cal.model, cal.fit_error // 100,
                                                      cal.fit_error % 100))
         reason = c.last_reason
-        if reason == "planar" and c.since_kept_us < _QUIET_HINT_US:
+        if reason == "planar" and c.since_kept_us < c.QUIET_US:
             reason = "too_few_samples"
         if self.short:
             parts.append("out of memory while solving (%s KB free before it): needs more heap"

@@ -3,31 +3,9 @@
 #     if buf.offer(x, y, z) == REPLACED: ...  # buf.evicted holds the sample that left
 #     pct = buf.coverage(vx, vy, vz)          # % of 100 equal-area sphere regions seen from V
 #
-# Why distance (Judd): a threshold on the distance between raw samples is origin-independent, so
-# it spreads samples evenly whatever the hard iron; an angle threshold measured from a wrong
-# centre bunches samples on one side and excludes the other. NXP's orientation bins need the
-# calibrated field to pick a bin; a distance rule needs nothing but the raw counts.
-#
-# The rule, in raw counts with s = separation:
-# - space is cut into cubic cells of side s, and a cell holds at most one sample;
-# - a sample is kept only if its own cell is empty and no held sample is closer than s
-#   (squared distances, no sqrt). Any sample closer than s lies in one of the 27 cells around
-#   the new one, so at most 27 hash look-ups decide, whatever the fill (neighbour cells whose
-#   nearest point is s or more away are skipped: 19.6 of the 26 remain on average): every
-#   pair of held samples is at least s apart, and no scan of the buffer is ever needed.
-# - when the buffer is full a kept sample overwrites the oldest one (FIFO), so a background
-#   calibration follows a change of hard iron; the evicted sample is copied to `.evicted` so a
-#   caller keeping exact sums can subtract its terms.
-#
-# Slot order: held samples always occupy slots 0 .. count-1 (`data[3*i:3*i+3]` is slot i), so
-# sums over `data[:3*count]` need no ordering. Age order, oldest first, is
-# `slot_by_age(0) .. slot_by_age(count - 1)`; `next_slot` is where the next kept sample goes
-# (the oldest slot once the buffer is full).
-#
-# Cells map to slots through an open-addressing hash table (linear probing, load <= 1/3,
-# backward-shift deletion, no tombstones) in preallocated arrays. offer() allocates nothing
-# on MicroPython and every intermediate stays below 2**30 for int16 input and separation
-# <= MAX_SEPARATION (tests/test_samples.py, tests/scenarios/samples_alloc.py).
+# A sample is kept only if no held one is closer than the separation (at most 27 hash look-ups,
+# no scan); a full buffer replaces its oldest. Why distance, the slot order and the hash table:
+# docs/design.md (module notes, samples). offer() allocates nothing (tests/test_samples.py).
 from array import array
 
 from firmware.fixedpoint import isqrt

@@ -4,31 +4,14 @@ history, save; then leave. Imported by CompassApp.calibrate(), dropped when the 
 #     app.calibrate()            # starts one (imports this module and the calibration machinery)
 #     app.collector              # firmware.calibrate.calibrator.Collector while it runs, None after
 #
-# A session ends once a calibration good enough to boot without collecting
-# (CompassApp._good_enough: the configured model, fit error within 5 %) is in force and saved,
-# nothing is pending, the app does not relearn, and the samples have stopped bringing new
-# directions: a solve has run on every sample kept and none came for _DONE_QUIET_US (the
-# user has stopped turning the board, or the buffer holds what the motion offers). Until
-# then every solve may replace the fit with a better one. app.learn=True keeps it running. At the end
-# the collector, the history and the modules of the calibration machinery are dropped
-# (firmware.compat.drop), so the board's heap returns to what showing a heading needs
-# (docs/design.md, memory; docs/benchmarks.md measures it).
-#
-# The steps (CompassApp._step calls solve() when a solve is running or due):
-#   solve    a few slices of the running solve (firmware.calibrate.calibrator.Collector.slice): each at
-#            most solve.SLICE_OPS long-int operations; a step runs period / 4 ms of them.
-#   accept   a calibration the Calibrator accepted (sour grapes: it beat the current one) is
-#            judged against the history of accepted calibrations (firmware/calibrate/history.py): inside
-#            its limits it is put in force and saved; outside it is kept as .pending ("hardware
-#            changed?") and not put in force until accept_change().
+# When a session ends and what leaves with it: docs/design.md#memory; its steps (solve,
+# accept): docs/design.md (module notes, session).
 from firmware.compat import const, drop, drop_part, kernels
+from firmware.i2cdevice import DEFAULT_PERIOD_US
 
-_DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
-_HMC_OVERFLOW = const(-4096)  # the HMC5883L's overflow marker (its datasheet, data registers)
-_DONE_QUIET_US = const(3000000)  # no new direction for 3 s (the collector's quiet period)
-_FLAG_ACCEPTED = const(1)     # firmware.calibrate.history's entry flags
-_FLAG_PENDING = const(2)
-_FLAG_BASELINE = const(4)
+_FLAG_ACCEPTED = const(1)     # firmware.calibrate.history.FLAG_ACCEPTED
+_FLAG_PENDING = const(2)      # firmware.calibrate.history.FLAG_PENDING
+_FLAG_BASELINE = const(4)     # firmware.calibrate.history.FLAG_BASELINE
 # what a finished session leaves for CompassApp's counters (accepted, refused, ...)
 ENDED = ("accepted", "refused", "solves", "last_reason", "last_detail", "last_model")
 
@@ -42,11 +25,11 @@ def start(app, fast=True):
     c = Collector(model=app.model, capacity=app.capacity,
                   counts_per_gauss=app.mag.counts_per_gauss, current=app.calibration,
                   solve_every=app.solve_every, fallback=app.fallback,
-                  overflow=_HMC_OVERFLOW if app.mag.KIND == "hmc5883l" else None)
+                  overflow=getattr(app.mag, "OVERFLOW", None))
     if app.accel is not None:  # the mounting check's pairs (firmware/calibrate/mounting.py)
         from firmware.calibrate.mounting import Pairs
         c.pairs = Pairs(app.accel.counts_per_g,
-                        getattr(app.mag, "period_us", _DEFAULT_PERIOD_US))
+                        getattr(app.mag, "period_us", DEFAULT_PERIOD_US))
     return c
 
 
@@ -54,7 +37,7 @@ def solve(app):
     t = app._wall()
     c = app.collector
     if c.job is None:
-        app._slices_per_step = c.start(getattr(app.mag, "period_us", _DEFAULT_PERIOD_US))
+        app._slices_per_step = c.start(getattr(app.mag, "period_us", DEFAULT_PERIOD_US))
     n = app._slices_per_step
     while n and c.job is not None:
         cal = c.slice()
@@ -102,7 +85,7 @@ def end_if_done(app):
     history and the calibration machinery leave. True when it ended."""
     c = app.collector
     if (app.learn or app.pending is not None or app._unsaved or c.relearning
-            or c.job is not None or c.kept or c.since_kept_us < _DONE_QUIET_US
+            or c.job is not None or c.kept or c.since_kept_us < c.QUIET_US
             or not app._good_enough(app.calibration)):
         return False
     mount_check(app)  # once more with every pair kept, when no check could tell yet
@@ -122,7 +105,7 @@ def mount_check(app):
     # the status while it names another MAG_AXES. Then the session's pairs go: a board short of
     # heap loads the check's code as seldom as that, and the next session checks afresh.
     # mountnote's code is loaded for a wrong setting, and for a right one only when a verdict
-    # file is there to remove, by a string as firmware/persist.py load loads it: no name is
+    # file is there to remove, by a string as firmware/app_persist.py load loads it: no name is
     # interned for it otherwise (a function of its own would intern its name too).
     c = app.collector
     p = c.pairs
@@ -151,7 +134,7 @@ def mount_check(app):
         pass  # no room now: the next fit, or the session's end, checks again
     except OSError:
         pass  # the verdict could not be kept: the same
-    drop("calibrate.mountcheck", name[9:], "slots")
+    drop("calibrate.mountcheck", name[9:], "store_slots")
 
 
 def history_check(app, cal):

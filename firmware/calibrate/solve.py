@@ -2,61 +2,11 @@
 #     f = solve.fit(c, sums, 10)               # exact least squares from the 35 moment sums
 #     w = solve.invw_from_a2(f.a2, f.det_a2)   # W^-1 = A^1/2, det 1, Q40
 #     q = solve.q15_from_invw(w, solve.SQRT_FRAC_BITS)   # InvW, 9 Q15 ints
-# (firmware/magcal.py strings these together, with the acceptance checks, time-sliced.)
+# (firmware/calibrate/calibrator.py strings these together, with the acceptance checks, time-sliced.)
 #
-# Models (AN4246 eq. 5: Bp = W Rx Ry Rz Br + V; locus eq. 11: (Bp-V)^T A (Bp-V) = B^2):
-#   4   hard iron V + field B, W^-1 = I.  The linear least squares of eqs. 26-37: regress
-#       Y = |d|^2 on X = (dx, dy, dz, 1); beta = (X^T X)^-1 X^T Y; V = beta[0:3] / 2;
-#       B = sqrt(beta[3] + V.V).
-#   7   V + diagonal soft iron + B.   X = (dx^2-dz^2, dy^2-dz^2, dx, dy, dz, 1).
-#   10  V + symmetric W^-1 + B.       X = (dx^2-dz^2, dy^2-dz^2, dx dy, dx dz, dy dz, dx, dy, dz, 1).
-# In every model the residual Y - X beta is the algebraic distance q(d) = d^T A d + b.d + e of
-# a quadric whose matrix A has trace 3: |d|^2 carries the trace and the other columns span
-# every trace-free change of A (7: diagonal only). Why this constraint rather than NXP's
-# smallest eigenvector (||beta|| = 1): it is linear, so the exact rational solution follows
-# from one fraction-free elimination of integer normal equations; it is invariant under
-# translation (the quadric's A does not change when d moves, so neither does the fit; the
-# reference centre of the sums only changes the size of the numbers) and, for 10 elements,
-# under rotation (trace is rotation-invariant); and the 4 / 7 / 10 models are nested with one
-# normalisation, so their residual sums P are comparable: P10 <= P7 <= P4 on the same samples.
-# A sphere has A = I, so the 4-element case IS AN4246's fit, and with little soft iron the
-# quadric stays close to A = I, far from the constraint's singular set (trace A = 0).
-#
-# Exactness: the 35 sums give X^T X, X^T Y and Y^T Y as integers. Bareiss elimination keeps
-# every intermediate an integer and, for a positive definite X^T X, needs no pivoting (its
-# pivots are the leading principal minors, all > 0); a pivot <= 0 means the samples do not
-# determine the model. The solution is beta = beta_num / D with D = det(X^T X), and the
-# residual P = Y^T Y - beta . X^T Y (least squares) is exact too. Then, in integers:
-#   A2 = 2 D A, b2 = 2 D b, e2 = 2 D e         the quadric scaled to integer coefficients
-#   d0 = -A2^-1 b2 / 2                         centre (eq. 19: V = R0), V = c + d0
-#   K2 = d0^T A2 d0 - e2                       so (d - d0)^T A2 (d - d0) = K2 on the fit
-# With det W^-1 = 1 (NXP's normalisation, so B is the field's geometric-mean radius):
-#   W^-1 = (A2 / det(A2)^(1/3))^(1/2)          eq. 20, symmetric root (AN4246 section 5)
-#   B^6 = K2^3 / det(A2)
-# The square root is a Denman-Beavers iteration on 3x3 fixed-point long ints (Q40): both
-# iterates stay exactly symmetric (adjugate inverses of symmetric matrices are symmetric), the
-# iteration is stable and converges quadratically; det(A2)^(1/3) and B come from the exact
-# integer roots icbrt / isqrt. Only these irrational steps round, far below one Q15 step.
-#
-# Fit error (the same for every model, min/max included): NXP's 50 sqrt(P'/N) / B^2 percent,
-# where P' sums the squared residuals of the quadric normalised as |W^-1 (Bp - V)|^2 - B^2.
-# That is 100 x AN4246's epsilon = sqrt(P/M) / (2 B^2) (eq. 37 text), and for small residuals
-# it is the RMS radial error as a percentage of B. In the trace normalisation P' / B^4 =
-# P / K^2 with K = K2 / (2 D), so fit_error = 50 sqrt(P / N) / K; kept in hundredths of a %.
-#
-# Q15 (AN4246 section 3): out = InvW (Bp - V) >> 15. InvW = s W^-1 with s chosen so every row's
-# absolute sum is at most 32767; then for any int16 input every partial sum is below
-# 32767 * 32768 < 2**30 (a MicroPython small int, a C int32 with room to spare), and the
-# output is the field scaled by s: field_out = B det(InvW / 32768)^(1/3).
-#
-# Degeneracy (Judd's degenerate ellipsoids): a model is undetermined when some column of X is
-# (nearly) a combination of the others, e.g. dx dy == 0 on two circles in the planes x = 0 and
-# y = 0, or dz ~ const on a flat spin. The test is the variance inflation of each parameter:
-# rho_i = 1 / (N (M^-1)_ii s^deg_i) with M = X^T X and s the samples' mean squared distance from
-# their mean. It is dimensionless and translation-invariant (the part of column i that no other
-# column explains, per sample, relative to the spread of the data). On a uniformly covered
-# sphere rho = 1/3 for the centre, 1/15 for dx dy, 1/5 for dx^2-dz^2; see firmware/magcal.py
-# for the thresholds.
+# Models 4, 7, 10 (AN4246 eq. 5): the trace-3 quadric constraint, the exact Bareiss solution,
+# W^-1 = A^1/2 by Denman-Beavers on fixed-point long ints, the fit error, Q15 and the
+# degeneracy test: docs/design.md (module notes, solve).
 from firmware.calibrate.accum import EXPONENTS, INDEX_TABLE, NUM_MOMENTS, index, shifted_steps
 from firmware.fixedpoint import bit_length, isqrt, rdiv
 

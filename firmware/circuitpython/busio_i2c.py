@@ -4,35 +4,10 @@
     from firmware.circuitpython.busio_i2c import BusioI2C
     mag = detect(BusioI2C(busio.I2C(board.SCL, board.SDA, frequency=400000)))
 """
-# BusioI2C(i2c, lock_timeout_us=50000, delay_us=None)
-#   i2c              a busio.I2C (anything with try_lock, unlock, writeto, writeto_then_readfrom
-#                    and scan, as CircuitPython documents them)
-#   lock_timeout_us  how long one transfer waits for the bus lock, 1..2**29 us. The default
-#                    covers another user of the bus finishing its own transfer: a 128x64
-#                    SSD1306 frame (1 KiB, 9 bits a byte at 400 kHz) holds it for ~23 ms.
-#   delay_us         None on a board: firmware.compat's sleep_us between lock polls, the wait
-#                    measured with its ticks_us. The simulator passes its bus.sleep_us, and
-#                    the waited time is then the sum of the delays asked for (as in Device).
-#
-# What the drivers use of machine.I2C (firmware/i2cdevice.py, firmware/detect.py):
-#   readfrom_mem_into(addr, reg, buf)  writeto_then_readfrom(addr, <reg>, buf): one transaction,
-#                                      register byte, repeated START, the data
-#   writeto_mem(addr, reg, buf)        writeto(addr, <reg, buf...>): one transaction
-#   scan()                             the addresses that answer, as a list
-#
-# Locking: busio refuses a transfer without the bus lock (RuntimeError), and the lock is
-# shared with whatever else uses the bus (a display, another task). Each transfer polls
-# try_lock() every _LOCK_POLL_US until lock_timeout_us has passed and releases the lock
-# whatever happens: the transfer runs inside `with self._held:`, whose __exit__ unlocks when it
-# raises too. A lock not taken in time raises OSError(110) (ETIMEDOUT): Device's BusGuard turns
-# it into a BusError naming address and register, as it does a NACK. busio's own errors (OSError
-# with errno 19 or 5 for a missing ACK, by CircuitPython's documentation) pass through unchanged.
-#
-# Allocation: the register byte and a write's bytes go through one preallocated buffer (a
-# memoryview of its first byte made once for the reads; writes pass end= instead of a slice),
-# and the read's frames stay within MicroPython's C-stack bound: a read allocates nothing
-# (tests/scenarios/busio_alloc.py measures it on MicroPython).
-# Writes longer than _OUT_MAX - 1 bytes (no driver makes one) build their bytes.
+# BusioI2C(i2c, lock_timeout_us=50000, delay_us=None): readfrom_mem_into, writeto_mem and scan
+# as busio's writeto_then_readfrom, writeto and scan, under busio's bus lock. The arguments,
+# the locking and why a read allocates nothing: docs/design.md (module notes, busio_i2c and
+# CircuitPython).
 from firmware.compat import const, ticks_diff, ticks_us, wait_clock
 
 _ETIMEDOUT = const(110)
@@ -42,7 +17,7 @@ _OUT_MAX = const(8)                 # register byte + up to 7 data bytes without
 
 
 class _Held:
-    """`with adapter._held:` holds the bus lock for one transfer (see the module's opening comment)."""
+    """`with adapter._held:` holds the bus lock for one transfer (see docs/design.md, module notes)."""
 
     def __init__(self, adapter):
         self._adapter = adapter

@@ -10,45 +10,7 @@ new calibration, the interference window, quick calibration's expected field vec
 #         print(loc.status)                                   # e.g. "no field model: missing: ..."
 #
 # CompassApp.set_location(lat_e7, lon_e7, year_e3=None) builds one and applies it (apply()).
-#
-# Units: lat_e7, lon_e7 in 1e-7 deg, north and east positive (GPS receivers and ArduPilot give
-# int32 in these units); year_e3 the decimal year * 1000 (firmware.field.wmm.decimal_year_e3
-# converts a date), None when the board has no date (the model's mid-life is used and the
-# status says "no date"). Declination and inclination in centidegrees (_cdeg) and KANG (_kang);
-# field_nt, north_nt, east_nt, down_nt, horizontal_nt in nT; the _counts methods convert nT to
-# the magnetometer's counts with its counts_per_gauss (1 G = 100000 nT).
-#
-# Errors. A bad argument raises before anything is opened: TypeError for a float, bool or
-# string (the message names the argument and its unit), ValueError for |lat| > 90 deg, |lon| >
-# 180 deg, or a year_e3 that is not a decimal year * 1000 (outside 1900000 .. 2100000). What the
-# board cannot help is a status, not an exception, so the compass keeps running with the
-# declination the user typed: .usable is False and .status is
-#   "no field model: <reason>: <detail>"   the table is missing, truncated or corrupt
-#                                           (firmware.field.wmm.FieldTableError's reason and detail)
-#   "outside model validity"               a date before 2025.0 or after 2030.0 (the model is
-#                                           not extrapolated)
-# A usable location's .status is the field model's: "ok", "no date", "caution zone" (H < 6000
-# nT: heading accuracy degraded), "blackout zone" (H < 2000 nT: magnetic heading unreliable;
-# firmware/accuracy.py reports level 0 there).
-#
-# Memory: firmware.field.wmm is imported here, and this module is imported only by set_location: a
-# board that never calls it loads neither. The table file is opened, read at 16 grid nodes and
-# closed in the constructor (docs/field_model.md); a Location keeps a dozen ints.
-#
-# apply(app), with a usable location (else it restores the manual declination and turns the
-# location's checks off):
-#   declination   compass.declination_kang = the model's declination.
-#   acceptance    the calibrator's expected_field = |B| in counts: a new fit whose B is more
-#                 than acceptance.FIELD_MATCH_PCT (20 %) off is refused with field_mismatch.
-#   interference  with a calibration in force: the |b| window spans both the model's |B| (through
-#                 the calibration's InvW scale) and the fitted field_out, widened by the app's
-#                 tolerance (max(10 %, 3 x fit error)) on each side - the field the model predicts
-#                 is never flagged, nor the one the accepted fit measured (a sensor gain a few %
-#                 off nominal would otherwise be flagged for ever); and, when an accelerometer
-#                 gives the tilt, the measured dip must be within DIP_TOL_CDEG (20 deg, PX4
-#                 EKF2's inclination check) of the model's inclination.
-#   .cal_mismatch True when the calibration in force (e.g. loaded from the store, made
-#                 elsewhere) has a B off the model by more than FIELD_MATCH_PCT: accuracy "low".
+# Units, errors, statuses and what apply() changes: docs/design.md (module notes, location).
 from firmware.compat import const
 from firmware.fixedpoint import rdiv
 
@@ -85,7 +47,7 @@ def check_position(lat_e7, lon_e7, year_e3=None):
 
 
 class Location:
-    """The field model at one place and date; see the module's opening comment."""
+    """The field model at one place and date; see docs/design.md, module notes."""
 
     def __init__(self, lat_e7, lon_e7, year_e3=None, path=None):
         check_position(lat_e7, lon_e7, year_e3)
@@ -143,7 +105,7 @@ class Location:
 
     # --- what the app does with it ---------------------------------------------------------
     def apply(self, app):
-        """Put the location to work in a CompassApp (see the module's opening comment); called by
+        """Put the location to work in a CompassApp (see docs/design.md, module notes); called by
         set_location and again whenever the app puts a calibration in force or starts
         collecting."""
         c = app.compass

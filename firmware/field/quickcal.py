@@ -6,40 +6,9 @@ field vector (PX4's `calibrate mag quick`, ArduPilot's fixed-yaw calibration), i
 #     qc.add(raw_sum, gravity_sum, n, true_heading_kang)  # n samples of one pose, summed
 #     cal = qc.result()           # a 4-element-equivalent Calibration, or CalibrationRejected
 #
-# CompassApp.quick_calibrate(true_heading_cdeg) (quick_calibrate(app, ...) below) reads the
-# samples, calls these and puts the result in force (docs/quick_calibration.md has the measured
-# accuracy and when a full calibration is needed instead).
-#
-# How. The field model gives the geomagnetic field at the board: horizontal H and down Z, in the
-# magnetometer's counts. The known true heading minus the model's declination is the magnetic
-# heading psi, so the de-rotated field the compass would compute is Bf = (H cos psi,
-# -H sin psi, Z) (AN4248 eq. 22 read backwards). The accelerometer gives roll phi (eq. 13) and
-# pitch theta (eq. 15) - or, without one, the board is taken as level - and undoing eq. 19
-# gives the field the board should see, Bp:
-#     Bx = Bfx cos theta - Bfz sin theta,    t = Bfx sin theta + Bfz cos theta,
-#     By = Bfy cos phi + t sin phi,          Bz = t cos phi - Bfy sin phi.
-# The magnetometer's axis map takes Bp back to the chip's axes, and AN4246 eq. 8 with W = I
-# (B_raw = B + V) leaves the hard iron: V = B_raw - Bp, in counts. More poses (add() again,
-# e.g. at opposite headings) average their V: soft iron's error flips sign with the field, so
-# opposite poses cancel most of it.
-#
-# The result is a Calibration of model 4 (hard iron only): offset V, InvW identity, field = the
-# model's |B| in counts, coverage 0 (firmware/accuracy.py tells a quick calibration by that),
-# fit_error QUICK_FIT_ERROR (10 %, no residual exists for one pose): any full 4-, 7- or
-# 10-element fit the app's collector accepts later replaces it.
-#
-# Refusals (CalibrationRejected, .reason):
-#   no_location          no usable field model (set_location first, or its status says why).
-#   blackout_zone        H < 2000 nT (WMM's blackout zone): a heading cannot be known.
-#   no_samples           the magnetometer gave no sample (the app's read failed every time).
-#   offset_out_of_range  |V| on an axis above _MAX_OFFSET_MG (ArduPilot's default offset limit,
-#                        1800 mG) in counts, or outside int16: a wrong heading, a magnet, or a
-#                        board too strongly magnetised for a correction.
-#   field_mismatch       with two poses or more, one pose's V is more than POSE_SPREAD_PCT (10 %)
-#                        of |B| from their mean: a mistyped heading, strong soft iron, or a
-#                        sensor gain that is not what the driver reports. A full calibration is
-#                        needed.
-# Bad arguments (a float heading, a zero sample count) raise TypeError / ValueError naming them.
+# CompassApp.quick_calibrate(true_heading_cdeg) reads the samples, calls these and puts the
+# result in force (docs/quick_calibration.md: measured accuracy). How V follows from AN4248's
+# equations read backwards, the result and the refusals: docs/design.md (module notes, quickcal).
 from firmware.calibrate import acceptance
 from firmware.calibrate.acceptance import REASON_FIELD_MISMATCH, REASON_OFFSET_OUT_OF_RANGE, reject
 from firmware.calibration import Calibration
@@ -55,14 +24,13 @@ QUICK_FIT_ERROR = const(1000)  # hundredths of a percent: a quick fit has no res
 POSE_SPREAD_PCT = const(10)    # poses' V within 10 % of |B| of their mean (3 % soft iron
 #                                moves a pose's V by <= 3 %, opposite poses apart by <= 6 %)
 _MAX_OFFSET_MG = const(1800)   # ArduPilot: offsets <= 1800 mG
-_IDENTITY_Q15 = (32767, 0, 0, 0, 32767, 0, 0, 0, 32767)  # Calibration's own identity
 _Q15 = const(32768)
 _R15 = const(16384)
 _BLACKOUT = "blackout zone"  # firmware.field.wmm.STATUS_BLACKOUT (not imported: field loads late)
 
 
 class QuickCal:
-    """Hard iron from poses of known heading; see the module's opening comment.
+    """Hard iron from poses of known heading; see docs/design.md, module notes.
 
     location: a firmware.field.location.Location; counts_per_gauss: the magnetometer's; mag_map: the
     app's firmware.axes.AxisMap (chip -> body). .poses: the per-pose V estimates, counts."""
@@ -129,7 +97,7 @@ class QuickCal:
         return tuple(rdiv(sum(p[i] for p in self.poses), k) for i in range(3))
 
     def result(self):
-        """The Calibration (see the module's opening comment), or CalibrationRejected."""
+        """The Calibration (see docs/design.md, module notes), or CalibrationRejected."""
         if not self.poses:
             reject(REASON_NO_SAMPLES, "no pose added")
         v = self.offset()
@@ -147,7 +115,7 @@ class QuickCal:
                    "do a full calibration" % (len(self.poses), spread,
                                               rdiv(spread * 100, self.field), POSE_SPREAD_PCT))
         f = self.field
-        return Calibration(model=4, offset=v, invw=_IDENTITY_Q15, field=f,
+        return Calibration(model=4, offset=v, field=f,
                            field_out=rdiv(f * 32767, _Q15), fit_error=QUICK_FIT_ERROR,
                            samples=self.samples, coverage=0)
 

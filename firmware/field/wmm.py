@@ -3,49 +3,12 @@
 #     wmm = FieldModel()                       # opens wmm2025.bin next to this module
 #     decl_cdeg, incl_cdeg, field_nt, status = wmm.at(-339000000, 1512000000, decimal_year_e3(2026, 3, 1))
 #
-# Units: lat_e7, lon_e7 in 1e-7 deg (as GPS receivers and ArduPilot give them), north and east
-# positive, sea level; year_e3 is the decimal year * 1000 (2026.5 -> 2026500; decimal_year_e3()
-# converts a calendar date). at() returns (declination_cdeg, inclination_cdeg, field_nt, status):
-# declination east positive, inclination down positive, both in centidegrees; field_nt the total
-# intensity F in nT. The same query leaves on the model, for the compass and a calibration check:
-# declination_kang, inclination_kang (KANG, 65536 per turn, as firmware.trig), field_nt,
-# north_nt, east_nt, down_nt, horizontal_nt (X, Y, Z, H in nT) and status.
-#
-# status (one string; the first that applies):
-#   STATUS_OUTSIDE  "outside model validity": year_e3 before 2025.0 or after 2030.0. The model is
-#                   not extrapolated: every value is None.
-#   STATUS_BLACKOUT "blackout zone": H < 2000 nT (WMM's blackout zone around the magnetic
-#                   poles): the declination is unreliable and so is any magnetic heading.
-#   STATUS_CAUTION  "caution zone": H < 6000 nT (WMM's caution zone): heading accuracy degraded.
-#   STATUS_NO_DATE  "no date": year_e3 was None, so the middle of the model's life (2027.5) was
-#                   used; declination changes by up to ~0.2 deg a year (WMM2025's secular
-#                   variation, docs/field_model.md),
-#                   so it may be ~0.5 deg off.
-#   STATUS_OK       "ok".
-#
-# How (docs/field_model.md has the table format and the measured errors): the table holds the
-# north, east and down components X, Y, Z at the epoch 2025.0 and their secular variation on a
-# 7.5 deg grid (host_sim/cli/wmm.py writes it from the official coefficients). A query reads the
-# 4 x 4 nodes around the point with seek + readinto into one 12-byte buffer, brings each node to
-# the date (WMM is linear in time), interpolates the components with a cubic Lagrange stencil,
-# first along longitude then along latitude, and only then derives D = atan2(Y, X),
-# I = atan2(Z, H), H = sqrt(X^2 + Y^2), F = sqrt(H^2 + Z^2). Interpolating the components, not
-# the angles, matters: declination turns quickly near the magnetic poles.
-#
-# Errors:
-#   TypeError, ValueError   a bad argument; the message names it and its unit.
-#   FieldTableError         the table cannot be used: .reason is one of REASON_MISSING,
-#                           REASON_TRUNCATED, REASON_BAD_MAGIC, REASON_UNKNOWN_VERSION,
-#                           REASON_BAD_HEADER, REASON_BAD_CRC; .detail names the file and the
-#                           numbers. Raised by FieldModel(), before any query: the app keeps
-#                           the declination the user typed and reports "no field model".
-#
-# Memory: the file stays open (close() or `with` releases it) and no query loads the table: a
-# query allocates its result tuple and a few call frames (tests/test_field.py measures the heap
-# on MicroPython), the per-node sums stay below 2**30 (32-bit small ints).
+# Units, the statuses, the errors and how a query interpolates the table: docs/design.md
+# (module notes, wmm); the table format and the measured errors: docs/field_model.md. The file
+# stays open (close() or `with` releases it); a query allocates its result tuple.
 try:
     from binascii import crc32 as _crc32
-except ImportError:  # a port without binascii.crc32: firmware.slots', imported when needed
+except ImportError:  # a port without binascii.crc32: firmware.store_slots', imported when needed
     _crc32 = None
 
 from firmware.compat import const
@@ -150,7 +113,7 @@ def _shift(v, s):
 
 
 class FieldModel:
-    """The World Magnetic Model from a table file; see the module's opening comment."""
+    """The World Magnetic Model from a table file; see docs/design.md, module notes."""
 
     def __init__(self, path=None):
         if path is None:
@@ -225,7 +188,7 @@ class FieldModel:
             if _crc32 is not None:
                 crc = _crc32(mv[:n], crc)
             else:
-                from firmware.slots import crc32_int
+                from firmware.store_slots import crc32_int
                 crc = crc32_int(mv[:n], crc)
             left -= n
         return crc  # unsigned, as binascii.crc32 and crc32_int return it

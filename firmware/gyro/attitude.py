@@ -4,69 +4,10 @@ is corrected by gravity and by the calibrated magnetic field (docs/gyro.md).
 #     att = app.use_gyro()               # firmware/app.py: loads this module, one call per step
 #     att.heading_kang, att.source, att.since_mag_us, att.uncertainty_cdeg
 #
-# Attitude(gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g, gain=500,
-#          mag_gain=500, bias_gain=125, accel_reject_cdeg=1000, mag_reject_cdeg=1000,
-#          recovery_us=5000000, max_uncertainty_cdeg=500)
-#   gyro, gravity, field  the app's body-frame arrays (AN4248 frame: x forward, y right, z
-#                  down): gyroscope counts, gravity (AN4248 Gp sign, +1 g down when level),
-#                  the calibrated field; read by update(), never copied.
-#   compass        the app's Compass: its roll, pitch and heading of the first good sample
-#                  start the filter.
-#   gain           accelerometer correction, 1/1000 rad/s per rad of tilt error (500: a 2 s
-#                  time constant); mag_gain the same for the heading error.
-#   bias_gain      the integral term, 1/1000 of the correction fed into the gyro bias each
-#                  second (0: off). All three run at up to 4 times the option (the start-up
-#                  gains) while the bias is not known.
-#   accel_reject_cdeg, mag_reject_cdeg  an accelerometer whose gravity direction differs
-#                  from the filter's by more (or whose |a| is off 1 g by more than 10 %), and a
-#                  field whose heading differs by more, are not used; after recovery_us of
-#                  continuous rejection they are used again (the filter, not the sensor, is
-#                  then the suspect: x-io's Fusion recovers the same way).
-#   max_uncertainty_cdeg  the gyro-held heading is vouched for while its uncertainty is
-#                  within this (5 deg).
-#
-# update(dt_us, flags) -> heading (KANG, magnetic), -1 until started; flags: MAG_OK (the app's
-# field checks pass this sample), FIELD (a calibrated field was read), ACC_OK (a plausible
-# accelerometer). The filter starts (and, after reset(), starts again) at the compass's
-# attitude on the first sample with all three. In the app: predict(app) before its compass
-# update (the gyro step and gravity's; the filter's gravity in app.gravity while the board
-# accelerates) and follow(app) after its field checks (the field's correction; the filter's
-# heading and status the app's once the bias is known).
-# After it: heading_kang, pitch_kang, roll_kang (KANG, AN4248 theta and phi), source
-# (SOURCE_MAG: the last sample's field corrected the heading; SOURCE_GYRO: held by the gyro
-# alone), since_mag_us (since the last magnetic correction), uncertainty_cdeg (grows while
-# the field is not used, by the gyro bias uncertainty), vouched (the uncertainty is within
-# max_uncertainty_cdeg), bias (gyro bias per body axis, 1/4096 count), bias_cdps (how well it
-# is known, 0.01 deg/s), known (within 0.3 deg/s, until past 1 deg/s), bias_estimates (the
-# integral's blocks of evidence), accel_rejected (the last sample's accelerometer was not
-# used).
-#
-# The filter (Mahony's complementary filter on a quaternion; the kinematics q' = q (0, w) / 2):
-#   state    q, body -> world (NED), Q28 in st[0..3]; the rotation matrix C (AN4248's R
-#            transposed) is built from q >> 14 (Q14) each sample.
-#   gyro     u = 16 x counts - bias (1/16 count; the mean of the sample and the one before it:
-#            the trapezoid rule), plus the corrections below as rates; the half
-#            angle of each axis h = u x dt x k, k from the range's counts per deg/s, with dt in
-#            chunks of < 32768 us (a slow loop integrates in several chunks); q += q (0, h).
-#   gravity  e = g x d (d = C's third row, the down direction the filter believes): the
-#            rotation that turns the belief toward the measurement, times gain; every other
-#            sample, held for the one between.
-#   field    m = C b, the field in the filter's level frame; its direction atan2(my, mx) is the
-#            heading error, corrected by a rotation about the down axis, times mag_gain.
-#   bias     the integral of the corrections (bias_gain; while every axis turns slower than 60
-#            deg/s: faster, the corrections carry the integration's own errors; not in the 1 s
-#            after a hold). Its evidence: over 2 s of field-corrected, integrating time the bias
-#            moves by bias_gain x the mean correction, which is the bias error the filter still
-#            carries (the field's and gravity's pull balance it), so |moved| / (bias_gain x
-#            time) bounds it: bias_cdps, the larger of the last two blocks.
-#   held     the uncertainty starts at the field's pull in its last ~0.5 s (mag_gain x its
-#            error x time) and grows at bias_cdps (or at what the bias moved in the block cut
-#            short, if more).
-# Every intermediate stays below 2**30 (a product a x b of a Q28 and a Q14 is taken as
-# (a >> 14) b + ((a & 0x3FFF) b >> 14), exact; a time in us likewise with 15 bits); the
-# per-sample path allocates nothing: its functions keep their frames within MicroPython's 11
-# words (see firmware/compass.py).
-
+# Attitude's options and what update() leaves: docs/api.md (gyro-aided heading); the filter
+# (Mahony's complementary filter on a quaternion), its bias evidence and the held heading's
+# uncertainty: docs/design.md (module notes, attitude) and docs/gyro.md. Every intermediate
+# stays below 2**30 and the per-sample path allocates nothing (see firmware/compass.py).
 from firmware.compat import const, drop, kernels
 from firmware.trig import ZERO_VECTOR, atan2, isqrt, norm14, sin
 
@@ -247,10 +188,10 @@ class Attitude:
 
     def __init__(self, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g,
                  **options):
-        from firmware.gyro.gyrosetup import init  # construction only: dropped after it
+        from firmware.gyro.attitude_setup import init  # construction only: dropped after it
         init(self, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g, options)
         init = None
-        drop("gyro.gyrosetup")
+        drop("gyro.attitude_setup")
         self._use(_UNKNOWN_CDPS)
 
     # results

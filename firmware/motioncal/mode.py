@@ -3,57 +3,9 @@
 #     mode = MotionCalMode(app)          # app: a firmware.app.CompassApp (built with learn=False)
 #     mode.run()                         # Raw: lines at 50 Hz; Send Cal installs and stores the fit
 #
-# MotionCalMode(app, write=None, poll=None, rate_hz=50, mag_axes="x,-y,-z", ticks_us=None,
-#               kbd_intr=None, viewer=False, echo_every_us=1000000)
-#   write     write(bytes-like) to the serial line; None: sys.stdout.buffer.write
-#   poll      poll() -> the bytes that arrived, b"" when none, never blocking; None:
-#             stdin_poll() (select.poll on sys.stdin.buffer)
-#   rate_hz   Raw lines per second (1..400: MotionCal reads ~400 lines/s); one line per app
-#             step at most, so the magnetometer's output rate caps it
-#   mag_axes  the app's magnetometer map (boards/*/board.py MAG_AXES): the accelerometer is
-#             sent in the magnetometer's chip axes so MotionCal's 3-D view sees one frame
-#   ticks_us  the clock (the simulator's on the host; plain ints); None: the port's ticks_us
-#   kbd_intr  micropython.kbd_intr on a board (boards/main.py passes it: port shims live in
-#             firmware/compat.py); None: Ctrl-C is left alone (CPython, the simulator)
-#   viewer    also print the Adafruit WebSerial 3D viewer's Orientation:/Calibration: lines
-#             (MotionCal skips them; firmware/motioncal/protocol.py)
-#
-# step() = the app's step, then: _listen (poll, feed the packet reader, act on its events),
-# _stream (a Raw line when due), _echo (Cal1/Cal2 again every echo_every_us once a packet is in
-# force). It never raises (but KeyboardInterrupt, see below).
-#
-# What goes out (firmware/motioncal/protocol.py has the format): `Raw:ax,ay,az,gx,gy,gz,mx,my,mz` CR LF,
-# the magnetometer as read (chip axes: the frame the calibration is applied in) in 0.1 uT
-# whatever the chip and range, the accelerometer in 1/8192 g and the MPU6050's gyroscope in
-# 1/16 deg/s (MotionCal's units), both turned into the magnetometer's chip axes; zeros for the
-# gyro without an MPU6050 (MotionCal only draws with it). A packet's outcome is one status line, `mcmode: applied ...` or
-# `mcmode: rejected <reason>: <detail>`, which MotionCal's parser skips (neither "Raw:" nor
-# "Cal1:"/"Cal2:").
-#
-# A packet (68 bytes, 117 84 ... CRC) is found by motioncal.PacketReader wherever it starts;
-# bytes around it are skipped (counted in .garbage). Then:
-#   bad CRC      status bad_crc; nothing changes.
-#   truncated    no byte for _PACKET_TIMEOUT_US while a packet is incomplete: status truncated.
-#   fields       motioncal.calibration_fields: not_a_number, not_positive_definite,
-#                soft_iron_out_of_range, field_out_of_range, offset_out_of_range (the
-#                acceptance rules of firmware/calibrate/acceptance.py on V, InvW and B).
-#   accepted     a 10-element Calibration with the record fields MotionCal does not send, set
-#                to the bounds its Send Cal rule guarantees (docs/motioncal.md):
-#                fit_error 500 (5.00 %: Send Cal needs fit error < 5 %), samples 150 (its
-#                10-element solver needs 150 points), coverage 86 (gaps < 15 leaves at most 14
-#                of its 100 regions empty). The app uses it at once (CompassApp.use_calibration),
-#                saves it, stops its own background collecting (a fit of its own would
-#                otherwise replace the user's choice; app.calibrate() resumes it), and the
-#                Cal1/Cal2 echo (the packet's values, 5 decimals) goes out.
-# A refused packet leaves the calibration in force and the stored record untouched.
-#
-# Ctrl-C: MotionCal's packet may hold 0x03, which MicroPython turns into KeyboardInterrupt, so
-# start() sets micropython.kbd_intr(-1) and stop() restores it (run() does both). A 0x03 that
-# arrives while no packet is in progress (no 117 before it in the same read, no partial packet
-# held) is the user's Ctrl-C: the mode restores kbd_intr and raises KeyboardInterrupt.
-#
-# At run time (REPL, after Ctrl-C stops boards/main.py): `mode = MotionCalMode(app); mode.run()`
-# (boards/main.py leaves `app` and `motioncal()`, which does exactly that); Ctrl-C returns.
+# step() = the app's step, then _listen, _stream, _echo; it never raises (but a Ctrl-C).
+# Options, what goes out, what a packet does and Ctrl-C: docs/design.md (module notes, mode);
+# docs/motioncal.md for the user's side.
 import sys
 from array import array
 
@@ -119,7 +71,7 @@ def _to_chip(m, force=True):
 
 
 class MotionCalMode:
-    """See the module's opening comment. Attributes: app, status, last_reason, last_detail, lines,
+    """See docs/design.md, module notes. Attributes: app, status, last_reason, last_detail, lines,
     applied, rejected, bad_crc, truncated, garbage (bytes skipped), cal_packet (the last
     applied packet)."""
 
@@ -239,7 +191,7 @@ class MotionCalMode:
             self._events(ev)
 
     def _interrupted(self, data):
-        # a 0x03 outside any packet: the user's Ctrl-C (the module's opening comment)
+        # a 0x03 outside any packet: the user's Ctrl-C (docs/design.md, module notes)
         if self.reader.n:
             return False
         i = data.find(b"\x03")
@@ -323,7 +275,7 @@ class MotionCalMode:
             self._refused(STATUS_REJECTED, REASON_NOT_A_CALIBRATION, str(e))
             return None
         app = self.app
-        app.collector = None  # the user's choice stands (the module's opening comment)
+        app.collector = None  # the user's choice stands (docs/design.md, module notes)
         stored = app.stored
         app.use_calibration(cal)
         self.applied += 1

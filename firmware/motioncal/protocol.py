@@ -1,25 +1,12 @@
 """PJRC MotionCal's serial protocol, board side, in integers."""
-#     from firmware import motioncal as mc
+#     from firmware.motioncal import protocol as mc
 #     out.write(mc.raw_line(acc_8192, mc.GYRO_NONE, mag_01ut))        # every sample
 #     for kind, value in reader.feed(chunk):  # reader = mc.PacketReader(); chunk from stdin
 #         if kind == mc.PACKET: fields = mc.calibration_fields(value, cpg); echo = mc.echo(value)
 #
-# Board -> MotionCal: `Raw:ax,ay,az,gx,gy,gz,mx,my,mz` ended by CR (MotionCal ignores LF and
-# never accepts a line without CR), accel in 1/8192 g, gyro in 1/16 deg/s, magnetometer in
-# 0.1 uT; any character but digits, ',' and a leading '-' makes MotionCal drop the rest of its
-# 256-byte read. MotionCal -> board: one 68-byte packet when the user clicks Send Cal:
-# 117, 84 ("uT"), 16 float32 little-endian (accel offsets x3, gyro offsets x3, hard iron V x3
-# in uT, field B in uT, invW diagonal x3, invW 01 02 12), CRC-16/MODBUS of bytes 0..65, low
-# byte first. No framing: any byte value can occur, 117, 84 included. Board -> MotionCal
-# again: `Cal1:` (the first 10 floats) and `Cal2:` (invW, 9 numbers, row-major), each number
-# with a '.', no exponent; MotionCal confirms when |echo - sent| <= 0.0001 + 0.00003 |sent|.
-# On a MicroPython board a 0x03 in the packet raises KeyboardInterrupt on stdin unless
-# micropython.kbd_intr(-1) is in force while listening.
-#
-# The facts are MotionCal's own (serialdata.c ascii_parse(); rawdata.c send_calibration(),
-# crc16(), cal1_data(), cal2_data(), is_float_ok(); imuread.h for the units).
-# Floats are decoded from their bits (sign, exponent, mantissa) into fixed point; nothing here
-# uses a float. The per-sample path (raw_line_into, the unit conversions) allocates nothing.
+# The line and packet formats (MotionCal's serialdata.c, rawdata.c): docs/design.md (module
+# notes, protocol). Floats are decoded from their bits into fixed point; the per-sample path
+# (raw_line_into, the unit conversions) allocates nothing.
 from firmware.compat import const
 from firmware.errors import CalibrationRejected
 from firmware.fixedpoint import bit_length, icbrt, rdiv, sat16
@@ -46,14 +33,11 @@ F32_DENORMAL = "denormal"       # decoded exactly: below 2**-126, 0 at any sensi
 F32_INF = "inf"
 F32_NAN = "nan"
 
-# calibration_fields() refusals (CalibrationRejected.reason); the shared names are
-# firmware/calibrate/acceptance.py's
+# calibration_fields() refusals (CalibrationRejected.reason) of its own; the field, offset and
+# soft-iron refusals are firmware/calibrate/acceptance.py's REASON_*
 REASON_BAD_CRC = "bad_crc"
 REASON_NOT_A_NUMBER = "not_a_number"
 REASON_NOT_POSITIVE_DEFINITE = "not_positive_definite"
-REASON_FIELD_OUT_OF_RANGE = "field_out_of_range"
-REASON_OFFSET_OUT_OF_RANGE = "offset_out_of_range"
-REASON_SOFT_IRON_OUT_OF_RANGE = "soft_iron_out_of_range"
 
 _INVW_FRAC_BITS = const(24)     # invW decoded in Q24: 2**-24 << one Q15 step
 _Q16 = const(65536)             # V and B decoded in Q16 uT

@@ -5,10 +5,10 @@
 import json
 import sys
 
-from firmware import mountnote, persist
+from firmware import app_persist, mountnote
 from firmware.calibration import Calibration
 from firmware.axes import AxisMap
-from firmware.slots import crc32
+from firmware.store_slots import crc32
 from firmware.store import CalStore
 from host_sim.cli.memfs import MemFs
 
@@ -32,7 +32,7 @@ class App:
 def recall(fs, mag_axes, accel_axes="-x,y,z"):
     a = App(CalStore("/", fs=fs), mag_axes, accel_axes)
     if path in fs.files:
-        mountnote.load(a, fs.files[path][:80])  # as firmware/persist.py reads it
+        mountnote.load(a, fs.files[path][:80])  # as firmware/app_persist.py reads it
     return [a.mounting and list(a.mounting), a._axes_status]
 
 
@@ -62,7 +62,7 @@ for text in (b"wrong hmc5883l x,y,z -x,y,z y,x,-z", b"wrong hmc5883l x,-y,-z -x,
              b"wrong hmc5883l x,-y,-z x,y,z y,x,-z", b"wrong hmc5883l  x,-y,-z -x,y,z y,x,-z"):
     fs.files[path] = text + ("%08x\n" % crc32(text)).encode()
     print(json.dumps(["line", len(text), recall(fs, "x,-y,-z")]))
-# through the store's load at boot (firmware/persist.py: the code loaded by its name, dropped)
+# through the store's load at boot (firmware/app_persist.py: the code loaded by its name, dropped)
 a.mounting = ("wrong", "y,x,-z")
 mountnote.save(a)
 CalStore("/", sensor="hmc5883l", fs=fs).save(Calibration(
@@ -70,7 +70,7 @@ CalStore("/", sensor="hmc5883l", fs=fs).save(Calibration(
     field_out=590, fit_error=100, samples=200, coverage=80, dip_kang=10923).to_bytes())
 for axes in ("x,-y,-z", "y,x,-z", "-y,-x,-z"):
     b = App(CalStore("/", fs=fs), axes)
-    cal = persist.load(b)
+    cal = app_persist.load(b)
     print(json.dumps(["boot", axes, b.load_reason, cal.model, cal.dip_kang,
                       b.mounting and list(b.mounting), b._axes_status,
                       "firmware.mountnote" in sys.modules]))

@@ -3,7 +3,7 @@
 import json
 from binascii import hexlify
 
-from firmware.slots import crc32, crc32_int, decode_record, encode_record
+from firmware.store_slots import crc32, crc32_int, decode_record, encode_record
 from firmware.errors import StoreError
 
 

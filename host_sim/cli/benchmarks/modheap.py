@@ -13,14 +13,14 @@ from host_sim.cli.benchmarks import common
 
 # what a calibrated board holds while it shows headings (tests/test_layout.py CORE), then the
 # status line it prints, then what it loads for a job and drops after it
-HEADING = ("compat", "errors", "fixedpoint", "i2cdevice", "trig", "kang_tables", "axes",
+HEADING = ("compat", "errors", "fixedpoint", "i2cdevice", "trig", "trig_tables", "axes",
            "calibration", "compass", "health", "fieldwatch", "store", "mpu6050", "qmc5883l", "app")
 REPORT = ("status", "accuracy")
-MACHINERY = ("boot", "detect", "appsetup", "persist", "slots", "calibrate.session",
+MACHINERY = ("boot", "detect", "app_setup", "app_persist", "store_slots", "calibrate.session",
              "calibrate.history", "calibrate.samples", "calibrate.accum", "calibrate.solve",
              "calibrate.acceptance", "calibrate.calibrator", "hmc5883l", "qmc5883p",
              "field.location", "field.wmm", "field.quickcal", "motioncal.protocol",
-             "motioncal.mode", "calfile.calimport", "gyro.gyrosetup", "gyro.attitude",
+             "motioncal.mode", "calfile.calimport", "gyro.attitude_setup", "gyro.attitude",
              "calibrate.mounting", "calibrate.mountcheck", "mountnote")
 
 

@@ -15,8 +15,6 @@ from firmware.trig import cdeg_to_kang
 DEFAULT_CAPACITY = const(300)  # samples held while collecting (firmware.calibrate.calibrator's default)
 _CONFIG_EVERY = const(1)     # samples between configuration read-backs (docs/faults.md)
 _EVIDENCE_PERIODS = const(4)  # a step counts as at most 4 sample periods of evidence
-_HMC_OVERFLOW = const(-4096)
-_DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: assume 50 Hz
 _STATUS_STARTING = "starting"  # firmware.app.STATUS_STARTING
 
 
@@ -59,7 +57,7 @@ def setup(app, i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, s
     app._am = app._acc_map.m
     app._accel_auto = accel is None    # detected: look again later when absent
     app.health = Health(app.mag.counts_per_gauss,
-                         _HMC_OVERFLOW if app.mag.KIND == "hmc5883l" else -32768,
+                         getattr(app.mag, "OVERFLOW", -32768),  # HMC5883L: -4096
                          app.accel.counts_per_g if app.accel is not None else 16384)
     app._mag_cfg = (getattr(app.mag, "config_matches", None)
                      or getattr(app.mag, "config_ok", None))
@@ -107,7 +105,7 @@ def setup(app, i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, s
     app._dt = 0                # us since the previous step, capped: evidence, not time
     app._gap_us = 0            # us since the magnetometer was last read successfully
     app._stalled = False       # the last read came after a gap (a stall, bus errors)
-    app._dt_cap = _EVIDENCE_PERIODS * getattr(app.mag, "period_us", _DEFAULT_PERIOD_US)
+    app._dt_cap = _EVIDENCE_PERIODS * getattr(app.mag, "period_us", i2cdevice.DEFAULT_PERIOD_US)
     app._age_us = 0
     app._interf_us = 0
     app._clean_us = 0

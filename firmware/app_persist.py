@@ -1,13 +1,13 @@
 """A CompassApp's calibration in the store: load at boot, save after each change, retry a
 failed save. Imported for each of those and dropped again (firmware.compat.drop), with the
-store's slot code (firmware/slots.py): a running board rarely saves.
+store's slot code (firmware/store_slots.py): a running board rarely saves.
 """
 # load(app)    -> the stored Calibration, or UNCALIBRATED with the reason in app.load_reason:
 #              the newest slot whose record is intact AND whose payload Calibration.from_bytes
 #              accepts (the store skips a torn, unreadable or meaningless slot and falls back to
 #              an older one).
 # save(app, dip_only)  the calibration in force, with the dip it measures when known
-#              (firmware/health.py DipCheck). A failed save (OSError, StoreError, MemoryError)
+#              (firmware/fieldwatch.py DipCheck). A failed save (OSError, StoreError, MemoryError)
 #              is counted in app.save_errors, never raises, and is retried every
 #              _SAVE_RETRY_US by CompassApp. dip_only: the fit in force again, now with its dip
 #              (not counted in app.stored).

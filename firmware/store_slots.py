@@ -3,7 +3,7 @@
 # slot files. CalStore imports this module for each operation; a running app drops it again
 # (firmware.compat.drop), so a board that is not saving holds only the small CalStore front.
 #
-#     from firmware.slots import encode_record, decode_record, crc32
+#     from firmware.store_slots import encode_record, decode_record, crc32
 #     record = encode_record(payload, "qmc5883l", range_code, seq)
 #     seq, payload = decode_record(record, "qmc5883l", range_code)   # or StoreError(reason)
 import struct
