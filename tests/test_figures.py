@@ -64,6 +64,15 @@ ALLOW = [
     ("docs/field_model.md", "11,072 B", "9 deg grid's table: 32 + 23 x 40 x 12 B (computed)"),
     ("docs/field_model.md", "0.27 %", "grid study, rejected 10 deg grid: measured once"),
     ("docs/field_model.md", "0.19 %", "grid study, rejected 9 deg grid: measured once"),
+    ("docs/api.md", "100 us", "AK8963 datasheet: the wait after a mode change (docs/hardware.md)"),
+    ("docs/api.md", "8 ms", "MPU6050 register map, DLPF_CFG table: the 21 Hz setting's delay"),
+    ("docs/design.md", "100 us", "AK09916 datasheet: the wait after a mode change"),
+    ("docs/design.md", "6.6 ms", "MMC5603 datasheet: the measurement time at BW 0"),
+    ("docs/design.md", "29 us", "2**29 us: the limit of a wait that stays a small int"),
+    ("docs/design.md", "23 ms", "computed: 1 KiB x 9 bits at 400 kHz (an SSD1306 frame)"),
+    ("docs/design.md", "0.0055 deg", "a KANG's resolution: 360 / 65536 deg (computed)"),
+    ("docs/design.md", "7.5 deg", "the field model table's grid step: a design choice"),
+    ("docs/design.md", "2.5-3.5 deg", "computed: half of a 5 deg direction error, and the tilt's share"),
 ]
 
 
