@@ -13,7 +13,7 @@ the main bus once the IMU's I2C bypass is open.
 #   rate   output rate in Hz: 10, 20, 50, 100 (continuous measurement mode 1-4)
 # read() -> (x, y, z) counts in the chip's axes; read_into(buf) without allocating. .KIND
 # 'ak09916', .range_code 0, .counts_per_gauss, .skipped (reads whose ST1 said DOR), .suspect
-# (this read's DOR: an exact repeat is then stale data), config_ok() (CNTL2 read back).
+# (DOR and the last read's data again: stale data, as the AK8963's), config_ok() (CNTL2 read back).
 #
 # From the ICM-20948 datasheet (DS-000189 rev 1.3, section 13; docs/hardware.md): WIA1, WIA2
 # read 0x48 0x09; a read polls ST1 for DRDY, then takes HXL..HZH, TMPS and ST2 (0x11..0x18)
@@ -58,6 +58,7 @@ class AK09916(Magnetometer):
 
     def __init__(self, i2c, address=0x0C, *, range=49, rate=100, delay_us=None,
                  timeout_us=None):
+        self._last = bytearray(6)      # the last read's data bytes (DOR: a repeat?)
         self._blk = bytearray(8)       # HXL..HZH, TMPS, ST2: one transfer per sample
         super().__init__(i2c, address, delay_us, timeout_us, range, rate)
 
@@ -78,9 +79,22 @@ class AK09916(Magnetometer):
         self.register = _HXL
         d = self._blk
         self._i2c.readfrom_mem_into(self.address, _HXL, d)
-        self.suspect = status & _DOR != 0
         if status & _DOR:
             self.skipped += 1
+            # in continuous mode the data registers hold the newest set after lost ones (DOR);
+            # only an exact repeat of the last read is old data (held: a read never ended)
+            p = self._last
+            self.suspect = (d[0] == p[0] and d[1] == p[1] and d[2] == p[2] and d[3] == p[3]
+                            and d[4] == p[4] and d[5] == p[5])
+        else:
+            self.suspect = False
+        p = self._last
+        p[0] = d[0]
+        p[1] = d[1]
+        p[2] = d[2]
+        p[3] = d[3]
+        p[4] = d[4]
+        p[5] = d[5]
         if d[7] & _HOFL:
             self._buf[0:6] = d[0:6]
             raw = self.held(0)

@@ -13,8 +13,8 @@ MPU-9255 (GY-9250, GY-91 breakouts), on the main bus once the IMU's I2C bypass i
 #   range offered; rate: 8 or 100 Hz (continuous measurement mode 1 or 2)
 # read(), read_into(buf) (no allocation): counts in the chip's axes, sensitivity-adjusted.
 # .asa: the fuse ROM's ASAX..ASAZ; .skipped: reads whose ST1 said DOR (a set was lost);
-# .suspect: this read's DOR (the app then takes an exact repeat for stale data: a live
-# AK8963's noise makes one rare); config_ok(): CNTL1 read back. docs/hardware.md has the
+# .suspect: DOR and the last read's data bytes again (lost sets leave the newest set in the
+# registers: only a held one repeats; the app then says stale data); config_ok(): CNTL1 read back. docs/hardware.md has the
 # registers and their sources. A read polls ST1, then takes HXL..HZH and ST2 in one transfer:
 # ST2 ends the read and frees the data registers for the next set (datasheet 6.4.3.2).
 # ST2.HOFL (a magnetic sensor overflow): SensorOverflow. The fuse-ROM sensitivity,
@@ -60,6 +60,7 @@ class AK8963(Magnetometer):
 
     def __init__(self, i2c, address=0x0C, *, range=49, rate=100, delay_us=None,
                  timeout_us=None):
+        self._last = bytearray(6)      # the last read's data bytes (DOR: a repeat?)
         self._blk = bytearray(7)       # HXL..HZH and ST2: one transfer per sample
         self.asa = (128, 128, 128)
         super().__init__(i2c, address, delay_us, timeout_us, range, rate)
@@ -88,9 +89,22 @@ class AK8963(Magnetometer):
         self.register = _HXL
         d = self._blk
         self._i2c.readfrom_mem_into(self.address, _HXL, d)
-        self.suspect = status & _DOR != 0
         if status & _DOR:
             self.skipped += 1
+            # in continuous mode the data registers hold the newest set after lost ones (DOR);
+            # only an exact repeat of the last read is old data (held: a read never ended)
+            p = self._last
+            self.suspect = (d[0] == p[0] and d[1] == p[1] and d[2] == p[2] and d[3] == p[3]
+                            and d[4] == p[4] and d[5] == p[5])
+        else:
+            self.suspect = False
+        p = self._last
+        p[0] = d[0]
+        p[1] = d[1]
+        p[2] = d[2]
+        p[3] = d[3]
+        p[4] = d[4]
+        p[5] = d[5]
         if d[6] & _HOFL:
             self._hofl()
         k = self._k
