@@ -170,3 +170,70 @@ def test_the_app_compiles_from_its_sources_in_a_small_heap(tmp_path):
                        env=dict(os.environ, MICROPYPATH="."), capture_output=True, text=True,
                        timeout=120)
     assert p.stdout.strip() == "ok", p.stderr[-400:]
+
+
+# the chips the detection table held before the AKM, ST and MEMSIC rows came
+OLDER_DRIVERS = ("qmc5883l", "hmc5883l", "qmc5883p", "mpu6050")
+PER_CHIP_BYTES = 300  # what one more row of the table may add to a calibrated board
+
+
+def _older_table(build, tmp_path):
+    """The build's firmware with detect.mpy compiled from a detect.py whose CHIPS keeps the
+    older chips' rows only; (the firmware folder, the rows removed)."""
+    import shutil
+    src = open(os.path.join(mp.ROOT, "firmware", "detect.py")).read().splitlines(True)
+    rows = [ln for ln in src if ln.startswith(('    b"M ', '    b"I '))]
+    gone = [ln for ln in rows if ln.split()[5] not in OLDER_DRIVERS]
+    assert len(rows) - len(gone) == len(OLDER_DRIVERS) and gone
+    work = tmp_path / "src" / "firmware"
+    work.mkdir(parents=True)
+    (work / "detect.py").write_text("".join(ln for ln in src if ln not in gone))
+    out = tmp_path / "older"
+    shutil.copytree(os.path.join(build["mpy"], "firmware"), str(out / "firmware"))
+    p = subprocess.run([bench.MPY_CROSS_32, "-march=x86", "-o",
+                        str(out / "firmware" / "detect.mpy"), "firmware/detect.py"],
+                       cwd=str(tmp_path / "src"), capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    return str(out), len(gone)
+
+
+def _smallest_heading_kb(pr, session, lo, hi):
+    # the smallest -X heapsize (1 KB steps) in which a calibrated board's boot and 2000
+    # headings complete (profiles.py heading --min; the recording's bytes included)
+    def fits(kb):
+        r = pr.run(session, "heading", heap="%dk" % kb, flags=["--min"], timeout=300)
+        return "error" not in r and r.get("complete") is True
+    assert fits(hi) and not fits(lo)
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if fits(mid):
+            hi = mid
+        else:
+            lo = mid
+    return hi
+
+
+def test_each_chip_in_the_table_adds_at_most_0_3_kb_to_a_calibrated_board(build, tmp_path):
+    # a QMC5883L + MPU6050 board, calibrated: its live heap after boot and 1000 headings and
+    # its smallest heap, with today's table and with the older chips' rows only; only the
+    # found driver loads and detect leaves after boot, so the rows cost at most what the
+    # table's bytes cost while booting
+    b = _x86(build)
+    older, added = _older_table(b, tmp_path)
+    got = {}
+    for name, path in (("today", b["mpy"]), ("older", older)):
+        with bench.ProfileRun(path) as pr:
+            c = pr.run(b["session"], "calibrate", fresh_store=True)
+            assert c.get("complete"), c
+            h = pr.run(b["session"], "heading")
+            assert h.get("complete"), h
+            kb = (b["session_bytes"] + 1023) // 1024
+            got[name] = (h["boot"], h["after"], h["modules"],
+                         _smallest_heading_kb(pr, b["session"], kb + 40, kb + 160))
+    print("rows added %d: live after boot, after headings (B), smallest heap (KB): today "
+          "%d %d %d, older table %d %d %d" % ((added,) + got["today"][:2] + got["today"][3:]
+                                              + got["older"][:2] + got["older"][3:]))
+    assert got["today"][2] == got["older"][2]  # the same modules: only the found drivers
+    assert got["today"][0] - got["older"][0] <= added * PER_CHIP_BYTES, got
+    assert got["today"][1] - got["older"][1] <= added * PER_CHIP_BYTES, got
+    assert (got["today"][3] - got["older"][3]) * KB <= added * PER_CHIP_BYTES, got
