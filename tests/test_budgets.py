@@ -237,3 +237,53 @@ def test_each_chip_in_the_table_adds_at_most_0_3_kb_to_a_calibrated_board(build,
     assert got["today"][0] - got["older"][0] <= added * PER_CHIP_BYTES, got
     assert got["today"][1] - got["older"][1] <= added * PER_CHIP_BYTES, got
     assert (got["today"][3] - got["older"][3]) * KB <= added * PER_CHIP_BYTES, got
+
+
+def _qstr(line):
+    # "qstr pool: n_pool=6, n_qstr=975, n_str_data_bytes=9803, n_total_bytes=18811"
+    return dict((k.strip(), int(v)) for k, v in (f.split("=") for f in line[11:].split(",")))
+
+
+def test_each_chips_calibrated_board_holds_its_own_drivers_only(build, tmp_path):
+    # every chip's board (app_world.ALL_SETUPS) booted from .mpy files on its simulated bus
+    # with a stored calibration, 500 headings (tests/scenarios/chip_heap.py): the modules
+    # are the QMC5883L board's with its own drivers in place of the QMC5883L's and MPU6050's,
+    # and what it holds (the names' text counted, not the name pool's block steps, which
+    # depend on the simulator's names beside it) is within 2 KB of the QMC5883L board's
+    # (measured: 20,368 B; the GY-9250 the most, 22,064 B: the MPU6050's driver and the
+    # MPU-9250's built on it, and the AK8963's)
+    import sys
+    sys.path.insert(0, os.path.join(mp.ROOT, "tests", "scenarios"))
+    import app_world as W
+    from host_sim import chips
+    from firmware.calibration import Calibration
+    from firmware.store import CalStore
+    b = _x86(build)
+    held = {}
+    mods = {}
+    for setup in sorted(W.ALL_SETUPS):
+        board = W.ALL_SETUPS[setup][0]
+        kind, imu = chips.board(board)[:2]
+        e = chips.mag(kind)
+        _, code, cpg, _ = [r for r in e["ranges"] if r[0] == e["default"]][0]
+        st = tmp_path / setup
+        st.mkdir()
+        f = cpg // 2  # 0.5 G
+        CalStore(str(st), sensor=kind, range_code=code).save(Calibration(
+            model=10, offset=(f // 10, -f // 12, f // 14), invw=(32767, 0, 0, 0, 32767, 0, 0, 0,
+                                                                32767),
+            field=f, field_out=f, fit_error=120, samples=220, coverage=80).to_bytes())
+        p = subprocess.run([mp.X86_32, "-X", "heapsize=2M", "tests/scenarios/chip_heap.py",
+                            setup, str(st)], cwd=mp.ROOT, capture_output=True, text=True,
+                           env=dict(os.environ, MICROPYPATH=b["mpy"] + ":" + mp.ROOT),
+                           timeout=300)
+        assert p.returncode == 0, p.stderr[-600:]
+        lines = p.stdout.splitlines()
+        q0, q1, r = _qstr(lines[0]), _qstr(lines[1]), json.loads(lines[2])
+        assert (r["kind"], r["model"], r["load_reason"], r["ok"]) == (kind, 10, None, 500), r
+        held[setup] = r["after"] - (q1["n_total_bytes"] - q0["n_total_bytes"]) + \
+            (q1["n_str_data_bytes"] - q0["n_str_data_bytes"])
+        mods[setup] = set(r["modules"]) - {kind, imu or "mpu6050", "mpu6050"}
+    print("held after boot and 500 headings, B: %s" % sorted(held.items()))
+    assert all(m == mods["gy271"] for m in mods.values()), mods
+    assert all(h - held["gy271"] <= 2 * KB for h in held.values()), held
