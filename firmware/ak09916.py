@@ -13,7 +13,8 @@ the main bus once the IMU's I2C bypass is open.
 #   rate   output rate in Hz: 10, 20, 50, 100 (continuous measurement mode 1-4)
 # read() -> (x, y, z) counts in the chip's axes; read_into(buf) without allocating. .KIND
 # 'ak09916', .range_code 0, .counts_per_gauss, .skipped (reads whose ST1 said DOR), .suspect
-# (DOR and the last read's data again: stale data, as the AK8963's), config_ok() (CNTL2 read back).
+# (DOR and the last read's data again: stale data, as the AK8963's), config_ok() (CNTL2 read
+# back).
 #
 # From the ICM-20948 datasheet (DS-000189 rev 1.3, section 13; docs/hardware.md): WIA1, WIA2
 # read 0x48 0x09; a read polls ST1 for DRDY, then takes HXL..HZH, TMPS and ST2 (0x11..0x18)

@@ -14,9 +14,10 @@ MPU-9255 (GY-9250, GY-91 breakouts), on the main bus once the IMU's I2C bypass i
 # read(), read_into(buf) (no allocation): counts in the chip's axes, sensitivity-adjusted.
 # .asa: the fuse ROM's ASAX..ASAZ; .skipped: reads whose ST1 said DOR (a set was lost);
 # .suspect: DOR and the last read's data bytes again (lost sets leave the newest set in the
-# registers: only a held one repeats; the app then says stale data); config_ok(): CNTL1 read back. docs/hardware.md has the
-# registers and their sources. A read polls ST1, then takes HXL..HZH and ST2 in one transfer:
-# ST2 ends the read and frees the data registers for the next set (datasheet 6.4.3.2).
+# registers: only a held one repeats; the app then says stale data); config_ok(): CNTL1
+# read back. docs/hardware.md has the registers and their sources. A read polls ST1, then
+# takes HXL..HZH and ST2 in one transfer: ST2 ends the read and frees the data registers for
+# the next set (datasheet 6.4.3.2).
 # ST2.HOFL (a magnetic sensor overflow): SensorOverflow. The fuse-ROM sensitivity,
 # Hadj = H x ((ASA - 128) x 0.5 / 128 + 1), is (H x (ASA + 128) + 128) >> 8 here: within half
 # a count, every intermediate below 2**24 (tests/test_ak8963.py); beyond int16 it is held at

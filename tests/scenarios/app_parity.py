@@ -1,9 +1,9 @@
 # Parity: one simulated session of the app, run on CPython and on MicroPython, must print the
 # same lines (ints and strings only). A GY-271 (QMC5883L) + MPU6050 (or the setup argv[1]
 # names, app_world.ALL_SETUPS) with strong iron, a 40 s figure-8 with faults on the way (a
-# NACK burst, an overflow, a magnet, a reset of the magnetometer), then still, tilted poses. Prints per second the heading (KANG), status and
-# progress; every accepted calibration's bytes (hex) and the record the store holds; the
-# headings of the still poses.
+# NACK burst, an overflow, a magnet, a reset of the magnetometer), then still, tilted poses.
+# Prints per second the heading (KANG), status and progress; every accepted calibration's
+# bytes (hex) and the record the store holds; the headings of the still poses.
 import json
 import sys
 
