@@ -73,6 +73,21 @@ class AK09916(Magnetometer):
         self._write_u8(_CNTL2, self._want[0])
         self._check_config()
 
+    def _repeat(self, d, dor):
+        # in continuous mode the data registers hold the newest set after lost ones (DOR);
+        # only the last read's bytes again are old data (held: a read never ended). Its own
+        # method: sample_into's frame stays small enough for the C stack
+        p = self._last
+        same = dor != 0 and d[0] == p[0] and d[1] == p[1] and d[2] == p[2] and \
+            d[3] == p[3] and d[4] == p[4] and d[5] == p[5]
+        p[0] = d[0]
+        p[1] = d[1]
+        p[2] = d[2]
+        p[3] = d[3]
+        p[4] = d[4]
+        p[5] = d[5]
+        return same
+
     def sample_into(self, buf):
         """read_into() for callers already inside a guard: the data, TMPS and ST2 in one
         transfer."""
@@ -80,22 +95,9 @@ class AK09916(Magnetometer):
         self.register = _HXL
         d = self._blk
         self._i2c.readfrom_mem_into(self.address, _HXL, d)
+        self.suspect = self._repeat(d, status & _DOR)
         if status & _DOR:
             self.skipped += 1
-            # in continuous mode the data registers hold the newest set after lost ones (DOR);
-            # only an exact repeat of the last read is old data (held: a read never ended)
-            p = self._last
-            self.suspect = (d[0] == p[0] and d[1] == p[1] and d[2] == p[2] and d[3] == p[3]
-                            and d[4] == p[4] and d[5] == p[5])
-        else:
-            self.suspect = False
-        p = self._last
-        p[0] = d[0]
-        p[1] = d[1]
-        p[2] = d[2]
-        p[3] = d[3]
-        p[4] = d[4]
-        p[5] = d[5]
         if d[7] & _HOFL:
             self._buf[0:6] = d[0:6]
             raw = self.held(0)
