@@ -213,29 +213,45 @@ def _smallest_heading_kb(pr, session, lo, hi):
     return hi
 
 
-def test_each_chip_in_the_table_adds_at_most_0_3_kb_to_a_calibrated_board(build, tmp_path):
-    # a QMC5883L + MPU6050 board, calibrated: its live heap after boot and 1000 headings and
-    # its smallest heap, with today's table and with the older chips' rows only; only the
-    # found driver loads and detect leaves after boot, so the rows cost at most what the
-    # table's bytes cost while booting
-    b = _x86(build)
-    older, added = _older_table(b, tmp_path)
+def _table_runs(build, tmp_path, smallest):
+    # a QMC5883L + MPU6050 board, calibrated, with today's table and with the older chips'
+    # rows only: (live after boot, after 1000 headings, modules, smallest heap KB or None)
+    older, added = _older_table(build, tmp_path)
     got = {}
-    for name, path in (("today", b["mpy"]), ("older", older)):
+    for name, path in (("today", build["mpy"]), ("older", older)):
         with bench.ProfileRun(path) as pr:
-            c = pr.run(b["session"], "calibrate", fresh_store=True)
+            c = pr.run(build["session"], "calibrate", fresh_store=True)
             assert c.get("complete"), c
-            h = pr.run(b["session"], "heading")
+            h = pr.run(build["session"], "heading")
             assert h.get("complete"), h
-            kb = (b["session_bytes"] + 1023) // 1024
+            kb = (build["session_bytes"] + 1023) // 1024
             got[name] = (h["boot"], h["after"], h["modules"],
-                         _smallest_heading_kb(pr, b["session"], kb + 40, kb + 160))
-    print("rows added %d: live after boot, after headings (B), smallest heap (KB): today "
-          "%d %d %d, older table %d %d %d" % ((added,) + got["today"][:2] + got["today"][3:]
-                                              + got["older"][:2] + got["older"][3:]))
+                         _smallest_heading_kb(pr, build["session"], kb + 40, kb + 160)
+                         if smallest else None)
+    return got, added
+
+
+def test_each_chip_in_the_table_adds_at_most_0_3_kb_to_a_calibrated_board(build, tmp_path):
+    # only the found driver loads and detect leaves after boot: the rows cost a calibrated
+    # board at most what the table's bytes cost (measured: 57,840 B after boot with today's
+    # table, 57,856 with the older rows only; 57,856 and 57,872 after 1000 headings)
+    got, added = _table_runs(_x86(build), tmp_path, False)
+    print("rows added %d: live after boot, after headings (B): today %d %d, older table %d %d"
+          % ((added,) + got["today"][:2] + got["older"][:2]))
     assert got["today"][2] == got["older"][2]  # the same modules: only the found drivers
     assert got["today"][0] - got["older"][0] <= added * PER_CHIP_BYTES, got
     assert got["today"][1] - got["older"][1] <= added * PER_CHIP_BYTES, got
+
+
+@pytest.mark.skipif(not os.environ.get("TABLE_SMALLEST_HEAP"),
+                    reason="the smallest-heap search near the limit takes ~45 s (heaps that "
+                           "barely fit collect on every step): TABLE_SMALLEST_HEAP=1 runs it")
+def test_each_chip_in_the_table_adds_at_most_0_3_kb_to_the_smallest_heap(build, tmp_path):
+    # the same boards' smallest heaps (measured: 162 KB today, 163 KB with the older rows
+    # only; the 72 KB recording included)
+    got, added = _table_runs(_x86(build), tmp_path, True)
+    print("rows added %d: smallest heap KB today %d, older table %d"
+          % (added, got["today"][3], got["older"][3]))
     assert (got["today"][3] - got["older"][3]) * KB <= added * PER_CHIP_BYTES, got
 
 
