@@ -172,6 +172,10 @@ def test_every_wrong_mounting_of_each_chip_is_found_with_its_handedness(board):
             found.append(mount)
         assert all(c[2] == right for c in s.checks if c[1] in (mountcheck.OK, mountcheck.WRONG))
     assert len(found) == 23
+    # and a map of the other handedness is refused on this chip's board at construction
+    other = M.mag_axes((own[0], own[1], -own[2]))
+    with pytest.raises(ValueError, match="rotation" if det == -1 else "mirror"):
+        M.Session(board, None if imu else True, mag_axes=other, seconds=0)
 
 
 def test_no_false_alarm_over_a_seeded_soak_of_right_settings_on_rough_boards():
