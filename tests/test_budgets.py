@@ -245,7 +245,8 @@ def test_each_chip_in_the_table_adds_at_most_0_3_kb_to_a_calibrated_board(build,
 
 @pytest.mark.skipif(not os.environ.get("TABLE_SMALLEST_HEAP"),
                     reason="the smallest-heap search near the limit takes ~45 s (heaps that "
-                           "barely fit collect on every step): TABLE_SMALLEST_HEAP=1 runs it")
+                           "barely fit collect on every step): TABLE_SMALLEST_HEAP=1 make test "
+                           "runs it")
 def test_each_chip_in_the_table_adds_at_most_0_3_kb_to_the_smallest_heap(build, tmp_path):
     # the same boards' smallest heaps (measured: 162 KB today, 163 KB with the older rows
     # only; the 72 KB recording included)

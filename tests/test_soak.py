@@ -161,3 +161,17 @@ def test_a_short_campaign_on_each_other_chip_has_no_exception_no_loss_and_no_wro
     c = st["clean"]
     assert c["sessions"] == 2 and c["steps"] > 800
     assert c["not_ok"] <= c["steps"] // 1000 and c["wrong_but_ok"] == 0
+
+
+@pytest.mark.xfail(strict=True, reason="docs/chips.md, known limits: fault-free LIS3MDL and "
+                   "LIS2MDL sessions at 20 Hz say 'heading jumped' with the heading within "
+                   "1.5 deg (85 and 136 of 1200 samples on these two streams)")
+@pytest.mark.parametrize("setup", [("lis3mdl", True), ("lis2mdl", True)], ids=["lis3mdl",
+                                                                             "lis2mdl"])
+def test_the_st_chips_fault_free_turning_raises_no_false_alarm(setup):
+    # the campaign above's fault-free streams 6 and 7 of seed 5 (turning 18 deg/s and
+    # tilting): no fault, so every non-ok sample is a false alarm
+    st = soak.campaign(sessions=6, seconds=30, seed=5, setups=(setup,), only=[6, 7])
+    c = st["clean"]
+    assert c["steps"] == 1200 and c["wrong_but_ok"] == 0
+    assert c["not_ok"] <= c["steps"] // 1000, c
