@@ -215,10 +215,14 @@ class AKMagSim(MagnetometerModel):
             self.reading = False
             return (_HOFL if self.hofl else 0) | (_BITM if self.bitm else 0)
         if reg == self.ST1:
-            return (_DRDY if self.drdy else 0) | (_DOR if self.dor else 0)
+            return self.st1()
         if reg < len(self.ID):
             return self.ID[reg]
         return self.read_other(reg)
+
+    def st1(self):
+        """ST1: DRDY (a set to read), DOR (a set was lost)."""
+        return (_DRDY if self.drdy else 0) | (_DOR if self.dor else 0)
 
     def read_other(self, reg):
         return self.regs[reg]

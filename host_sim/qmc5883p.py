@@ -25,6 +25,10 @@ are model choices, stated so that a driver's assumptions show up in tests:
 - Noise: the datasheet's feature table gives 2 mG field resolution; the model adds 2 mG RMS
   per axis and rounds to the nearest count.
 - inject_raw(x, y, z) forces the raw counts of the next set (queued).
+- Field faults (host_sim.bus.MagnetometerModel, as the QMC5883L's): freeze() keeps the
+  output registers while DRDY still rises with each set; constant(x, y, z) makes every set
+  read those counts; brown_out() is power-on; SOFT_RST and brown_out clear a fault unless
+  sticky; glitch(reg, value) a write the driver never made.
 """
 import math
 
@@ -34,7 +38,7 @@ except ImportError:
     def const(x):
         return x
 
-from host_sim.bus import RegisterDevice
+from host_sim.bus import MagnetometerModel
 from host_sim.prng import Prng
 from host_sim.world import sensor_counts
 
@@ -60,13 +64,13 @@ _COUNTS_PER_G = (1000, 2500, 3750, 15000)        # RNG +-30 / +-12 / +-8 / +-2 G
 _NOISE_G = 0.002                                 # 2 mG (datasheet feature table)
 
 
-class QMC5883PSim(RegisterDevice):
+class QMC5883PSim(MagnetometerModel):
     """QMC5883P at 0x2C (see the module docstring)."""
 
     ADDRESS = 0x2C
 
     def __init__(self, world=None, mount=(1, -2, -3), seed=1, noise=True):
-        RegisterDevice.__init__(self)
+        MagnetometerModel.__init__(self)
         self.world = world
         self.mount = tuple(mount)
         self.seed = seed
@@ -95,6 +99,14 @@ class QMC5883PSim(RegisterDevice):
     def inject_raw(self, x, y, z):
         self.injected.append((int(x), int(y), int(z)))
 
+    def brown_out(self):
+        self.power_on()
+        if not self.sticky:
+            self.fault = None
+
+    def glitch(self, reg, value):
+        self.write_reg(reg, value)
+
     def update(self, now_us):
         if self._t0 is None:
             return
@@ -111,7 +123,13 @@ class QMC5883PSim(RegisterDevice):
         self._place(self._t0 + k * period)
 
     def _place(self, t_us):
-        if self.injected:
+        if self.fault == "freeze":
+            self.drdy = True
+            self.measurements += 1
+            return
+        if self.fault == "constant":
+            raw = self.fault_value
+        elif self.injected:
             raw = self.injected.pop(0)
         else:
             cpg = self.counts_per_gauss()
@@ -158,7 +176,7 @@ class QMC5883PSim(RegisterDevice):
                 self._k = 0
         elif reg == _REG_CTRL2:
             if value & _CTRL2_SOFT_RST:
-                self.power_on()
+                self.brown_out()
             else:
                 self.ctrl2 = value
         elif reg == _REG_AXIS_SIGN:

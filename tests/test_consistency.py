@@ -19,6 +19,16 @@ HARD_IRON_TOL_UT = 1.5
 INCONSISTENT = acceptance.REASON_INCONSISTENT
 
 
+def setups(limits, every=True):
+    """Every setup (app_world.ALL_SETUPS; every=False: the GY-271 and GY-87 only, to keep
+    make test short); those in `limits` (setup -> what happens) are a known limit of the
+    halves check on that chip (docs/chips.md, known limits): expected to fail, and flagged
+    the day they pass."""
+    names = sorted(set(W.ALL_SETUPS if every else W.SETUPS) | set(limits))
+    return [pytest.param(s, marks=pytest.mark.xfail(strict=True, reason=limits[s]))
+            if s in limits else s for s in names]
+
+
 def session(setup, world_hook, seconds):
     """A first calibration (empty store, figure-8) with world_hook(world) applied; returns
     (board, app, fs, refusal reasons seen, every 10-element fit the app accepted)."""
@@ -53,7 +63,9 @@ def true_iron(app, cal, v_ut):
     return all(abs(ut(app, cal.offset[i]) - v_ut[i]) < HARD_IRON_TOL_UT for i in range(3))
 
 
-@pytest.mark.parametrize("setup", sorted(W.SETUPS))
+@pytest.mark.parametrize("setup", setups({
+    "icm20948": "a fit over the mixed samples accepted at 20.5 s, hard iron 6 uT off: the "
+                "halves 5.8 % of B apart, spared as within twice the fit's RMS residual"}))
 def test_a_magnet_near_the_sensor_during_part_of_the_first_calibration_is_refused(setup):
     # a small magnet (9 uT, inside the first fit's interference window, so its samples are
     # fed) near the sensor from 6 s to 18 s of a first figure-8
@@ -70,7 +82,12 @@ def test_a_magnet_near_the_sensor_during_part_of_the_first_calibration_is_refuse
     assert Calibration.from_bytes(app.store.load()) == c
 
 
-@pytest.mark.parametrize("setup", sorted(W.SETUPS))
+@pytest.mark.parametrize("setup", setups({
+    "gy9250": "a mixed fit accepted (hard iron ~3 uT off)",
+    "icm20948": "a mixed fit accepted (hard iron ~3 uT off)",
+    "lis2mdl": "a mixed fit accepted (hard iron ~5 uT off)",
+    "lis3mdl": "a mixed fit accepted at 11.6 s (hard iron 5 uT off): the halves 8.6 % of B "
+               "apart, chi-square 15.8 within the noise limit 16 at 20 Hz"}, every=False))
 def test_two_hard_iron_states_mixed_are_refused_until_one_holds(setup):
     # a relay or a motor near the sensor: the hard iron 12 uT off for 6 s of every 12 s
     # while the first figure-8 begins (from 3 s to 39 s: switch_iron, period 12 s from -3 s);
@@ -85,7 +102,10 @@ def test_two_hard_iron_states_mixed_are_refused_until_one_holds(setup):
     assert c.model == 10 and true_iron(app, c, W.HARD_IRON_UT)
 
 
-@pytest.mark.parametrize("setup", sorted(W.SETUPS))
+@pytest.mark.parametrize("setup", setups({
+    "icm20948": "a fit over drifting samples accepted before the drift ends",
+    "qmc5883p": "a fit over 10 s of drift accepted (1.6 % fit error): the halves shared too "
+                "few directions for a verdict"}, every=False))
 def test_a_drifting_hard_iron_is_refused_until_it_holds(setup):
     # 0.5 uT/s (21 uT over 40 s: a board warming up near a magnetised part), then steady
     rate = (0.3, -0.3, 0.3)
@@ -102,7 +122,7 @@ def test_a_drifting_hard_iron_is_refused_until_it_holds(setup):
     assert c.model == 10 and true_iron(app, c, end)
 
 
-@pytest.mark.parametrize("setup", sorted(W.SETUPS))
+@pytest.mark.parametrize("setup", sorted(W.ALL_SETUPS))
 def test_a_clean_first_calibration_never_meets_the_refusal(setup):
     b, app, fs, reasons, fits, _ = session(setup, lambda w: None, 60)
     assert INCONSISTENT not in reasons and fits

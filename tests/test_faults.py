@@ -12,7 +12,7 @@ import math
 import pytest
 
 from tests.test_reliability import POSE, settled
-from tests.test_reliability import good, good_qmc  # noqa: F401  (the same fixtures)
+from tests.test_reliability import Good, good_qmc  # noqa: F401  (the same fixture)
 from host_sim.world import mat_vec, mount_apply
 from firmware.health import DIP_TOL_KANG
 from tests.scenarios import app_world as W
@@ -22,6 +22,13 @@ from firmware.calibration import Calibration
 from firmware.store import CalStore
 
 ACCURACY_CDEG = 500
+
+
+@pytest.fixture(scope="module", params=sorted(W.SETUPS))
+def good(request):
+    # the GY-271 and the GY-87: these scenarios reach into the QMC5883L's and HMC5883L's
+    # registers and scales (tests/test_reliability.py runs the shared ones on every chip)
+    return Good(request.param)
 
 
 def watch(app, b, seconds, turn=None):

@@ -129,6 +129,55 @@ def test_every_wrong_magnetometer_rotation_is_found_and_the_right_one_named(chip
     assert len(found) == 23
 
 
+# the other chips' boards (host_sim/chips.py BOARDS): each chip mounted every way its
+# handedness allows (a mirror for the LIS2MDL, rotations for the rest) against the board's
+# accelerometer, with the board's own MAG_AXES (boards/breakouts.py); sessions of
+# CHIP_SECONDS, each wrong mounting named within FOUND_BY_S all the same
+CHIP_BOARDS = ("lis3mdl", "lis2mdl", "mmc5603", "gy9250", "icm20948")
+CHIP_SECONDS = 12
+
+
+def mountings(board):
+    """The 24 mountings of `board`'s magnetometer of its handedness, its own first."""
+    from host_sim import chips
+    kind, _, _, _, own = chips.board(board)
+    rots = M.rotations()
+    if chips.mag(kind)["mirror"]:
+        rots = [(a, b, -c) for a, b, c in rots]  # each rotation followed by z turned over
+    assert own in rots
+    return [own] + [m for m in rots if m != own]
+
+
+@pytest.mark.parametrize("board", CHIP_BOARDS)
+def test_every_wrong_mounting_of_each_chip_is_found_with_its_handedness(board):
+    from boards.breakouts import breakout
+    from host_sim import chips
+    kind, imu, _, _, own = chips.board(board)
+    given = M.mag_axes(own)
+    assert given == breakout(chips.demo(kind)[2])["mag"]
+    det = -1 if chips.mag(kind)["mirror"] else 1
+    found = []
+    for mount in mountings(board):
+        s = M.Session(board, None if imu else True, mount=mount, mag_axes=given,
+                      seconds=CHIP_SECONDS)
+        right = M.mag_axes(mount)
+        assert AxisMap(right).det == det
+        v, axes = s.verdict
+        if mount == own:
+            assert v == mountcheck.OK and s.checks[-1][3] <= RIGHT_MAX_Q10, s.checks
+        else:
+            assert (v, axes) == (mountcheck.WRONG, right), (mount, s.checks)
+            first = min(c[0] for c in s.checks if c[1:3] == (mountcheck.WRONG, right))
+            assert first <= FOUND_BY_S, (mount, s.checks)
+            found.append(mount)
+        assert all(c[2] == right for c in s.checks if c[1] in (mountcheck.OK, mountcheck.WRONG))
+    assert len(found) == 23
+    # and a map of the other handedness is refused on this chip's board at construction
+    other = M.mag_axes((own[0], own[1], -own[2]))
+    with pytest.raises(ValueError, match="rotation" if det == -1 else "mirror"):
+        M.Session(board, None if imu else True, mag_axes=other, seconds=0)
+
+
 def test_no_false_alarm_over_a_seeded_soak_of_right_settings_on_rough_boards():
     st = M.soak(SOAK_SESSIONS, seed=1)
     assert st["false_alarms"] == 0, st["alarms"]

@@ -53,11 +53,17 @@ HARD_IRON_UT = (45.0, -35.0, 30.0)
 SOFT_IRON = ((1.18, 0.09, -0.06), (0.09, 0.88, 0.07), (-0.06, 0.07, 1.04))
 SETUPS = (("gy271", True), ("gy87", None))
 AKM_SETUPS = (("gy9250", None), ("icm20948", None))
+# the other magnetometers, each on its module with a GY-521 (tests/test_soak.py runs each)
+CHIP_SETUPS = (("hmc5883l", True), ("qmc5883p", True), ("lis3mdl", True), ("lis2mdl", True),
+               ("mmc5603", True))
 CLASSES = ("stale", "zeros", "mag_reset", "range", "accel_sleep", "accel_ff", "free_fall",
            "stall", "magnet", "nack", "accel_absent")
 # each board's maps (boards/breakouts.py: the magnetometer inside an IMU has its own axes)
 AXES = {"gy271": ("x,-y,-z", "-x,y,z"), "gy87": ("x,-y,-z", "-x,y,z"),
-        "gy9250": ("y,-x,z", "-x,y,z"), "icm20948": ("x,y,z", "-x,y,z")}
+        "gy9250": ("y,-x,z", "-x,y,z"), "icm20948": ("x,y,z", "-x,y,z"),
+        "hmc5883l": ("x,-y,-z", "-x,y,z"), "qmc5883p": ("x,-y,-z", "-x,y,z"),
+        "lis3mdl": ("x,-y,-z", "-x,y,z"), "lis2mdl": ("x,-y,z", "-x,y,z"),
+        "mmc5603": ("x,-y,-z", "-x,y,z")}
 
 
 class Turning:
@@ -136,6 +142,14 @@ def inject(b, cls, g):
         elif b.mag_address == 0x0C:  # the AKM chips: their mode register (output width, rate)
             reg = mag.CNTL
             mag.glitch(reg, mag.regs[reg] ^ (0x10 if reg == 0x0A else 0x06))
+        elif b.chip == "qmc5883p":  # CTRL2 RNG[3:2]
+            mag.glitch(0x0B, mag.ctrl2 ^ (g.randrange(3) + 1) << 2)
+        elif b.chip == "lis3mdl":  # CTRL_REG2 FS[6:5]
+            mag.glitch(0x21, g.randrange(4) << 5)
+        elif b.chip == "lis2mdl":  # one range: CFG_REG_A's ODR[3:2]
+            mag.glitch(0x60, mag.cfg[0] ^ (g.randrange(3) + 1) << 2)
+        elif b.chip == "mmc5603":  # the range is the driver's: Control 1's bandwidth
+            mag.glitch(0x1C, g.randrange(4))
         else:
             mag.glitch(0x01, (g.randrange(8) << 5))
         return lambda: None

@@ -1,23 +1,28 @@
 # Parity: one simulated session of the app, run on CPython and on MicroPython, must print the
-# same lines (ints and strings only). A GY-271 (QMC5883L) + MPU6050 with strong iron, a 40 s
-# figure-8 with faults on the way (a NACK burst, an overflow, a magnet, a brown-out reset of
-# the magnetometer), then still, tilted poses. Prints per second the heading (KANG), status and
-# progress; every accepted calibration's bytes (hex) and the record the store holds; the
-# headings of the still poses.
+# same lines (ints and strings only). A GY-271 (QMC5883L) + MPU6050 (or the setup argv[1]
+# names, app_world.ALL_SETUPS) with strong iron, a 40 s figure-8 with faults on the way (a
+# NACK burst, an overflow, a magnet, a reset of the magnetometer), then still, tilted poses.
+# Prints per second the heading (KANG), status and progress; every accepted calibration's
+# bytes (hex) and the record the store holds; the headings of the still poses.
 import json
 import sys
 
 sys.path.append("tests/scenarios")
-from app_world import TILTED_POSES, hold, make_app, make_sim, mem_store  # noqa: E402
+from app_world import OVERFLOW_RAW, TILTED_POSES, hold, make_app, make_sim, mem_store  # noqa: E402
 
 from binascii import hexlify  # noqa: E402
 
-b = make_sim("gy271", seed=5)
+setup = sys.argv[1] if len(sys.argv) > 1 else "gy271"
+b = make_sim(setup, seed=5)
 b.world.add_magnet((0.0, 90.0, 40.0), 22.0, 25.0, ramp_s=0.3, frame="sensor")
 store = mem_store()
 app = make_app(b, store=store)
 state = {"accepted": 0, "t": 0}
 events = [(8000000, "nack"), (12000000, "overflow"), (30000000, "reset")]
+end = 40000000
+if len(sys.argv) > 2:  # a shorter session: SECONDS, the reset at 3/4 of it
+    end = int(sys.argv[2]) * 1000000
+    events[2] = (end * 3 // 4, "reset")
 
 
 def each(a):
@@ -27,9 +32,11 @@ def each(a):
         if ev == "nack":
             b.bus.inject_nack(after=0, count=3)
         elif ev == "overflow":
-            b.mag.inject_raw(40000, 0, 0)
-        else:
+            b.mag.inject_raw(OVERFLOW_RAW[a.mag.KIND], 0, 0)
+        elif setup == "gy271":
             b.bus.writeto_mem(0x0D, 0x0A, b"\x80")  # SOFT_RST: the chip is back in standby
+        else:
+            b.mag.power_on()  # a brown-out: its registers at their power-on values
         print(json.dumps(["event", ev, now]))
     if a.accepted != state["accepted"]:
         state["accepted"] = a.accepted
@@ -43,7 +50,6 @@ def each(a):
                           p["samples"], p["model"], p["fit_error"], p["last_reason"]]))
 
 
-end = 40000000
 while b.clock.now_us < end:
     app.step()
     each(app)

@@ -15,11 +15,30 @@ FIELD_UT = 50.0
 INCLINATION_DEG = 60.0
 DECLINATION_DEG = 4.0
 DECLINATION_CDEG = 400
-# host_sim.boards mounts every chip x forward, y left, z up (boards/breakouts.py: gy271, gy87)
+# host_sim.boards mounts a module's chip x forward, y left, z up (boards/breakouts.py: gy271,
+# gy87); BOARD_AXES below: the others
 MAG_AXES = "x,-y,-z"
 ACCEL_AXES = "-x,y,z"
 # (board, accel) per setup: a GY-271 (QMC5883L) with a GY-521 (MPU6050) module, and a GY-87
 SETUPS = {"gy271": ("gy271", True), "gy87": ("gy87", None)}
+# every other magnetometer on its board (host_sim/chips.py DEMOS): a module with a GY-521
+# beside it, or the IMU that carries it
+CHIP_SETUPS = {"hmc5883l": ("hmc5883l", True), "qmc5883p": ("qmc5883p", True),
+               "lis3mdl": ("lis3mdl", True), "lis2mdl": ("lis2mdl", True),
+               "mmc5603": ("mmc5603", True), "gy9250": ("gy9250", None),
+               "icm20948": ("icm20948", None)}
+# an injected raw sample each magnetometer reports as an overflow: beyond int16 (QMC5883L OVL,
+# QMC5883P OVFL, the AKM chips' HOFL past +-32752, the LIS3MDL's rails), beyond the HMC5883L's
+# 12 bits (-4096) or the LIS2MDL's +-16.38 G; the MMC5603's field H (16384 counts/G) past
+# its 4 G range
+OVERFLOW_RAW = {"qmc5883l": 40000, "hmc5883l": 3000, "qmc5883p": 40000, "ak8963": 40000,
+                "ak09916": 40000, "lis3mdl": 40000, "lis2mdl": 20000, "mmc5603": 5 * 16384}
+ALL_SETUPS = dict(SETUPS)
+ALL_SETUPS.update(CHIP_SETUPS)
+# the boards whose magnetometer lies otherwise than x forward, y left, z up: their maps
+# (boards/breakouts.py; tests/test_app.py checks these are its maps)
+BOARD_AXES = {"gy9250": ("y,-x,z", ACCEL_AXES), "icm20948": ("x,y,z", ACCEL_AXES),
+              "lis2mdl": ("x,-y,z", ACCEL_AXES)}
 TILTED_POSES = ((30.0, 20.0, -15.0), (135.0, -25.0, 10.0), (250.0, 10.0, 30.0),
                 (300.0, -15.0, -25.0), (80.0, 0.0, 0.0))
 
@@ -42,13 +61,19 @@ def make_world(m=None, hard_iron_ut=HARD_IRON_UT, soft_iron=SOFT_IRON):
 
 
 def make_sim(setup="gy271", m=None, seed=3, world=None):
-    chip, accel = SETUPS[setup]
+    chip, accel = ALL_SETUPS[setup]
     return make_board(chip, world=world if world is not None else make_world(m), seed=seed,
                       accel=accel)
 
 
+def axes(b):
+    """(MAG_AXES, ACCEL_AXES) of board `b`."""
+    return BOARD_AXES.get(b.chip, (MAG_AXES, ACCEL_AXES))
+
+
 def make_app(b, store=None, **kw):
-    return CompassApp(b.bus, mag_axes=MAG_AXES, accel_axes=ACCEL_AXES,
+    mag_axes, accel_axes = axes(b)
+    return CompassApp(b.bus, mag_axes=mag_axes, accel_axes=accel_axes,
                       declination_cdeg=DECLINATION_CDEG, store=store, delay_us=b.sleep_us,
                       ticks_us=b.clock.ticks_us, **kw)
 
