@@ -230,7 +230,7 @@ def test_the_simulator_imports_nothing_of_firmware_boards_or_tests():
 
 
 def _cli_files():
-    base = os.path.join(ROOT, "host_sim", "cli")
+    base = os.path.join(ROOT, "desktop")
     for dirpath, _, files in os.walk(base):
         for f in files:
             if f.endswith(".py"):
@@ -254,9 +254,9 @@ def test_commands_never_import_tests_and_load_numpy_matplotlib_only_where_needed
 
 
 def test_every_command_parses_its_arguments_with_the_one_shared_parser():
-    from host_sim import __main__ as runner
+    from desktop import __main__ as runner
     for cmd in runner._COMMANDS:
-        src = open(os.path.join(ROOT, "host_sim", "cli", cmd + ".py")).read()
+        src = open(os.path.join(ROOT, "desktop", cmd + ".py")).read()
         assert "parser(" in src or "Parser(" in src, cmd      # args.Parser, or demo.parser
         assert "sys.argv" not in src.replace('sys.argv[1:]', ''), cmd
     for path in _cli_files():

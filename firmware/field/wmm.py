@@ -25,7 +25,7 @@
 #
 # How (docs/field_model.md has the table format and the measured errors): the table holds the
 # north, east and down components X, Y, Z at the epoch 2025.0 and their secular variation on a
-# 7.5 deg grid (host_sim/cli/wmm.py writes it from the official coefficients). A query reads the
+# 7.5 deg grid (desktop/wmm.py writes it from the official coefficients). A query reads the
 # 4 x 4 nodes around the point with seek + readinto into one 12-byte buffer, brings each node to
 # the date (WMM is linear in time), interpolates the components with a cubic Lagrange stencil,
 # first along longitude then along latitude, and only then derives D = atan2(Y, X),
@@ -67,7 +67,7 @@ REASON_BAD_HEADER = "bad_header"
 REASON_BAD_CRC = "bad_crc"
 
 TABLE_NAME = "wmm2025.bin"
-_HEADER = const(32)  # bytes before the first record (host_sim/cli/wmm.py: file layout)
+_HEADER = const(32)  # bytes before the first record (desktop/wmm.py: file layout)
 _RECORD = const(12)  # X0 Y0 Z0 SX SY SZ, int16 each
 _MAIN_NT = const(4)  # nT per count of X0, Y0, Z0
 _SV_PER_NT = const(8)  # counts per nT/year of SX, SY, SZ
