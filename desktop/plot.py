@@ -45,8 +45,6 @@ def calibration_png(path, setup, cal, raws):
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from desktop.demo import invw_float
-
     raws = [(raws[j], raws[j + 1], raws[j + 2]) for j in range(0, len(raws) - 2, 3)]
     n_all = len(raws)
     if len(raws) > _MAX_POINTS:
@@ -63,7 +61,9 @@ def calibration_png(path, setup, cal, raws):
     k_out = cal.field / cal.field_out if cal.field_out else 1.0
     corr = np.array(corr, dtype=float) * k_out * k_ut
     b_ut = cal.field * k_ut
-    w_fit = np.linalg.inv(np.array(invw_float(cal)))  # W, the ellipsoid's shape
+    # W, the ellipsoid's shape: the inverse of W^-1 = InvW / 32768 scaled as the corrected
+    # samples are (demo.invw_float; computed here, demo imports this module)
+    w_fit = np.linalg.inv(np.array(cal.invw, dtype=float).reshape(3, 3) / 32768 * k_out)
     eye = np.eye(3)
     fe = "%d.%02d %%" % (cal.fit_error // 100, cal.fit_error % 100)
 
