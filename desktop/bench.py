@@ -743,6 +743,21 @@ def wire_us(n_bytes, freq=I2C_HZ):
     return (9 * (3 + n_bytes) + 3) * 1000000 / freq
 
 
+# what boards() assumes, written into its output
+BOARD_ASSUMPTIONS = (
+    "board time = unix port time x (board / unix time of the same reference "
+    "loop); int loop for the firmware, float loop for the heading guide's float math",
+    "plus, per int operation that is a long int only on a 32-bit port "
+    "(intcount.py), the published cost of one long-int result: (int_mul - "
+    "int_add) per iteration",
+    "ESP32 at 240 MHz: the 160 MHz figures x 160/240 (clock ratio only: the "
+    "weakest assumption; flash-cache misses do not scale with the clock)",
+    "viper code is scaled like bytecode (unknown: native code may scale "
+    "differently)",
+    "I2C time on the wire at 400 kHz per sample (QMC5883L status + data, "
+    "MPU6050 accel); machine.I2C's own call overhead is not included")
+
+
 def boards(res):
     """Estimates for RP2040 and ESP32 from the yardstick (see yardstick.py)."""
     from desktop.benchmarks.yardstick import PUBLISHED_MS, SOURCE
@@ -752,94 +767,104 @@ def boards(res):
     pub = dict(PUBLISHED_MS)
     e160 = pub["esp32_160mhz"]
     pub["esp32_240mhz"] = {k: v * 160 / 240 for k, v in e160.items()}  # clock-scaled
-    hot = _get(res, "hot", "micropython") or {}
-    col = _get(res, "collector", "micropython") or {}
-    sol = _get(res, "solver", "micropython") or {}
-    app = _get(res, "appbench", "micropython") or {}
-    ic = _get(res, "intcount", "cpython") or {}
-    stages = hot.get("stages_us", {})
     wire = wire_us(1) + wire_us(6) + wire_us(6)   # QMC status, QMC data, MPU6050 accel
     out = {"source": SOURCE, "unix_ms_per_1e6": ys, "i2c_wire_us_per_sample": wire,
-           "assumptions": [
-               "board time = unix port time x (board / unix time of the same reference "
-               "loop); int loop for the firmware, float loop for the heading guide's float math",
-               "plus, per int operation that is a long int only on a 32-bit port "
-               "(intcount.py), the published cost of one long-int result: (int_mul - "
-               "int_add) per iteration",
-               "ESP32 at 240 MHz: the 160 MHz figures x 160/240 (clock ratio only: the "
-               "weakest assumption; flash-cache misses do not scale with the clock)",
-               "viper code is scaled like bytecode (unknown: native code may scale "
-               "differently)",
-               "I2C time on the wire at 400 kHz per sample (QMC5883L status + data, "
-               "MPU6050 accel); machine.I2C's own call overhead is not included"]}
-    add_full = _get(col, "phases", "full", "us_per_raw")
+           "assumptions": list(BOARD_ASSUMPTIONS)}
+    measured = _board_inputs(res)
+    for b, p in pub.items():
+        out[b] = board_estimate(p, ys, measured, wire)
+    return out
+
+
+def _board_inputs(res):
+    """What boards() scales, from the unix port's runs and the long-int counts."""
+    col = _get(res, "collector", "micropython") or {}
+    ic = _get(res, "intcount", "cpython") or {}
     paths = col.get("paths_us", {})
     n_rep = _get(paths, "replaced_full", 1) or 0
     n_rej = _get(paths, "rejected_full", 1) or 0
     rep_mid = _get(ic, "add_per_path", "replaced", "mid") or 0
-    mid_per_raw_full = rep_mid * n_rep / (n_rep + n_rej) if (n_rep + n_rej) else 0
-    steps_us = _get(sol, "sliced_10", "per_step_us") or []
-    steps_mid = [s[1] for s in (ic.get("sliced_10_per_step") or [])]
-    for b, p in pub.items():
-        f_int = p["int_add"] / ys["int_add"]
-        f_float = p["float_add"] / ys["float_add"]
-        f_pi = p["pi_1000"] / ys["pi_1000"]
-        c_long = (p["int_mul"] - p["int_add"]) / 1000.0   # us per long-int result
-        e = {"scale_int": f_int, "scale_float": f_float, "scale_long_int": f_pi,
-             "long_int_op_us": c_long}
-        if hot.get("ours_cpu_us") is not None:
-            e["hot_plain_us"] = hot["ours_cpu_us"] * f_int
-            e["hot_fast_us"] = hot["fast_cpu_us"] * f_int
-            fr = _get(stages, "float", "read_both") or 0
-            fl = hot["float_cpu_us"] - fr
-            e["hot_float_us"] = fr * f_int + fl * f_float
-            e["hot_ratio_fast_float"] = e["hot_fast_us"] / e["hot_float_us"]
-        if add_full is not None:
-            e["add_full_us"] = add_full * f_int + mid_per_raw_full * c_long
-        solve = {}
-        for m, t in (sol.get("solve_us") or {}).items():
-            mid = (_get(ic, "solve", m) or [0, 0, 0])[1]
-            solve[m] = {"estimate_ms": (t * f_int + mid * c_long) / 1000,
-                        "upper_ms": (t * f_pi + mid * c_long) / 1000, "long_ops": mid}
-        e["solve"] = solve
-        if steps_us:
-            if len(steps_mid) == len(steps_us):
-                est = [t * f_int + m * c_long for t, m in zip(steps_us, steps_mid)]
-            else:  # counts of another solve shape: charge the largest to every slice
-                top = max(steps_mid) if steps_mid else 0
-                est = [t * f_int + top * c_long for t in steps_us]
-            e["slices_us"] = est
-            e["worst_slice_us"] = max(est)
-        if app.get("worst_stall_us") is not None:
-            # the app's own figure includes whatever garbage collection fell in that step
-            # (a 2 MB heap here): reported, not used for the verdict
-            e["app_worst_stall_scaled_us"] = app["worst_stall_us"] * f_int
-        ap = _get(res, "apppath", "micropython", "cpu_us") or {}
-        for kind in ("fast", "plain"):
-            # the whole app step (reads, checks, heading, field watch), scaled the same way:
-            # a calibrated board's (its session ended) and one fed to a collector
-            for key, name in (("core_" + kind, "step_calibrated_%s_us"),
-                              ("ours_" + kind, "step_collecting_%s_us")):
-                if ap.get(key) is not None:
-                    e[name % kind] = wire + ap[key] * f_int
-        period = 1000000 / QMC_ODR_HZ
-        for kind in ("fast", "plain"):
-            h = e.get("hot_%s_us" % kind)
-            if h is None or "add_full_us" not in e:
-                continue
-            per = wire + h + e["add_full_us"]
-            e["per_sample_%s_us" % kind] = per
-            e["keeps_up_%s" % kind] = per <= period
-            if "worst_slice_us" in e:
-                worst = per + e["worst_slice_us"]
-                e["worst_step_%s_us" % kind] = worst
-                e["samples_lost_in_worst_step_%s" % kind] = int(worst // period)
-                # the QMC5883L keeps one set and skips the rest (DOR) while a step overruns
-                over = [int((per + t) // period) for t in e["slices_us"]]
-                e["slices_over_period_%s" % kind] = sum(1 for n in over if n)
-                e["samples_lost_per_solve_%s" % kind] = sum(over)
-        out[b] = e
-    return out
+    hot = _get(res, "hot", "micropython") or {}
+    return {"hot": hot, "stages": hot.get("stages_us", {}),
+            "sol": _get(res, "solver", "micropython") or {},
+            "app": _get(res, "appbench", "micropython") or {}, "ic": ic,
+            "add_full": _get(col, "phases", "full", "us_per_raw"),
+            "mid_per_raw_full": rep_mid * n_rep / (n_rep + n_rej) if (n_rep + n_rej) else 0,
+            "steps_us": _get(_get(res, "solver", "micropython") or {}, "sliced_10",
+                             "per_step_us") or [],
+            "steps_mid": [s[1] for s in (ic.get("sliced_10_per_step") or [])],
+            "apppath": _get(res, "apppath", "micropython", "cpu_us") or {}}
+
+
+def board_estimate(p, ys, m, wire):
+    """One board's estimates: its published reference times `p` over the unix port's `ys`
+    scale the measured `m` (_board_inputs)."""
+    f_int = p["int_add"] / ys["int_add"]
+    f_float = p["float_add"] / ys["float_add"]
+    f_pi = p["pi_1000"] / ys["pi_1000"]
+    c_long = (p["int_mul"] - p["int_add"]) / 1000.0   # us per long-int result
+    e = {"scale_int": f_int, "scale_float": f_float, "scale_long_int": f_pi,
+         "long_int_op_us": c_long}
+    hot = m["hot"]
+    if hot.get("ours_cpu_us") is not None:
+        e["hot_plain_us"] = hot["ours_cpu_us"] * f_int
+        e["hot_fast_us"] = hot["fast_cpu_us"] * f_int
+        fr = _get(m["stages"], "float", "read_both") or 0
+        fl = hot["float_cpu_us"] - fr
+        e["hot_float_us"] = fr * f_int + fl * f_float
+        e["hot_ratio_fast_float"] = e["hot_fast_us"] / e["hot_float_us"]
+    if m["add_full"] is not None:
+        e["add_full_us"] = m["add_full"] * f_int + m["mid_per_raw_full"] * c_long
+    solve = {}
+    for k, t in (m["sol"].get("solve_us") or {}).items():
+        mid = (_get(m["ic"], "solve", k) or [0, 0, 0])[1]
+        solve[k] = {"estimate_ms": (t * f_int + mid * c_long) / 1000,
+                    "upper_ms": (t * f_pi + mid * c_long) / 1000, "long_ops": mid}
+    e["solve"] = solve
+    steps_us, steps_mid = m["steps_us"], m["steps_mid"]
+    if steps_us:
+        if len(steps_mid) == len(steps_us):
+            est = [t * f_int + n * c_long for t, n in zip(steps_us, steps_mid)]
+        else:  # counts of another solve shape: charge the largest to every slice
+            top = max(steps_mid) if steps_mid else 0
+            est = [t * f_int + top * c_long for t in steps_us]
+        e["slices_us"] = est
+        e["worst_slice_us"] = max(est)
+    if m["app"].get("worst_stall_us") is not None:
+        # the app's own figure includes whatever garbage collection fell in that step
+        # (a 2 MB heap here): reported, not used for the verdict
+        e["app_worst_stall_scaled_us"] = m["app"]["worst_stall_us"] * f_int
+    ap = m["apppath"]
+    for kind in ("fast", "plain"):
+        # the whole app step (reads, checks, heading, field watch), scaled the same way:
+        # a calibrated board's (its session ended) and one fed to a collector
+        for key, name in (("core_" + kind, "step_calibrated_%s_us"),
+                          ("ours_" + kind, "step_collecting_%s_us")):
+            if ap.get(key) is not None:
+                e[name % kind] = wire + ap[key] * f_int
+    _samples_lost(e, wire)
+    return e
+
+
+def _samples_lost(e, wire):
+    """Add to estimates `e` the time per sample with I2C and add(), whether it keeps up with
+    the QMC5883L, and the samples a solve slice costs."""
+    period = 1000000 / QMC_ODR_HZ
+    for kind in ("fast", "plain"):
+        h = e.get("hot_%s_us" % kind)
+        if h is None or "add_full_us" not in e:
+            continue
+        per = wire + h + e["add_full_us"]
+        e["per_sample_%s_us" % kind] = per
+        e["keeps_up_%s" % kind] = per <= period
+        if "worst_slice_us" in e:
+            worst = per + e["worst_slice_us"]
+            e["worst_step_%s_us" % kind] = worst
+            e["samples_lost_in_worst_step_%s" % kind] = int(worst // period)
+            # the QMC5883L keeps one set and skips the rest (DOR) while a step overruns
+            over = [int((per + t) // period) for t in e["slices_us"]]
+            e["slices_over_period_%s" % kind] = sum(1 for n in over if n)
+            e["samples_lost_per_solve_%s" % kind] = sum(over)
 
 
 # ---- the table ----------------------------------------------------------------------------
@@ -1131,8 +1156,8 @@ def rows_program(m):
     ]
 
 
-def rows(res, derived):
-    """[(item, cpython, micropython, ratio/goal, verdict)]"""
+def rows_hot(res):
+    """Item 1: the per-sample path (benchmarks/hot.py)."""
     R = []
     cp = _get(res, "hot", "cpython") or {}
     mp = _get(res, "hot", "micropython") or {}
@@ -1174,6 +1199,12 @@ def rows(res, derived):
         R.append(("1 bytes/sample mem_total (bytecode/fast/float)", "n/a", "%s / %s / %s" % (
             _f(bo.get("mem_total"), "%.0f"), _f(bv.get("mem_total"), "%.0f"),
             _f(bf.get("mem_total"), "%.0f")), "goal 0", verdict(zero_t)))
+    return R
+
+
+def rows_collector(res):
+    """Item 2: Calibrator.add per raw sample (benchmarks/collector.py)."""
+    R = []
     cp = _get(res, "collector", "cpython") or {}
     mp = _get(res, "collector", "micropython") or {}
 
@@ -1189,6 +1220,13 @@ def rows(res, derived):
     R.append(("2 add() bytes/raw, mem_total empty -> full", "n/a", "%s -> %s" % (
         _f(_get(mp, "phases", "empty", "mem_total_per_raw"), "%.0f"),
         _f(_get(mp, "phases", "full", "mem_total_per_raw"), "%.0f")), "transient frames", ""))
+    return R
+
+
+def rows_solver(res):
+    """Item 3: the solves, their slices and the app's worst stall (benchmarks/solver.py,
+    intcount.py, appbench.py)."""
+    R = []
     cp = _get(res, "solver", "cpython") or {}
     mp = _get(res, "solver", "micropython") or {}
     for m in ("minmax", "4", "7", "10"):
@@ -1226,6 +1264,12 @@ def rows(res, derived):
               _f(mp.get("worst_stall_us"), "%.0f"), "median step %s us" % _f(
                   _get(mp, "step_us", "median_without_slice"), "%.0f"),
               "" if "error" not in mp else "ERROR"))
+    return R
+
+
+def rows_heap_x64(res):
+    """Item 4 on the unix port: the heap of the firmware imported (benchmarks/memory.py)."""
+    R = []
     mem = {k: (_get(res, "memory", k) or {}) for k in ("py", "mpy")}
     fb = {k: (mem[k].get("firmware_bytes") or {}) for k in mem}
     if not fb["py"]:
@@ -1238,6 +1282,12 @@ def rows(res, derived):
             "armv6m .mpy code %s" % _kb(code), ""))
         # what a 32-bit board holds is measured, not estimated from these: the board
         # profiles and the smallest heaps (rows_32bit, rows_profiles)
+    return R
+
+
+def rows_accuracy(res):
+    """Item 5: the logs and headings against float64 (benchmarks/accuracy.py)."""
+    R = []
     acc = _get(res, "accuracy", "cpython") or {}
     worst = None
     for name, row in (acc.get("logs") or {}).items():
@@ -1267,6 +1317,12 @@ def rows(res, derived):
             _f(_get(row, "minmax_seed004_float", "rms_deg"), "%.2f")), "same bits",
             "%s (goal <= 1.05)" % _f(r, "%.3fx"), verdict(r is not None and r <= GOALS[
                 "heading_ratio"])))
+    return R
+
+
+def rows_estimates(res, derived):
+    """Item 6: the yardstick and the boards' estimates scaled from it (boards())."""
+    R = []
     ys = derived.get("unix_ms_per_1e6") or {}
     rp = derived.get("rp2040_125mhz") or {}
     es = derived.get("esp32_160mhz") or {}
@@ -1277,32 +1333,45 @@ def rows(res, derived):
                       rp.get("scale_int", 0), es.get("scale_int", 0)), "published"))
     for b in ("rp2040_125mhz", "esp32_160mhz", "esp32_240mhz"):
         e = derived.get(b) or {}
-        if not e:
+        if e:
+            R.extend(rows_board_estimate(b, e))
+    return R
+
+
+def rows_board_estimate(b, e):
+    """Item 6 for board `b`: its estimates `e` (boards()[b])."""
+    R = []
+    R.append(("6 %s est.: I2C + path + add(), fast / bytecode [us]" % b, "", "%s / %s" % (
+        _f(e.get("per_sample_fast_us"), "%.0f"), _f(e.get("per_sample_plain_us"), "%.0f")),
+        "200 Hz = 5000 us", verdict(e.get("keeps_up_fast"), True)))
+    for what, key in (("calibrated board (session ended)", "calibrated"),
+                      ("while collecting", "collecting")):
+        f = e.get("step_%s_fast_us" % key)
+        p = e.get("step_%s_plain_us" % key)
+        if f is None:
             continue
-        R.append(("6 %s est.: I2C + path + add(), fast / bytecode [us]" % b, "", "%s / %s" % (
-            _f(e.get("per_sample_fast_us"), "%.0f"), _f(e.get("per_sample_plain_us"), "%.0f")),
-            "200 Hz = 5000 us", verdict(e.get("keeps_up_fast"), True)))
-        for what, key in (("calibrated board (session ended)", "calibrated"),
-                          ("while collecting", "collecting")):
-            f = e.get("step_%s_fast_us" % key)
-            p = e.get("step_%s_plain_us" % key)
-            if f is None:
-                continue
-            goal = b == "rp2040_125mhz" and key == "calibrated"
-            R.append(("6 %s est.: whole app step, %s, fast / bytecode [ms]" % (b, what), "",
-                      "%.2f / %.2f" % (f / 1000, p / 1000),
-                      "goal <= 1.0 / 2.0 ms (RP2040, scaled est.)" if goal else "",
-                      verdict(f <= 1000 and p <= 2000, True) if goal else ""))
-        R.append(("6 %s est.: that + longest solve slice [us]" % b, "",
-                  _f(e.get("worst_step_fast_us"), "%.0f"),
-                  "%s samples lost; %s per solve" % (e.get("samples_lost_in_worst_step_fast"),
-                                                     e.get("samples_lost_per_solve_fast")),
-                  verdict(None if e.get("worst_step_fast_us") is None else
-                          e["worst_step_fast_us"] <= 1000000 / QMC_ODR_HZ, True)))
-        s10 = _get(e, "solve", "10")
-        if s10:
-            R.append(("6 %s est.: solve 10 [ms]" % b, "", "%.0f (<= %.0f)" % (
-                s10["estimate_ms"], s10["upper_ms"]), "%d long-int ops" % s10["long_ops"], ""))
+        goal = b == "rp2040_125mhz" and key == "calibrated"
+        R.append(("6 %s est.: whole app step, %s, fast / bytecode [ms]" % (b, what), "",
+                  "%.2f / %.2f" % (f / 1000, p / 1000),
+                  "goal <= 1.0 / 2.0 ms (RP2040, scaled est.)" if goal else "",
+                  verdict(f <= 1000 and p <= 2000, True) if goal else ""))
+    R.append(("6 %s est.: that + longest solve slice [us]" % b, "",
+              _f(e.get("worst_step_fast_us"), "%.0f"),
+              "%s samples lost; %s per solve" % (e.get("samples_lost_in_worst_step_fast"),
+                                                 e.get("samples_lost_per_solve_fast")),
+              verdict(None if e.get("worst_step_fast_us") is None else
+                      e["worst_step_fast_us"] <= 1000000 / QMC_ODR_HZ, True)))
+    s10 = _get(e, "solve", "10")
+    if s10:
+        R.append(("6 %s est.: solve 10 [ms]" % b, "", "%.0f (<= %.0f)" % (
+            s10["estimate_ms"], s10["upper_ms"]), "%d long-int ops" % s10["long_ops"], ""))
+    return R
+
+
+def rows(res, derived):
+    """[(item, cpython, micropython, ratio/goal, verdict)]"""
+    R = rows_hot(res) + rows_collector(res) + rows_solver(res) + rows_heap_x64(res)
+    R += rows_accuracy(res) + rows_estimates(res, derived)
     R.extend(rows_boardtime(res))
     R.extend(rows_32bit(res))
     R.extend(rows_quality(res))
@@ -1317,6 +1386,43 @@ def rows_gyro(res):
     (benchmarks/gyroacc.py), its per-sample cost beside the compass step
     (benchmarks/gyrobench.py), its heap on the 32-bit tier (benchmarks/profiles.py 'gyro') and
     the fault campaign with it (benchmarks/soak.py)."""
+    R = rows_gyro_scenarios(res)
+    for label in ("x86-32", "micropython"):
+        c = _get(res, "gyrobench", label) or {}
+        if "error" in c:
+            R.append(("9 gyro per-sample cost (%s)" % label, "", c["error"][:60], "", "ERROR"))
+            continue
+        if not c:
+            continue
+        cpu = c["cpu_us"]
+        R.append(("9 gyro: the filter's cost per sample, %s, viper / plain [us] (compass step "
+                  "%.1f / %.1f us)" % (label, cpu["core_fast"], cpu["core_plain"]), "",
+                  "%.1f / %.1f" % (c["filter_fast_us"], c["filter_plain_us"]),
+                  "%.2fx / %.2fx of the step; goal <= 1.0x" % (c["ratio_fast"],
+                                                                c["ratio_plain"]),
+                  verdict(c["ratio_fast"] <= 1.0 and c["ratio_plain"] <= 1.0)))
+    from desktop.benchmarks.budgets import BUDGETS
+    p = _get(res, "memory32", "profiles_mpy") or {}
+    gy = p.get("gyro") or {}
+    h = p.get("heading") or {}
+    if "after" in gy and "after" in h:
+        d = gy["after"] - h["after"]
+        R.append(("9 gyro: extra live heap over the heading line (.mpy, x86-32); bytes/sample",
+                  "", "%s; %s" % (_kbf(d), gy.get("bytes_per_sample")),
+                  "goal <= 8 KB / 0 (budget %s)" % _kbf(BUDGETS["gyro_extra_mpy"]),
+                  verdict(d <= BUDGETS["gyro_extra_mpy"] and gy.get("bytes_per_sample") == 0)))
+    q = _get(res, "soak", "cpython", "gyro_campaign") or {}
+    if q and "error" not in q:
+        R.append(("9 gyro: fault campaign %d x %d s with the filter; exceptions / lost / "
+                  "wrong-but-ok (ok or gyro held)" % (q["sessions"], q["seconds_per_session"]),
+                  "%d / %d / %d" % (q["exceptions"], q["lost"], q["wrong_but_ok"]), "",
+                  "goal 0 / 0 / 0", verdict(q["exceptions"] == 0 and q["lost"] == 0
+                                            and q["wrong_but_ok"] == 0)))
+    return R
+
+
+def rows_gyro_scenarios(res):
+    """Item 9's scenarios against the goals (benchmarks/gyroacc.py)."""
     R = []
     g = _get(res, "gyroacc", "cpython") or {}
     if "error" in g:
@@ -1362,37 +1468,6 @@ def rows_gyro(res):
             from desktop.benchmarks.gyroacc import compare_rows
             for label, goal, measured, ok in compare_rows(c):
                 R.append(("9 gyro: " + label, measured, "", "goal " + goal, verdict(ok)))
-    for label in ("x86-32", "micropython"):
-        c = _get(res, "gyrobench", label) or {}
-        if "error" in c:
-            R.append(("9 gyro per-sample cost (%s)" % label, "", c["error"][:60], "", "ERROR"))
-            continue
-        if not c:
-            continue
-        cpu = c["cpu_us"]
-        R.append(("9 gyro: the filter's cost per sample, %s, viper / plain [us] (compass step "
-                  "%.1f / %.1f us)" % (label, cpu["core_fast"], cpu["core_plain"]), "",
-                  "%.1f / %.1f" % (c["filter_fast_us"], c["filter_plain_us"]),
-                  "%.2fx / %.2fx of the step; goal <= 1.0x" % (c["ratio_fast"],
-                                                                c["ratio_plain"]),
-                  verdict(c["ratio_fast"] <= 1.0 and c["ratio_plain"] <= 1.0)))
-    from desktop.benchmarks.budgets import BUDGETS
-    p = _get(res, "memory32", "profiles_mpy") or {}
-    gy = p.get("gyro") or {}
-    h = p.get("heading") or {}
-    if "after" in gy and "after" in h:
-        d = gy["after"] - h["after"]
-        R.append(("9 gyro: extra live heap over the heading line (.mpy, x86-32); bytes/sample",
-                  "", "%s; %s" % (_kbf(d), gy.get("bytes_per_sample")),
-                  "goal <= 8 KB / 0 (budget %s)" % _kbf(BUDGETS["gyro_extra_mpy"]),
-                  verdict(d <= BUDGETS["gyro_extra_mpy"] and gy.get("bytes_per_sample") == 0)))
-    q = _get(res, "soak", "cpython", "gyro_campaign") or {}
-    if q and "error" not in q:
-        R.append(("9 gyro: fault campaign %d x %d s with the filter; exceptions / lost / "
-                  "wrong-but-ok (ok or gyro held)" % (q["sessions"], q["seconds_per_session"]),
-                  "%d / %d / %d" % (q["exceptions"], q["lost"], q["wrong_but_ok"]), "",
-                  "goal 0 / 0 / 0", verdict(q["exceptions"] == 0 and q["lost"] == 0
-                                            and q["wrong_but_ok"] == 0)))
     return R
 
 

@@ -304,31 +304,13 @@ def _solve(cal, model):
 def run(opts):
     """Read, convert, calibrate. Returns (calibration or None, rejection or None, info);
     UsageError for unusable input."""
-    from firmware.errors import CalibrationRejected
     from firmware.calibrate.acceptance import DEFAULT_MAX_FIT_ERROR
     from firmware.calibrate.calibrator import Calibrator
 
     path = opts["file"]
     opts, board_note = logged_board(opts, path)
     board = Board(opts)
-    log = logfile.Log(path, opts["columns"], opts["skip"])
-    mag = logfile.Magnitude()
-    for _, row in log.rows():
-        mag.add(row)
-    if log.rows_read == 0:
-        if log.skipped:
-            ln, msg = log.warnings[0]
-            vals = None
-            if log.names is not None and opts["columns"] is None:
-                vals = calopts.value_columns(log.names, log.columns)
-            raise UsageError("%s: no valid data row (%d corrupt; line %d: %s)%s"
-                             % (path, log.skipped, ln, msg, "" if vals is None else
-                                "; each value follows its label (%s): --columns %d,%d,%d "
-                                "reads them" % ((" ".join(log.names[:6]),) + vals)))
-        if opts["skip"]:
-            raise UsageError("%s: no data rows left after --skip %d" % (path, opts["skip"]))
-        raise UsageError("%s: no data rows%s" % (path, " after the header (line %d)"
-                                                 % log.header_line if log.header_line else ""))
+    log, mag = _read_log(opts, path)
     opts, units_note = header_units(opts, log)
     num, den, cpg, p = conversion(opts, board, mag, path)
     capacity, separation, step = desktop_plan(log.rows_read, opts["capacity"],
@@ -344,47 +326,10 @@ def run(opts):
                               overflow=board.overflow)
         except MemoryError:
             raise UsageError("--capacity %d: out of memory; give a smaller one" % plan[0])
-    olo, ohi = board.output
-    used = 0
-    markers = 0  # samples holding the HMC5883L's overflow marker: dropped, not "corrupt"
-    railed = 0   # samples with an axis at an int16 rail (a clipping chip; Calibrator.add)
-    names = None
-    outside = 0  # rows beyond the stated chip's output: its counts they are not
-    peak = 0     # the largest |value| of those, in counts
-    pts = array("h", bytes(6 * log.rows_read))  # the rows used, in counts: row i at 3i..3i+2
-    lines = array("i", bytes(4 * log.rows_read))  # and their line numbers
-    zeros = 0           # all-zero rows (glitches.py): a failed read
-    for lineno, row in log.rows():
-        v = [logfile.convert(m, d, num, den) for m, d in row]
-        if board.overflow is not None and board.overflow in v:
-            markers += 1
-            continue
-        bad = -1
-        for k in range(3):
-            if not olo <= v[k] <= ohi:
-                bad = k
-        if bad >= 0:
-            outside += 1
-            peak = max(peak, max([abs(x) for x in v]))
-            if names is None:
-                names = log.column_names()
-            log.bad(lineno, "%s = %s is %d counts, outside %d..%d%s" % (
-                names[bad], decimal_text(row[bad]), v[bad], olo, ohi,
-                " (%s at %s G)" % (board.sensor, board.range_gauss) if board.sensor else ""))
-            continue
-        if v[0] == 0 and v[1] == 0 and v[2] == 0:
-            zeros += 1
-            continue
-        if 32767 in v or -32768 in v:
-            railed += 1
-            continue
-        pts[3 * used] = v[0]
-        pts[3 * used + 1] = v[1]
-        pts[3 * used + 2] = v[2]
-        lines[used] = lineno
-        used += 1
+    t = _take_rows(log, board, num, den)
+    used, outside = t["used"], t["outside"]
     keep = bytearray(b"\x01" * used)
-    far = glitches.box_outliers(pts, keep)   # before any fit: rows far outside the others
+    far = glitches.box_outliers(t["pts"], keep)   # before any fit: rows far outside the others
     for i in far:
         keep[i] = 0
     # rows: every data row once (log.skipped counts the reader's corrupt rows and, since
@@ -392,26 +337,106 @@ def run(opts):
     rows = log.rows_read + log.skipped - outside
     note = None
     if board.sensor is not None and outside * 2 > rows:
-        note = calopts.range_advice(board, opts, outside, rows, peak,
+        note = calopts.range_advice(board, opts, outside, rows, t["peak"],
                                     calopts.named_sensor(path))
         board_note = None   # the advice names the log's chip already
     info = {"rows": rows, "range_note": note, "units": opts["units"], "units_note": units_note,
             "board_note": board_note, "logged_board": opts.get("logged_board"),
-            "outside": outside, "used": used, "railed": railed + markers,
+            "outside": outside, "used": used, "railed": t["railed"] + t["markers"],
             "skipped": log.skipped,
             "warnings": log.warnings, "num": num, "den": den, "p": p, "cpg": cpg,
             "held": 0, "separation": separation, "step": step, "board": board,
-            "log": log, "zeros": zeros, "far": far, "off": [], "lines": lines}
+            "log": log, "zeros": t["zeros"], "far": far, "off": [], "lines": t["lines"]}
     if used == 0:
+        olo, ohi = board.output
         if note is not None:
             raise UsageError("%s: no row within %d..%d counts: %s" % (path, olo, ohi, note))
         _print_warnings(log)
         raise UsageError("%s: no row within %d..%d counts after conversion (x %s / %s): check "
                          "--units, --scale, --sensor and --range" % (path, olo, ohi, num, den))
-    # the rows far off the fit (glitches.py) are found on every row the desktop holds, even
-    # for --board-like, whose thinned buffer a row far off can bend more
     plan = (capacity, separation, step)
-    screen = desktop_plan(used) if opts["board_like"] else plan
+    cal, c, rej, fail = _fit(calibrator, model, t["pts"], keep, plan, opts["board_like"], info)
+    info.update({"off": sorted(info["off"]), "railed": cal.railed + t["railed"] + t["markers"],
+                 "held": cal.count, "separation": cal.separation})
+    return _outcome(c, rej, fail, info, opts["force"])
+
+
+def _read_log(opts, path):
+    """(log, mag): the log opened and its rows' magnitudes read; UsageError when it holds
+    no data row."""
+    log = logfile.Log(path, opts["columns"], opts["skip"])
+    mag = logfile.Magnitude()
+    for _, row in log.rows():
+        mag.add(row)
+    if log.rows_read:
+        return log, mag
+    if log.skipped:
+        ln, msg = log.warnings[0]
+        vals = None
+        if log.names is not None and opts["columns"] is None:
+            vals = calopts.value_columns(log.names, log.columns)
+        raise UsageError("%s: no valid data row (%d corrupt; line %d: %s)%s"
+                         % (path, log.skipped, ln, msg, "" if vals is None else
+                            "; each value follows its label (%s): --columns %d,%d,%d "
+                            "reads them" % ((" ".join(log.names[:6]),) + vals)))
+    if opts["skip"]:
+        raise UsageError("%s: no data rows left after --skip %d" % (path, opts["skip"]))
+    raise UsageError("%s: no data rows%s" % (path, " after the header (line %d)"
+                                             % log.header_line if log.header_line else ""))
+
+
+def _take_rows(log, board, num, den):
+    """The rows a fit may use, in counts: {"pts": row i at 3i..3i+2, "lines": their line
+    numbers, "used": how many}, and the counts of those left out: "markers" (the HMC5883L's
+    overflow marker: dropped, not "corrupt"), "railed" (an axis at an int16 rail: a clipping
+    chip; Calibrator.add), "zeros" (all-zero: a failed read, glitches.py), "outside" (beyond
+    the stated chip's output: its counts they are not; logged by log.bad) and "peak" (the
+    largest |value| of those, in counts)."""
+    olo, ohi = board.output
+    t = {"used": 0, "markers": 0, "railed": 0, "outside": 0, "peak": 0, "zeros": 0,
+         "pts": array("h", bytes(6 * log.rows_read)),
+         "lines": array("i", bytes(4 * log.rows_read))}
+    pts = t["pts"]
+    names = None
+    used = 0
+    for lineno, row in log.rows():
+        v = [logfile.convert(m, d, num, den) for m, d in row]
+        if board.overflow is not None and board.overflow in v:
+            t["markers"] += 1
+            continue
+        bad = -1
+        for k in range(3):
+            if not olo <= v[k] <= ohi:
+                bad = k
+        if bad >= 0:
+            t["outside"] += 1
+            t["peak"] = max(t["peak"], max([abs(x) for x in v]))
+            if names is None:
+                names = log.column_names()
+            log.bad(lineno, "%s = %s is %d counts, outside %d..%d%s" % (
+                names[bad], decimal_text(row[bad]), v[bad], olo, ohi,
+                " (%s at %s G)" % (board.sensor, board.range_gauss) if board.sensor else ""))
+            continue
+        if v[0] == 0 and v[1] == 0 and v[2] == 0:
+            t["zeros"] += 1
+            continue
+        if 32767 in v or -32768 in v:
+            t["railed"] += 1
+            continue
+        pts[3 * used] = v[0]
+        pts[3 * used + 1] = v[1]
+        pts[3 * used + 2] = v[2]
+        t["lines"][used] = lineno
+        used += 1
+    t["used"] = used
+    return t
+
+
+def _fit(calibrator, model, pts, keep, plan, board_like, info):
+    """(calibrator, fit, refusal, failure) of the rows `keep` marks: the rows far off the fit
+    (glitches.py) are found on every row the desktop holds, even for --board-like, whose
+    thinned buffer a row far off can bend more; those found go to info["off"]."""
+    screen = desktop_plan(len(keep)) if board_like else plan   # len(keep): the rows used
     fits = 0
     while True:
         cal = calibrator(screen)
@@ -429,13 +454,17 @@ def run(opts):
         info["off"] += off
     if screen != plan:
         cal = calibrator(plan)
-        _feed(cal, pts, keep, step)
+        _feed(cal, pts, keep, plan[2])
         c, rej, fail = _solve(cal, model)
-    info.update({"off": sorted(info["off"]), "railed": cal.railed + railed + markers,
-                 "held": cal.count, "separation": cal.separation})
+    return cal, c, rej, fail
+
+
+def _outcome(c, rej, fail, info, force):
+    """run()'s answer: the accepted fit; or, refused, the refusal, or with --force the
+    forced fit (the refusal kept in info["forced"])."""
     if rej is None:
         return c, None, info
-    if not opts["force"]:
+    if not force:
         return None, rej, info
     if c is None:
         info["force_failed"] = fail

@@ -225,25 +225,37 @@ def session(k, seed, seconds, goods, stats, trace=None, faults=True, gyro=False,
         if not faults:
             clean_step(app, b, stats["clean"])
             continue
-        stats["steps"] += 1
-        if app.status not in GOOD:
-            if pending is not None:
-                d = (b.clock.now_us - pending[1]) / 1e3
-                stats["detect_ms"].setdefault(pending[0], []).append(d)
-                pending = None
-        elif app.calibration.model is not None and err_deg(app, b) > ACCURACY_DEG:
-            stats["wrong_but_ok"] += 1
-            stats["wrong_by_class"][last] = stats["wrong_by_class"].get(last, 0) + 1
+        pending = faulted_step(app, b, stats, pending, last)
     if clear is not None:
         clear()
-    # lost: the store must still boot a calibration at least as good as the good one
+    if not stored_as_good(fs, kind, rng, cal):
+        stats["lost"] += 1
+
+
+def faulted_step(app, b, stats, pending, last):
+    """Count one step of a session with faults: a status not ok detects the `pending`
+    fault (None returned then, else `pending`); an ok heading off by more than ACCURACY_DEG
+    is charged to the `last` fault's class."""
+    stats["steps"] += 1
+    if app.status not in GOOD:
+        if pending is not None:
+            d = (b.clock.now_us - pending[1]) / 1e3
+            stats["detect_ms"].setdefault(pending[0], []).append(d)
+            pending = None
+    elif app.calibration.model is not None and err_deg(app, b) > ACCURACY_DEG:
+        stats["wrong_but_ok"] += 1
+        stats["wrong_by_class"][last] = stats["wrong_by_class"].get(last, 0) + 1
+    return pending
+
+
+def stored_as_good(fs, kind, rng, cal):
+    """Not lost: the store still boots a calibration at least as good as the good one."""
     try:
         st = CalStore("/", sensor=kind, range_code=rng, fs=fs)
         got = Calibration.from_bytes(st.load())
-        if got.model is None or got.fit_error > cal.fit_error:
-            stats["lost"] += 1
+        return got.model is not None and got.fit_error <= cal.fit_error
     except Exception:  # noqa: BLE001
-        stats["lost"] += 1
+        return False
 
 
 def clean_step(app, b, st):

@@ -361,6 +361,24 @@ def test_commands_never_import_tests_and_load_numpy_matplotlib_only_where_needed
         assert not top & {"numpy", "matplotlib"}, path
 
 
+# a function a reader takes in at once: longer ones are split into named steps
+TOOL_FUNCTION_MAX = 80
+
+
+def test_no_function_of_the_desktop_tools_is_over_80_lines():
+    long_, n = [], 0
+    for path in _cli_files():
+        for node in ast.walk(ast.parse(open(path).read(), path)):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n += 1
+                lines = node.end_lineno - node.lineno + 1
+                if lines > TOOL_FUNCTION_MAX:
+                    long_.append("%s:%d %s (%d lines)" % (os.path.relpath(path, ROOT),
+                                                          node.lineno, node.name, lines))
+    assert n > 500   # every tool was read
+    assert not long_, long_
+
+
 def test_every_command_parses_its_arguments_with_the_one_shared_parser():
     from desktop import __main__ as runner
     for cmd in runner._COMMANDS:

@@ -78,6 +78,28 @@ def machinery(app):
     return out
 
 
+def mount_romfs(path):
+    """The ROMFS image at `path` mounted at /rom, first on the path (bytecode in place, as
+    frozen); its bytes."""
+    import vfs
+    with open(path, "rb") as f:
+        rom = f.read()
+    vfs.mount(vfs.VfsRom(rom), "/rom")
+    sys.path.insert(0, "/rom")
+    return rom
+
+
+def firmware_bytes(m):
+    """The heap each stage adds, from the live heap `m` at each (main())."""
+    base = m["base"]
+    peak = m["peak_solving"]
+    return {"heading_only": m["heading_only"] - base,
+            "imports": m["imported"] - base, "app_start": m["app"] - base,
+            "app_running": m["running"] - base,
+            "peak_solving": (peak - base) if peak is not None else None,
+            "fast_module": m["fast"] - m["after"]}
+
+
 def main():
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     if not common.IS_MP:
@@ -85,13 +107,7 @@ def main():
         return
     mag, acc = load(args[0])
     steps = len(mag) // 6
-    rom = None
-    if "--romfs" in sys.argv:
-        import vfs
-        with open(args[1], "rb") as f:
-            rom = f.read()
-        vfs.mount(vfs.VfsRom(rom), "/rom")
-        sys.path.insert(0, "/rom")
+    rom = mount_romfs(args[1]) if "--romfs" in sys.argv else None
     res = {"interpreter": common.interpreter(), "session_samples": steps}
     m = {"base": live()}
     import firmware.app  # noqa: F401
@@ -150,12 +166,7 @@ def main():
         pass
     m["fast"] = live()
     res["heap_bytes"] = m
-    base = m["base"]
-    res["firmware_bytes"] = {"heading_only": m["heading_only"] - base,
-                             "imports": m["imported"] - base, "app_start": m["app"] - base,
-                             "app_running": m["running"] - base,
-                             "peak_solving": (peak - base) if solving else None,
-                             "fast_module": m["fast"] - m["after"]}
+    res["firmware_bytes"] = firmware_bytes(m)
     res.update(seen)
     res["frozen_or_mpy"] = ("romfs" if rom is not None else
                             "mpy" if firmware.app.__file__.endswith(".mpy") else "py")
