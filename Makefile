@@ -105,7 +105,7 @@ bench: $(STAMP) tiers  ## speed, memory, accuracy; writes docs/benchmarks.md
 soak: $(STAMP)  ## the seeded fault campaign (writes its table into docs/faults.md), then the mounting check's: minutes; fails on a missed goal
 	rc=0; \
 	$(PY) -m host_sim soak --sessions 600 --seconds 60 --seed 1 --doc docs/faults.md || rc=$$?; \
-	$(PY) -m host_sim.cli.mounting --sessions 600 --seconds 40 --seed 1 || rc=$$?; \
+	$(PY) -m desktop.mounting --sessions 600 --seconds 40 --seed 1 || rc=$$?; \
 	exit $$rc
 
 bench-smoke: $(STAMP)  ## a quick run of the benchmarks
@@ -158,7 +158,7 @@ wmm: $(STAMP)  ## regenerate firmware/field/wmm2025.bin
 	$(PY) -m host_sim wmm
 
 package-json: $(STAMP)  ## regenerate package.json and the parts package-PART.json (mip install)
-	$(PY) -m host_sim.cli.packaging --write
+	$(PY) -m desktop.packaging --write
 
 clean:  ## remove build/ and test caches
 	rm -rf build .pytest_cache .hypothesis

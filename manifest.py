@@ -4,7 +4,7 @@
 #   cd ports/esp32 && make BOARD=ESP32_GENERIC FROZEN_MANIFEST=/abs/path/to/this/manifest.py
 # Then copy only boards/<board>/board.py and boards/main.py to the board's filesystem.
 # Install what you use: keep in PARTS the parts your board needs ("core" always, and the parts
-# each one requires: host_sim/cli/packaging.py REQUIRES; docs/design.md gives the heap of each).
+# each one requires: desktop/packaging.py REQUIRES; docs/design.md gives the heap of each).
 # A part is its folder, firmware/PART/ (core: the files at firmware/'s root). The field part's
 # table (firmware/field/wmm2025.bin) is a data file, not frozen: copy it to the board and pass
 # its path to set_location(table=...).

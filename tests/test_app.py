@@ -109,7 +109,7 @@ def test_board_axis_constants_match_the_breakout_derivation():
 def test_every_setting_of_a_board_file_is_read_by_the_code_that_runs_on_it():
     # a setting nothing reads (the BREAKOUT these files once had) misleads whoever edits it:
     # each upper-case name a board file assigns is read by boards/main.py (firmware/runner.py), the CircuitPython
-    # code.py / boot.py, host_sim (the simulated board) or the board file itself, as a name,
+    # code.py / boot.py, host_sim (the simulated board), desktop/ or the board file itself, as a name,
     # an attribute or a getattr string; tests do not count
     import ast
     import glob
@@ -119,7 +119,8 @@ def test_every_setting_of_a_board_file_is_read_by_the_code_that_runs_on_it():
     readers = files + [os.path.join(ROOT, "boards", "main.py"),
                        os.path.join(ROOT, "firmware", "runner.py")] + sorted(
         glob.glob(os.path.join(ROOT, "boards", "circuitpython", "*.py"))) + sorted(
-        glob.glob(os.path.join(ROOT, "host_sim", "**", "*.py"), recursive=True))
+        glob.glob(os.path.join(ROOT, "host_sim", "**", "*.py"), recursive=True)) + sorted(
+        glob.glob(os.path.join(ROOT, "desktop", "**", "*.py"), recursive=True))
     read = set()
     for f in readers:
         for node in ast.walk(ast.parse(open(f).read())):

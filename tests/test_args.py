@@ -1,11 +1,11 @@
-"""host_sim/cli/args.py: the one argument parser of the host commands."""
+"""desktop/args.py: the one argument parser of the host commands."""
 from fractions import Fraction as Fr
 
 import pytest
 from hypothesis import given, strategies as st
 
-from host_sim.cli import args
-from host_sim.cli.args import Parser, UsageError
+from desktop import args
+from desktop.args import Parser, UsageError
 
 
 def parser():

@@ -1,4 +1,4 @@
-"""make bench (host_sim/cli/bench.py): the smoke run completes on both interpreters, writes a
+"""make bench (desktop/bench.py): the smoke run completes on both interpreters, writes a
 JSON of the agreed shape, and its figures are sane. No timing assertions: times depend on the
 machine; what is asserted has a reason independent of the code measured."""
 import json
@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from host_sim.cli import bench
+from desktop import bench
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -112,7 +112,7 @@ def test_accuracy_figures(smoke):
     assert logs and all(isinstance(v, dict) for v in logs.values())
     # the smoke run's log ships in datasets/: the calibrate command at its default settings
     # against a float64 fit of every row (docs/calibration.md's table, in full by make bench)
-    from host_sim.cli.benchmarks.accuracy import COMMAND_GOAL, SMOKE_LOG
+    from desktop.benchmarks.accuracy import COMMAND_GOAL, SMOKE_LOG
     cmd = acc["commands"][SMOKE_LOG]
     assert "refused" not in cmd and 0 < cmd["ratio"] <= COMMAND_GOAL
     row = [r for r in d["table"] if r[0].startswith("5 logs: calibrate at default settings")]
@@ -161,7 +161,7 @@ def test_wire_time_formula():
 
 
 def test_the_fault_campaign_is_in_the_bench(smoke):
-    # the smoke run's campaign: tiny, but the whole path (host_sim/cli/benchmarks/soak.py)
+    # the smoke run's campaign: tiny, but the whole path (desktop/benchmarks/soak.py)
     d, out = smoke
     q = d["results"]["soak"]["cpython"]
     assert "error" not in q, q
@@ -186,7 +186,7 @@ def test_the_soak_block_is_replaced_alone(tmp_path):
 def test_board_time_from_qemu_instruction_counts_is_repeatable_and_plausible():
     # benchmarks/boardtime.py in the Cortex-M guest under -icount shift=0: the counts are the
     # same on a second run, and the RP2040 factors they give are those of a real board
-    from host_sim.cli import bench
+    from desktop import bench
     import shutil
     if not shutil.which("qemu-system-arm") or not os.path.exists(bench.QEMU_ELF):
         pytest.skip("qemu-system-arm or the qemu firmware is missing (make tiers; as root: "

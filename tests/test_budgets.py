@@ -1,7 +1,7 @@
-"""Memory budgets that fail the build (host_sim/cli/benchmarks/budgets.py), on the 32-bit tiers
+"""Memory budgets that fail the build (desktop/benchmarks/budgets.py), on the 32-bit tiers
 that are here: the x86-32 build (collects as a board does: live heap and the smallest heap that
 completes) and the WebAssembly port (never collects while a script runs: what a run allocates
-in total). The board profiles boot as boards/main.py does (host_sim/cli/benchmarks/profiles.py);
+in total). The board profiles boot as boards/main.py does (desktop/benchmarks/profiles.py);
 `make bench` prints the same figures beside the budgets in docs/benchmarks.md."""
 import json
 import os
@@ -9,8 +9,8 @@ import subprocess
 
 import pytest
 
-from host_sim.cli import bench
-from host_sim.cli.benchmarks.budgets import BUDGETS, KB
+from desktop import bench
+from desktop.benchmarks.budgets import BUDGETS, KB
 from tests import mp
 
 X86 = mp.TIERS["x86-32"]
@@ -142,7 +142,7 @@ def test_the_webassembly_port_allocates_within_budget_for_boot_and_headings(buil
     env = dict(os.environ, MICROPYPATH="bytecode:.:.frozen")
     out = {}
     for profile in ("calibrate", "heading"):  # the first leaves the record the second boots
-        p = subprocess.run(WASM.cmd + ["-m", "host_sim.cli.benchmarks.profiles",
+        p = subprocess.run(WASM.cmd + ["-m", "desktop.benchmarks.profiles",
                                        os.path.basename(build["session"]), "st-wasm", profile],
                            cwd=build["dir"], env=env, capture_output=True, text=True,
                            timeout=600)

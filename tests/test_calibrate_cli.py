@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from host_sim.cli import calibrate as cli
+from desktop import calibrate as cli
 from tests import mp
 
 
@@ -214,7 +214,7 @@ def qmc_log(tmp_path, n=600, name="qmc.csv", comment=True):
 def test_the_loggers_sensor_line_states_the_board(tmp_path, capsys):
     # examples/log_csv.py writes '# qmc5883l range_code 0 counts_per_gauss 12000' above the
     # header: calibrate --out needs no --sensor then, and the field check is on
-    from host_sim.cli import calfile
+    from desktop import calfile
     p = qmc_log(tmp_path)
     out = str(tmp_path / "cal.json")
     assert cli.main([p, "--out", out, "--json"]) == 0
@@ -408,7 +408,7 @@ def test_the_new_spellings_under_micropython(tmp_path):
 # ---- the runner: --help describes each command; nothing escapes as a traceback ---------------
 
 def test_top_level_help_describes_every_command_in_a_line():
-    from host_sim import __main__ as runner
+    from desktop import __main__ as runner
     rc, out, err = cli_run("--help")
     assert rc == 0 and err == ""
     lines = out.splitlines()
@@ -425,7 +425,7 @@ def test_top_level_help_describes_every_command_in_a_line():
 
 
 def _commands():
-    from host_sim import __main__ as runner
+    from desktop import __main__ as runner
     return list(runner._COMMANDS)
 
 
@@ -437,8 +437,8 @@ def test_bad_usage_of_every_command_is_one_line_exit_2(cmd):
 
 
 def test_the_last_resort_names_the_problem_in_one_line(monkeypatch, capsys):
-    from host_sim import __main__ as runner
-    from host_sim.cli import calibrate
+    from desktop import __main__ as runner
+    from desktop import calibrate
 
     def boom(opts):
         raise RuntimeError("an invariant broke\nsecond line")

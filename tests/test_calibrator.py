@@ -217,7 +217,7 @@ def sim():
 
 
 def ref_fit(pts, model):
-    from host_sim.cli.benchmarks.reference import numpy_fit
+    from desktop.benchmarks.reference import numpy_fit
     return numpy_fit(pts, model)
 
 

@@ -6,7 +6,7 @@ import pytest
 from firmware import detect
 from host_sim import chips
 from host_sim.boards import make_board
-from host_sim.cli import calfile, calopts, demo, serve
+from desktop import calfile, calopts, demo, serve
 
 
 def fields(line):

@@ -8,9 +8,9 @@ import subprocess
 import numpy as np
 import pytest
 
-from host_sim.cli import calfile
-from host_sim.cli import calibrate as cli
-from host_sim.cli.benchmarks.reference import (ALL_LOGS, MISSING, log_path, meta,
+from desktop import calfile
+from desktop import calibrate as cli
+from desktop.benchmarks.reference import (ALL_LOGS, MISSING, log_path, meta,
                                                missing_reason)
 from tests import mp
 
@@ -482,7 +482,7 @@ def test_every_dataset_calibrates_or_is_refused_for_a_reason(name, capsys):
     if "planar" in name:
         assert rc == 1 and r["rejected"] == "planar"
         return
-    # at most one row in a hundred left out, far off the fit (host_sim/cli/glitches.py), and
+    # at most one row in a hundred left out, far off the fit (desktop/glitches.py), and
     # said in one line
     g = r["glitch_rows"]
     assert g["off_ellipsoid"] * 100 <= r["rows"] and g["off_ellipsoid"] + g["all_zero"] + \

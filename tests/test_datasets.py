@@ -6,12 +6,12 @@ build/datasets, are tested when they are there and skipped, naming that command,
 
 Sphericity (the corrected radius's spread) = std(|corrected|) / mean(|corrected|).
 - The calibrate command at its default settings (every distinct sample of the log:
-  host_sim/cli/calibrate.py desktop_plan) against the same 10-element model fitted in float64
+  desktop/calibrate.py desktop_plan) against the same 10-element model fitted in float64
   to every row of the file (reference.default_command): within COMMAND_GOAL, on every log it
   accepts; the logs it refuses, refused for their reason. docs/calibration.md quotes these.
 - Every model (min/max, 4, 7, 10) of the Calibrator filled the same way, on every row but the
   QMC5883L logs' first 3000 still samples, against the float64 fit of that model to those
-  rows (host_sim/cli/benchmarks/reference.py numpy_fit; min/max over the rows).
+  rows (desktop/benchmarks/reference.py numpy_fit; min/max over the rows).
 """
 import io
 import json
@@ -24,9 +24,9 @@ import pytest
 
 from firmware.calibrate.calibrator import Calibrator
 from firmware.errors import CalibrationRejected
-from host_sim.cli import calibrate
-from host_sim.cli.benchmarks import accuracy
-from host_sim.cli.benchmarks.reference import (ALL_LOGS, LOGS, PLANAR, SHIPPED, STILL_ROWS,
+from desktop import calibrate
+from desktop.benchmarks import accuracy
+from desktop.benchmarks.reference import (ALL_LOGS, LOGS, PLANAR, SHIPPED, STILL_ROWS,
                                                default_command, load, log_path, meta,
                                                missing_reason, numpy_fit, ours, reference,
                                                MISSING)

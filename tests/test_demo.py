@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from host_sim.cli import demo
+from desktop import demo
 from tests import mp
 
 GOAL_DEG = 0.5  # calibrated max error on the tilted grid, every chip but the AKM ones:
@@ -295,7 +295,7 @@ def test_bad_usage_exits_2_with_one_line_on_stderr(capsys):
 # ---- docs/design.md quotes `make run`: written by it, checked here ---------------------------
 
 def test_design_md_quotes_what_make_run_prints():
-    from host_sim.cli import run
+    from desktop import run
     p = subprocess.run([sys.executable, "-m", "host_sim", "run", "--no-plot"], cwd=mp.ROOT,
                        capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stderr
@@ -308,7 +308,7 @@ def test_design_md_quotes_what_make_run_prints():
 
 def test_update_doc_rewrites_the_excerpt_only_for_the_default_world(tmp_path, monkeypatch,
                                                                     capsys):
-    from host_sim.cli import run
+    from desktop import run
     doc = tmp_path / "design.md"
     doc.write_text("intro\n%s\n```\nold figures\n```\n%s\nafter\n" % (run.BEGIN, run.END))
     monkeypatch.setattr(run, "DOC", str(doc))

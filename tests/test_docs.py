@@ -73,7 +73,7 @@ def test_code_tests_and_messages_name_no_folder_outside_the_repository():
     outside = re.compile(r"\.\./shared(?!/notes\b)|\bshared/(datasets|seeds|tools)\b"
                          r"|\"\.\.\", \"shared\"")   # the same, as os.path.join parts
     paths = [os.path.join(ROOT, "Makefile"), os.path.join(ROOT, "datasets", "README.md")]
-    for top in ("boards", "examples", "firmware", "host_sim", "tests", "tools", "web"):
+    for top in ("boards", "desktop", "examples", "firmware", "host_sim", "tests", "tools", "web"):
         for dirpath, dirs, files in os.walk(os.path.join(ROOT, top)):
             dirs[:] = [d for d in dirs if d not in ("vendor", "node_modules", "__pycache__")]
             paths += [os.path.join(dirpath, f) for f in files
@@ -230,7 +230,7 @@ def test_every_literal_skip_reason_says_what_to_run_or_install():
 def test_computed_skip_reasons_name_what_to_run(monkeypatch):
     # the reasons the tiers, the fetched logs and the browser tier give when they are missing
     import shutil
-    from host_sim.cli.benchmarks.reference import missing_reason
+    from desktop.benchmarks.reference import missing_reason
     from tests import mp
     from tests import test_web
     monkeypatch.setattr(shutil, "which", lambda name: None)
@@ -378,7 +378,7 @@ def _section(path, heading):
 
 
 def test_design_names_every_command_of_the_runner():
-    from host_sim.__main__ import _COMMANDS
+    from desktop.__main__ import _COMMANDS
     text = open(os.path.join(ROOT, "docs", "design.md"), encoding="utf-8").read()
     para = [p for p in text.split("\n\n") if "the command-line runner:" in p]
     assert len(para) == 1
@@ -405,9 +405,11 @@ def test_readme_names_every_example_and_the_install_page_every_package_part():
 # and `make test` make from requirements.txt) for what needs its packages.
 
 _BARE_PYTHON = re.compile(r"(?<![\w./-])python(?=\s)")
-# host_sim commands (and modules) that import a requirements.txt package: matplotlib for run's
-# plot and quality's plot, pygeomag for wmm, numpy for bench, pg8000 for a PostgreSQL database
-VENV_ONLY = re.compile(r"-m (host_sim (run|wmm|bench)\b|host_sim quality\b.*(\bplot\b|postgresql:)"
+# host_sim / desktop commands (and modules) that import a requirements.txt package: matplotlib
+# for run's plot and quality's plot, pygeomag for wmm, numpy for bench, pg8000 for a PostgreSQL
+# database
+VENV_ONLY = re.compile(r"-m ((host_sim|desktop) (run|wmm|bench)\b"
+                       r"|(host_sim|desktop) quality\b.*(\bplot\b|postgresql:)"
                        r"|pytest\b)")
 
 
@@ -446,12 +448,12 @@ def test_what_python3_runs_needs_only_the_standard_library():
             if VENV_ONLY.search(line[m.start():]):
                 venv.append("%s: %s" % (where, line.strip()))
             mod, cmd = m.group(1), m.group(2)
-            if mod.split(".")[0] in ("host_sim", "examples"):
-                seen.add((mod, cmd if mod == "host_sim" else None))
+            if mod.split(".")[0] in ("host_sim", "desktop", "examples"):
+                seen.add((mod, cmd if mod in ("host_sim", "desktop") else None))
     assert venv == [], "these need .venv/bin/python:\n" + "\n".join(venv)
     assert ("host_sim", "calibrate") in seen and len(seen) >= 8
     for mod, cmd in sorted(seen, key=str):
-        if mod == "host_sim":                    # the command's module, through the runner
+        if mod in ("host_sim", "desktop"):       # the command's module, through the runner
             argv = [sys.executable, "-S", "-m", mod] + ([cmd] if cmd else []) + ["--help"]
         else:   # a script (a benchmark, an example): imported; their tests run them
             argv = [sys.executable, "-S", "-c", "import %s" % mod]
@@ -462,7 +464,7 @@ def test_what_python3_runs_needs_only_the_standard_library():
 def test_the_module_map_in_design_names_every_firmware_module():
     # docs/design.md's two tables (the pipeline, then every other module by part): a module
     # added or moved without a line there fails here
-    from host_sim.cli.packaging import firmware_files
+    from desktop.packaging import firmware_files
     text = open(os.path.join(ROOT, "docs", "design.md"), encoding="utf-8").read()
     body = text[text.index("## The pipeline, one module per step"):]
     body = body[:body.index("\n## ", 5)]

@@ -72,7 +72,7 @@ def test_a_log_fitted_on_the_desktop_is_loaded_onto_the_board_once(tmp_path):
 def test_a_refused_calibration_file_is_said_once_and_exits_1(tmp_path, micro):
     # a file written for another chip than the one the board finds (the simulator's QMC5883L)
     import json
-    from host_sim.cli import calfile
+    from desktop import calfile
     log = str(tmp_path / "log.csv")
     cal = str(tmp_path / "calibration.json")
     mp.run(["examples/log_csv.py", log, "12000"], micro=True)

@@ -16,8 +16,8 @@ from hypothesis import strategies as st
 
 from firmware.field import wmm as field
 from firmware.field.wmm import FieldModel, FieldTableError, decimal_year_e3
-from host_sim.cli import wmm
-from host_sim.cli.benchmarks import fieldacc
+from desktop import wmm
+from desktop.benchmarks import fieldacc
 from tests import intcheck, mp
 
 pygeomag = pytest.importorskip("pygeomag", reason="pygeomag not installed (requirements.txt: "
@@ -238,7 +238,7 @@ def test_interpolation_headroom_is_reported():
 
 
 def test_micropython_heap_per_query_and_import():
-    out = mp.json_lines(mp.run(["-m", "host_sim.cli.benchmarks.fieldheap"], micro=True))[0]
+    out = mp.json_lines(mp.run(["-m", "desktop.benchmarks.fieldheap"], micro=True))[0]
     print("\nMicroPython heap: %s" % json.dumps(out))
     assert out["query_bytes"] <= 1024
     assert out["first_bytes"] <= 1024 + 512  # + one-time cost of the first atan2 call

@@ -77,11 +77,11 @@ ALLOW = [
 
 
 # The blocks a command writes, and the command: only these are a source.
-WRITERS = {"bench": "make bench (host_sim/cli/bench.py)", "soak": "make bench (--soak-only)",
+WRITERS = {"bench": "make bench (desktop/bench.py)", "soak": "make bench (--soak-only)",
            "boards": "make bench", "by-board": "make bench", "gyro": "make bench",
-           "logs": "make bench (host_sim/cli/benchmarks/accuracy.py)",
-           "run": "make run (host_sim/cli/run.py)",
-           "soak-run": "make soak (host_sim/cli/soak.py --doc)"}
+           "logs": "make bench (desktop/benchmarks/accuracy.py)",
+           "run": "make run (desktop/run.py)",
+           "soak-run": "make soak (desktop/soak.py --doc)"}
 
 
 def _rel(path):
@@ -252,7 +252,7 @@ def test_make_soak_writes_the_table_docs_faults_md_quotes(tmp_path):
     text = open(os.path.join(mp.ROOT, "docs", "faults.md"), encoding="utf-8").read()
     assert "<!-- soak-run:begin -->\n\n    soak: 600 sessions x 60 s, seed 1\n" in text
     assert "--doc docs/faults.md" in open(os.path.join(mp.ROOT, "Makefile")).read()
-    from host_sim.cli import soak
+    from desktop import soak
     page = tmp_path / "page.md"
     page.write_text("before\n<!-- soak-run:begin -->\nold\n<!-- soak-run:end -->\nafter\n")
     assert soak.main(["--sessions", "2", "--seconds", "5", "--clean", "2",

@@ -1,4 +1,4 @@
-"""Glitch rows in a good log (host_sim/cli/glitches.py): an all-zero row, a row at the rails,
+"""Glitch rows in a good log (desktop/glitches.py): an all-zero row, a row at the rails,
 a row far off the ellipsoid and one far outside the others change the calibrate command's fit
 by less than 0.5 % of B, and one line on stderr says how many of each kind were left out.
 
@@ -11,7 +11,7 @@ import os
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from host_sim.cli import calibrate, glitches
+from desktop import calibrate, glitches
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LOG = os.path.join(ROOT, "datasets", "qmc5883l_tomisuarez_filtered.csv")

@@ -1,10 +1,10 @@
 """Gyro-aided heading in the app (CompassApp.use_gyro, firmware/gyro/attitude.py) on the simulated
-GY-87: the scenarios of docs/gyro.md (host_sim/cli/benchmarks/gyroacc.py, whose figures make
+GY-87: the scenarios of docs/gyro.md (desktop/benchmarks/gyroacc.py, whose figures make
 bench prints) with their stated tolerances, each beside the magnetometer-only app where that
 is the point."""
 import pytest
 
-from host_sim.cli.benchmarks import gyroacc
+from desktop.benchmarks import gyroacc
 
 HELD = "gyro held"
 
@@ -58,7 +58,7 @@ def test_use_gyro_without_an_mpu6050_says_so():
 
 def test_the_status_line_and_the_accuracy_say_the_heading_is_held():
     from firmware.app import status_line
-    from host_sim.cli.benchmarks import gyroworld as G
+    from desktop.benchmarks import gyroworld as G
     from host_sim import motion
     b = G.board(motion.still(yaw=40), gyro=gyroacc.BIAS)
     b.world.add_magnet((8.0, 4.0, 0.0), 10, 30, ramp_s=0.3, frame="world")
@@ -90,7 +90,7 @@ def test_the_status_line_and_the_accuracy_say_the_heading_is_held():
 
 def test_another_calibration_in_force_starts_the_filter_again_from_the_compass():
     from firmware.calibration import Calibration
-    from host_sim.cli.benchmarks import gyroworld as G
+    from desktop.benchmarks import gyroworld as G
     from host_sim import motion
     b = G.board(motion.still(yaw=40), gyro=gyroacc.BIAS)
     app = G.app(b)
@@ -184,7 +184,7 @@ def test_the_icm20948s_gyroscope_aids_the_heading_and_agrees_with_the_magnetomet
     import sys
     sys.path.insert(0, os.path.join(os.path.dirname(__file__), "scenarios"))
     import app_world as W
-    from host_sim.cli.soak import Turning
+    from desktop.soak import Turning
     from tests.test_reliability import Good
     good = Good("icm20948")
     got = {}

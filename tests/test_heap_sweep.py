@@ -1,4 +1,4 @@
-"""Every heap a board may have: boards/main.py itself (host_sim/cli/benchmarks/boardrun.py) on
+"""Every heap a board may have: boards/main.py itself (desktop/benchmarks/boardrun.py) on
 the x86-32 build (a collector like a board's), from `.mpy` files (make deploy) and from `.py`
 sources (mip), with an empty store (a first calibration) and with a stored calibration, at
 heaps from 32 KB to 512 KB. No run may end in a traceback: each completes, or its last status
@@ -10,8 +10,8 @@ import shutil
 
 import pytest
 
-from host_sim.cli import bench
-from host_sim.cli.benchmarks.budgets import BUDGETS, KB
+from desktop import bench
+from desktop.benchmarks.budgets import BUDGETS, KB
 from tests import mp
 
 X86 = mp.TIERS["x86-32"]
@@ -90,7 +90,7 @@ def test_a_first_calibration_stays_short_of_the_name_tables_next_block(world, tm
     # its restart, interns far fewer (boardrun.py's and the wrapper's own included)
     import subprocess
     wrapper = os.path.join(mp.ROOT, "tests", "scenarios", "board_names.py")
-    boardrun = os.path.join(mp.ROOT, "host_sim", "cli", "benchmarks", "boardrun.py")
+    boardrun = os.path.join(mp.ROOT, "desktop", "benchmarks", "boardrun.py")
     store = tmp_path / "store"
     store.mkdir()
     p = subprocess.run(X86.cmd + ["-X", "heapsize=160k", wrapper, boardrun,

@@ -220,17 +220,125 @@ def test_test_only_reference_code_lives_under_tests():
     assert not hasattr(accum, "batch")
 
 
-def test_the_simulator_imports_nothing_of_firmware_boards_or_tests():
-    sim = os.path.join(ROOT, "host_sim")
-    for f in os.listdir(sim):
-        if f.endswith(".py"):
-            deps = _imports(os.path.join(sim, f), "host_sim")
-            bad = [d for d in deps if d.split(".")[0] in ("firmware", "boards", "tests")]
-            assert not bad, (f, bad)
+def _host_modules():
+    """{dotted name: path} of every module of the simulator (host_sim/) and the desktop tools
+    (desktop/); a package by its own name ("desktop.benchmarks")."""
+    out = {}
+    for top in ("host_sim", "desktop"):
+        for d, dirs, files in os.walk(os.path.join(ROOT, top)):
+            dirs[:] = [x for x in dirs if not x.startswith((".", "__"))]
+            pkg = os.path.relpath(d, ROOT).replace(os.sep, ".")
+            for f in files:
+                if f.endswith(".py"):
+                    out[pkg if f == "__init__.py" else pkg + "." + f[:-3]] = os.path.join(d, f)
+    return out
+
+
+def _host_imports(path):
+    """Every dotted name the file imports, at module level or inside a function: `import a.b`,
+    `from a import b` (a and a.b: b may be a module), and `__import__(PREFIX + x)` resolved
+    through the file's string constants (PREFIX + the text before a dot: chips.py's
+    "qmc5883l.QMC5883LSim", desktop/__main__.py's command names)."""
+    tree = ast.parse(open(path).read(), path)
+    strings = {n.value for n in ast.walk(tree)
+               if isinstance(n, ast.Constant) and isinstance(n.value, str)}
+    out = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            assert node.level == 0 and node.module, (path, node.lineno)  # absolute imports
+            out.add(node.module)
+            out.update(node.module + "." + a.name for a in node.names)
+        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+              and node.func.id == "__import__" and node.args):
+            a = node.args[0]
+            if isinstance(a, ast.Constant):
+                out.add(a.value)
+            elif (isinstance(a, ast.BinOp) and isinstance(a.left, ast.Constant)
+                  and isinstance(a.left.value, str)):
+                out.update(a.left.value + t.split(".")[0] for t in strings)
+            else:
+                out.add("?")   # a name this check cannot follow
+    return out
+
+
+def _host_graph():
+    """{module: [the modules of host_sim and desktop it imports]}; importing a.b.c imports
+    the packages a and a.b too (not counted for a module inside them)."""
+    mods = _host_modules()
+    g = {}
+    for m, path in mods.items():
+        deps = set()
+        for d in _host_imports(path):
+            parts = d.split(".")
+            for k in range(1, len(parts) + 1):
+                p = ".".join(parts[:k])
+                if p in mods and p != m and not m.startswith(p + "."):
+                    deps.add(p)
+        g[m] = sorted(deps)
+    return g
+
+
+def _cycle(g):
+    """An import cycle of graph g as a list of modules, or None."""
+    state = {}
+
+    def visit(m, path):
+        if state.get(m) == 1:
+            return path[path.index(m):] + [m]
+        if state.get(m) == 2:
+            return None
+        state[m] = 1
+        for d in g.get(m, ()):
+            c = visit(d, path + [m])
+            if c:
+                return c
+        state[m] = 2
+        return None
+
+    for m in sorted(g):
+        c = visit(m, [])
+        if c:
+            return c
+    return None
+
+
+def test_the_cycle_check_finds_a_cycle():
+    assert _cycle({"a": ["b"], "b": ["c"], "c": ["a"], "d": ["a"]}) == ["a", "b", "c", "a"]
+    assert _cycle({"a": ["b", "c"], "b": ["c"], "c": []}) is None
+
+
+def test_no_import_cycles_in_the_simulator_or_the_desktop_tools():
+    g = _host_graph()
+    # the graph is the real one: function-level and by-name imports are in it
+    assert "desktop.plot" in g["desktop.demo"]                    # inside demo's _plot()
+    assert "host_sim.qmc5883l" in g["host_sim.chips"]             # chips.model_class
+    assert {"desktop.calibrate", "desktop.serve"} <= set(g["desktop.__main__"])
+    assert g["host_sim.__main__"] == ["desktop", "desktop.__main__"]
+    c = _cycle(g)
+    assert c is None, "import cycle: " + " -> ".join(c)
+
+
+def test_the_simulator_imports_nothing_of_desktop_firmware_boards_or_tests():
+    # host_sim models hardware from datasheets; the desktop tools drive it and the firmware.
+    # Its __main__.py only forwards `python -m host_sim` to desktop/__main__.py
+    mods = _host_modules()
+    sim = [m for m in mods if m.split(".")[0] == "host_sim"]
+    assert len(sim) >= 15
+    for m in sim:
+        deps = _host_imports(mods[m])
+        assert "?" not in deps, m
+        bad = sorted(d for d in deps if d.split(".")[0] in ("desktop", "firmware", "boards",
+                                                             "tests"))
+        if m == "host_sim.__main__":
+            assert bad == ["desktop.__main__", "desktop.__main__.main"], bad
+        else:
+            assert not bad, (m, bad)
 
 
 def _cli_files():
-    base = os.path.join(ROOT, "host_sim", "cli")
+    base = os.path.join(ROOT, "desktop")
     for dirpath, _, files in os.walk(base):
         for f in files:
             if f.endswith(".py"):
@@ -253,10 +361,28 @@ def test_commands_never_import_tests_and_load_numpy_matplotlib_only_where_needed
         assert not top & {"numpy", "matplotlib"}, path
 
 
+# a function a reader takes in at once: longer ones are split into named steps
+TOOL_FUNCTION_MAX = 80
+
+
+def test_no_function_of_the_desktop_tools_is_over_80_lines():
+    long_, n = [], 0
+    for path in _cli_files():
+        for node in ast.walk(ast.parse(open(path).read(), path)):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n += 1
+                lines = node.end_lineno - node.lineno + 1
+                if lines > TOOL_FUNCTION_MAX:
+                    long_.append("%s:%d %s (%d lines)" % (os.path.relpath(path, ROOT),
+                                                          node.lineno, node.name, lines))
+    assert n > 500   # every tool was read
+    assert not long_, long_
+
+
 def test_every_command_parses_its_arguments_with_the_one_shared_parser():
-    from host_sim import __main__ as runner
+    from desktop import __main__ as runner
     for cmd in runner._COMMANDS:
-        src = open(os.path.join(ROOT, "host_sim", "cli", cmd + ".py")).read()
+        src = open(os.path.join(ROOT, "desktop", cmd + ".py")).read()
         assert "parser(" in src or "Parser(" in src, cmd      # args.Parser, or demo.parser
         assert "sys.argv" not in src.replace('sys.argv[1:]', ''), cmd
     for path in _cli_files():

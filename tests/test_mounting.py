@@ -2,7 +2,7 @@
 MAG_AXES is found and the right one named after a calibration dance, a right one never raises
 it, the integer bounds hold, the same verdicts on CPython and MicroPython, its heap.
 
-The simulated sessions (host_sim/cli/mounting.py Session) run CompassApp through a 40 s
+The simulated sessions (desktop/mounting.py Session) run CompassApp through a 40 s
 figure-8 (host_sim.motion.figure8, the dance of tests/test_app.py) on a board whose
 magnetometer is mounted as asked while MAG_AXES stays the boards' usual "x,-y,-z"; every
 calibration the app accepts is checked as the board checks it. Bounds (independent of the
@@ -23,13 +23,13 @@ from firmware.axes import AxisMap
 from firmware.calibration import Calibration
 from firmware.calibrate.mounting import BINS, WIDTH, Pairs, _bin
 from host_sim import motion
-from host_sim.cli import bench, mounting as M
+from desktop import bench, mounting as M
 from tests import intcheck, mp
 
 RIGHT_MAX_Q10 = 62        # 0.06: docs/calibration.md's "right setting" figure
 WRONG_MIN_Q10 = 277       # 0.27: ... and its "wrong setting" figure
 FOUND_BY_S = 10          # docs/calibration.md: each wrong rotation first found within 10 s
-SOAK_SESSIONS = 60        # make soak runs 600 (python -m host_sim.cli.mounting)
+SOAK_SESSIONS = 60        # make soak runs 600 (python -m desktop.mounting)
 HEAP_BUDGET = 2048        # bytes the session holds for the check (the issue's goal)
 
 
@@ -217,7 +217,7 @@ def _world(m, magnet=False):
 def test_a_flat_spin_or_the_soak_campaign_turning_says_not_enough_spread_never_wrong():
     # the app accepts no fit from these motions (planar data), so each session's pairs are
     # checked with the calibration a figure-8 on the same board gave
-    from host_sim.cli.soak import Turning
+    from desktop.soak import Turning
     for mount in (M.MOUNT, (2, 1, -3)):
         cal = M.Session("qmc5883l", True, mount=mount, world=_world(motion.figure8())
                         ).app.calibration

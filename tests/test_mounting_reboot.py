@@ -31,7 +31,7 @@ import app_world as W  # noqa: E402
 
 MOUNT = (2, 1, -3)        # the HMC5883L turned against the MPU6050
 WRONG = "x,-y,-z"         # the boards' usual MAG_AXES: wrong for this board
-SAID = "y,x,-z"           # what the data say (host_sim.cli.mounting.mag_axes(MOUNT))
+SAID = "y,x,-z"           # what the data say (desktop.mounting.mag_axes(MOUNT))
 OTHER = "-y,-x,-z"        # a third setting, also wrong
 NOTE = 'check MAG_AXES: the data say "%s"' % SAID
 NOTE_PATH = "/ecompass_mounting.txt"

@@ -5,7 +5,7 @@ import re
 
 import pytest
 
-from host_sim.cli.packaging import (MPY_DIR, PARTS, REQUIRES, ROOT, build_mpy, firmware_files,
+from desktop.packaging import (MPY_DIR, PARTS, REQUIRES, ROOT, build_mpy, firmware_files,
                                      module_name, package_json, shipped)
 from tests import mp
 

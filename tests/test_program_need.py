@@ -36,7 +36,7 @@ def test_a_board_short_of_heap_is_told_what_needs_less(tmp_path):
     """From .mpy files at 96 KB (an ESP32's ~110 KB less the port's own), the program says its
     figure and points at what needs less heap than .mpy files: a frozen or ROMFS build."""
     import pytest
-    from host_sim.cli import bench
+    from desktop import bench
     from tests import mp
     if not mp.TIERS["x86-32"].available:
         pytest.skip("x86-32 tier: %s" % mp.TIERS["x86-32"].reason)

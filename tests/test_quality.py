@@ -23,9 +23,9 @@ import time
 
 import pytest
 
-from host_sim.cli import quality
-from host_sim.cli.benchmarks.quality import ingest_benchmark
-from host_sim.cli.qualitydb import fleet, limits, records
+from desktop import quality
+from desktop.benchmarks.quality import ingest_benchmark
+from desktop.qualitydb import fleet, limits, records
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -542,7 +542,7 @@ def test_export_writes_formula_like_names_as_text_on_postgresql(pg_url, tmp_path
 
 def test_the_chart_shows_device_names_as_typed(tmp_path, capsys):
     # matplotlib reads $...$ as mathematics: an unknown command there would fail the plot
-    from host_sim.cli.qualitydb import chart
+    from desktop.qualitydb import chart
     db = tmp_path / "q.db"
     recs = history("$\\notacommand$", 3) + history('=HYPERLINK("x")', 3)
     assert run(capsys, "--db", db, "ingest", write_jsonl(tmp_path / "c.jsonl", recs))[0] == 0

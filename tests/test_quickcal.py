@@ -1,6 +1,6 @@
 """Quick calibration (firmware/field/quickcal.py, CompassApp.quick_calibrate): the expected field
 vector against the simulator, the heading accuracy it reaches (docs/quick_calibration.md; the
-full measurement is in `make bench`: host_sim/cli/benchmarks/quickcal.py), the limit no
+full measurement is in `make bench`: desktop/benchmarks/quickcal.py), the limit no
 one-pose method can pass, and its refusals."""
 import math
 import random

@@ -1,4 +1,4 @@
-"""MotionCal mode (firmware/motioncal/mode.py) on the simulated board (host_sim/cli/serve.py):
+"""MotionCal mode (firmware/motioncal/mode.py) on the simulated board (desktop/serve.py):
 the full loop as MotionCal runs it, bad packets, Ctrl-C, the rate, and the command itself.
 
 The loop: the board streams Raw lines -> tests/motioncal_ref.py parses them in 256-byte reads
@@ -18,8 +18,8 @@ import time
 
 import pytest
 
-from host_sim.cli import demo
-from host_sim.cli.serve import Session
+from desktop import demo
+from desktop.serve import Session
 from tests.motioncal_fit import MotionCalModel
 from tests.motioncal_ref import MotionCal, build_packet
 
@@ -313,7 +313,7 @@ def test_with_an_mpu6050_the_raw_lines_carry_the_gyroscope_in_motioncal_units():
     # (MotionCal's DEG_PER_SEC_PER_COUNT) in the magnetometer's chip axes (x, -y, -z of the
     # body here), like the accelerometer's: (0.5, -0.4, -36 + 0.6) x 16
     from host_sim import motion
-    from host_sim.cli.benchmarks import gyroworld as G
+    from desktop.benchmarks import gyroworld as G
     from firmware.motioncal.mode import MotionCalMode
     b = G.board(motion.flat_spin(period_s=10), gyro={"gyro_bias_dps": (0.5, -0.4, 0.6)})
     app = G.app(b, gyro=False)

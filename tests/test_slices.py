@@ -2,10 +2,10 @@
 the solve in one go.
 
 Work per slice is bounded by COUNTS, never by time: long-int operations counted exactly by
-host_sim/cli/benchmarks/intcount.py's TInt (an operation whose operand or result is >= 2**30
+desktop/benchmarks/intcount.py's TInt (an operation whose operand or result is >= 2**30
 is a heap-allocated long int on a 32-bit board), samples classified by the coverage count,
 and Python lines executed (sys.settrace) as a proxy for the bytecode. Times are the bench's
-business (`make bench`: host_sim/cli/benchmarks/solver.py).
+business (`make bench`: desktop/benchmarks/solver.py).
 """
 import math
 import random
@@ -22,7 +22,7 @@ from firmware.calibrate import samples
 from firmware.calibrate import solve
 from firmware.errors import CalibrationRejected
 from firmware.calibrate.calibrator import Calibrator
-from host_sim.cli.benchmarks import intcount
+from desktop.benchmarks import intcount
 
 MODELS = ("minmax", 4, 7, 10)
 # Python lines a slice may execute (CPython's line events): the bytecode side of the bound.

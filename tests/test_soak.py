@@ -12,8 +12,8 @@ import pytest
 
 from firmware.store import CalStore
 from host_sim.boards import make_board
-from host_sim.cli import soak
-from host_sim.cli.memfs import MemFs
+from desktop import soak
+from desktop.memfs import MemFs
 
 NEED_NO_DETECTION = {"stall", "accel_absent"}  # a pause; a missing part found at boot
 

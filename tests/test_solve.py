@@ -3,7 +3,7 @@ from fractions import Fraction as Fr
 
 import numpy as np
 
-from host_sim.cli.benchmarks.reference import numpy_fit
+from desktop.benchmarks.reference import numpy_fit
 import pytest
 from hypothesis import given, strategies as st
 

@@ -24,8 +24,8 @@ import pytest
 
 from firmware.calibrate.calibrator import SOLVE_EVERY, Calibrator
 from firmware.errors import CalibrationRejected
-from host_sim.cli import web as webcli
-from host_sim.cli.args import UsageError
+from desktop import web as webcli
+from desktop.args import UsageError
 from tests import mp
 from tests.motioncal_ref import build_packet, crc16_modbus, is_float_ok, sent_values
 
@@ -202,7 +202,7 @@ def test_screenshot_saved(run):
 # ---- `python -m host_sim web`: no browser needed ----------------------------------------
 
 def test_cli_bad_port_is_one_line(capsys):
-    from host_sim.__main__ import main
+    from desktop.__main__ import main
     assert main(["web", "--port", "70000"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--port" in err[0] and "70000" in err[0]

@@ -1,4 +1,4 @@
-"""`python -m host_sim web`'s server (host_sim/cli/web.py, docs/web.md "What it serves, and to
+"""`python -m host_sim web`'s server (desktop/web.py, docs/web.md "What it serves, and to
 whom") against raw requests: a real server on a free port, the request target written to the
 socket byte for byte (no client normalises it), the answer read back whole.
 
@@ -15,7 +15,7 @@ import threading
 
 import pytest
 
-from host_sim.cli import web as webcli
+from desktop import web as webcli
 
 ROOT = webcli.ROOT
 SECRET = b"SECRET-outside-web-and-firmware"

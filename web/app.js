@@ -64,7 +64,7 @@ function fromFiles() {
     return { from: "files", port, texts };
 }
 
-// From vendor/bundle.js, one classic script made by `make web` (host_sim/cli/web.py): what a
+// From vendor/bundle.js, one classic script made by `make web` (desktop/web.py): what a
 // file:// page can load. Chromium refuses fetch(), XHR and import() of files there but runs a
 // <script src> of a file, and fetches a data: URL, which is how the .wasm (base64 in the
 // bundle) reaches the port's loader. Its firmware is as of the last `make web`.

@@ -30,7 +30,7 @@ REASON_BAD_HEADER = "bad_header"
 REASON_BAD_CRC = "bad_crc"
 
 TABLE_NAME = "wmm2025.bin"
-_HEADER = const(32)  # bytes before the first record (host_sim/cli/wmm.py: file layout)
+_HEADER = const(32)  # bytes before the first record (desktop/wmm.py: file layout)
 _RECORD = const(12)  # X0 Y0 Z0 SX SY SZ, int16 each
 _MAIN_NT = const(4)  # nT per count of X0, Y0, Z0
 _SV_PER_NT = const(8)  # counts per nT/year of SX, SY, SZ

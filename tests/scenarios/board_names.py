@@ -1,4 +1,4 @@
-"""MicroPython only: host_sim/cli/benchmarks/boardrun.py (boards/main.py over a recorded
+"""MicroPython only: desktop/benchmarks/boardrun.py (boards/main.py over a recorded
 session) run as it is, then the names interned by the end (micropython.qstr_info()'s line).
 A wrapper, so the sweeps' harness carries no code of this test.
 

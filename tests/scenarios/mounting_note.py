@@ -10,7 +10,7 @@ from firmware.calibration import Calibration
 from firmware.axes import AxisMap
 from firmware.store_slots import crc32
 from firmware.store import CalStore
-from host_sim.cli.memfs import MemFs
+from desktop.memfs import MemFs
 
 
 class Mag:

@@ -8,7 +8,7 @@ import json
 import sys
 
 sys.path.append("tests/scenarios")
-from host_sim.cli import mounting as M  # noqa: E402
+from desktop import mounting as M  # noqa: E402
 from firmware.calibrate import mountcheck  # noqa: E402
 
 s = M.Session("gy87", None, mount=(2, 1, -3))

@@ -18,7 +18,7 @@ sys.path.insert(0, "tests/scenarios")
 import app_world as W  # noqa: E402
 
 from host_sim import motion  # noqa: E402
-from host_sim.cli.benchmarks import gyroworld as G  # noqa: E402
+from desktop.benchmarks import gyroworld as G  # noqa: E402
 
 from firmware import compat  # noqa: E402
 from firmware.app import status_line, status_view  # noqa: E402
