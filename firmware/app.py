@@ -203,11 +203,11 @@ def _status_of(e):
     return STATUS_BUS_ERROR
 
 
-def _collector_attr(name, default):
-    # an app attribute that is the collector's; when not collecting, what the last session
-    # left (firmware/calibrate/session.py ENDED), else `default`
-    return property(lambda self: getattr(self.collector, name) if self.collector is not None
-                    else self._ended.get(name, default))
+def _collector_attr(name, default, owner="collector"):
+    # an app attribute that is the collector's (or the session's); when not collecting, what
+    # the last session left (firmware/calibrate/session.py ENDED, KEPT), else `default`
+    return property(lambda self: getattr(getattr(self, owner), name)
+                    if getattr(self, owner) is not None else self._ended.get(name, default))
 
 
 class CompassApp:
@@ -223,13 +223,15 @@ class CompassApp:
     calibration = UNCALIBRATED
     compass = None
     collector = None
-    pending = None
-    change = None
+    _session = None  # firmware.calibrate.session.Session while a calibration session runs
+    pending = _collector_attr("pending", None, "_session")  # a fit whose parameters jumped
+    change = _collector_attr("change", None, "_session")  # (parameter, value, low, high)
+    history_errors = _collector_attr("history_errors", 0, "_session")
+    history_reason = _collector_attr("history_reason", None, "_session")
     stored = 0
     save_errors = 0
     load_reason = None
     worst_stall_us = 0
-    history_errors = 0
     _ended = {}      # (read only here: a made app has its own)
     no_memory = None  # what the heap could not hold: "start", "load", "calibrate" (status line)
     _args = None     # the constructor's arguments while the heap could not hold the app
@@ -293,9 +295,10 @@ class CompassApp:
 
     # --- storage (firmware/persist.py, loaded for each use) ---------------------------
     def _load(self):
+        self.load_reason = None
         try:
             from firmware import persist
-            cal = persist.load(self)
+            cal, self.load_reason = persist.load(self)
         except MemoryError:  # no room for the store's code: not "uncalibrated" (_retry)
             from firmware.calibration import UNCALIBRATED
             self.load_reason = _LOAD_NO_MEMORY
@@ -307,14 +310,29 @@ class CompassApp:
     def _save(self, dip_only=False):
         try:
             from firmware import persist
-            persist.save(self, dip_only)
+            r = persist.save(self, dip_only)
         except MemoryError:  # no room for the store's code: as a failed save (retried)
-            self.save_errors += 1
-            self.save_reason = _LOAD_NO_MEMORY
-            self._unsaved = True
-            self._save_wait_us = 0
+            r = (_LOAD_NO_MEMORY, 0)
         persist = None
         drop("persist", "slots")
+        if r is not None:  # (None: no store)
+            self._saved(dip_only, r[0], r[1])
+
+    def _saved(self, dip_only, reason, us):
+        # a save's figures: stored, or failed (.save_errors, .save_reason; retried after
+        # _SAVE_RETRY_US with the dip known then)
+        if reason is None:
+            if not dip_only:
+                self.stored += 1
+            self._dip_unsaved = self.dip is not None and not self.dip.armed
+        else:
+            self._dip_unsaved = False
+            self.save_errors += 1
+            self._save_wait_us = 0
+        self._unsaved = reason is not None
+        self.save_reason = reason
+        if us > self.worst_save_us:
+            self.worst_save_us = us
 
     # --- calibration in force ---------------------------------------------------------
     def _good_enough(self, cal):
@@ -346,9 +364,12 @@ class CompassApp:
         if self._dip_unsaved and not self._unsaved:
             self._save(True)
 
-    def use_calibration(self, cal, save=True):
+    def use_calibration(self, cal, save=True, collect=True):
         """Put `cal` (a Calibration made outside the app, e.g. from MotionCal's packet by
-        firmware/motioncal/mode.py) in force now, and save it to the store when `save`."""
+        firmware/motioncal/mode.py) in force now, and save it to the store when `save`;
+        collect False: stop collecting (the user's choice stands)."""
+        if not collect:
+            self.collector = None
         self._use(cal)
         if save:
             self._save()
@@ -366,8 +387,8 @@ class CompassApp:
                 return self._no_room()
             try:
                 from firmware.calibrate import session
-                self._session = session
-                self.collector = session.start(self)
+                s = self._session = session.Session(self)
+                self.collector = s.collector
             except ImportError:  # package-calibrate.json not installed on this board
                 self.not_installed = "calibrate"
                 return None
@@ -377,6 +398,15 @@ class CompassApp:
                 return self._no_room()
             self._locate()
         return self.collector
+
+    def _mounted(self, verdict, axes):
+        # a mounting check's answer (firmware/calibrate/mountcheck.py, or its note read at boot,
+        # firmware/mountnote.py): "wrong" puts its status in place of "ok", "ok" clears it
+        self.mounting = (verdict, axes)
+        if verdict == "wrong":
+            self._axes_status = 'check MAG_AXES: the data say "%s"' % axes
+        elif verdict == "ok":
+            self._axes_status = None
 
     def _no_room(self):
         self.no_memory = "calibrate"
@@ -422,7 +452,8 @@ class CompassApp:
         except ImportError:
             raise ImportError("quick_calibrate() needs the field part: install "
                               "package-field.json")
-        return quick_calibrate(self, true_heading_cdeg, refine, samples)
+        self.quick, cal = quick_calibrate(self, true_heading_cdeg, refine, samples)
+        return cal
 
     # --- gyro-aided heading (firmware/gyro/attitude.py) ----------------------------------------
     def use_gyro(self, **options):
@@ -439,7 +470,7 @@ class CompassApp:
         except ImportError:
             raise ImportError("use_gyro() needs the gyro part: install package-gyro.json")
         attitude.use_kernels(None if self.fast else False)  # the app's kernel set
-        a = attach(self, attitude.Attitude, options)
+        a = self.attitude = attach(self, attitude.Attitude, options)
         attach = None
         drop("gyro.gyrosetup")
         self._gyro_options = options if options else ()
@@ -501,16 +532,21 @@ class CompassApp:
             self._reinit_level = 0
             if self._check():
                 self._select()
-            if self.attitude is not None:
-                self.attitude.follow(self)  # use_gyro(): the filter's step
+            a = self.attitude
+            if a is not None:  # use_gyro(): the filter's step, its heading and status
+                st = a.follow(self)
+                if st is not None:
+                    self.heading_kang = a.shown_kang
+                    self.status = st
             if not self.tilt and (self.accel is not None or self._accel_auto) \
                     and self.status == STATUS_OK:
                 self._flag(STATUS_TILT)
         c = self.collector
         if c is not None and (c.job is not None or c.due()):
             self._solve()
-        if self.pending is not None and (self.status == STATUS_OK
-                                         or self.status == STATUS_INTERFERENCE):
+        s = self._session
+        if s is not None and s.pending is not None and (self.status == STATUS_OK
+                                                         or self.status == STATUS_INTERFERENCE):
             self.status = STATUS_CHANGED  # the likely cause of the interference, too
         if self._axes_status is not None and (self.status == STATUS_OK
                                               or self.status == STATUS_INTERFERENCE):
@@ -674,11 +710,12 @@ class CompassApp:
         if self._tilt_bad % _ACCEL_REINIT_EVERY == 1:
             self._wake_accel()
 
-    def _wake_accel(self):
-        # an MPU6050 asleep since a reset or a glitch write: its configure() wakes it
+    def _wake_accel(self, check=True):
+        # an MPU6050 asleep since a reset or a glitch write (or, check False, one whose
+        # gyroscope setting changed: firmware/gyro/attitude.py): its configure() wakes it
         g = self._guard
         with g:
-            if not self.accel.config_ok():
+            if not check or not self.accel.config_ok():
                 self.accel.configure()
                 self.reinits += 1
 
@@ -687,6 +724,7 @@ class CompassApp:
         self._apply(self._mm, self._cor, self.body)
         a = self.attitude  # use_gyro(): the gyro step maps gravity (the filter's if bumped)
         if a is not None and a.predict(self):
+            self.tilt = True  # (a bumped accelerometer: gravity is the filter's)
             h = self.compass.update(self.body, self.gravity)
         elif self.accel is None or not self.tilt:
             h = self.compass.update(self.body)
@@ -811,7 +849,20 @@ class CompassApp:
 
     # --- the calibration session (firmware/calibrate/session.py, while collecting) ----------------
     def _solve(self):
-        self._session.solve(self)
+        t = self._wall()
+        done = self._session.solve(self)
+        d = self._wall_diff(self._wall(), t)
+        self.slices = (self.slices + 1) & 0x3FFFFFFF
+        if d > self.worst_stall_us:
+            self.worst_stall_us = d
+        if done:
+            self._end_session()
+
+    def _end_session(self):
+        # the session's job is done: its counters stay, it and the calibration machinery go
+        self._ended = self._session.ended()
+        self.collector = self._session = None
+        drop_part("calibrate")
 
     date_s = None  # a function returning the date in seconds, when the board knows it
 
@@ -821,7 +872,8 @@ class CompassApp:
         is pending."""
         if self.pending is None:
             return False
-        self._session.accept_change(self)
+        if self._session.accept_change(self):
+            self._end_session()
         if self.status == STATUS_CHANGED:
             self.status = STATUS_OK
         return True
@@ -831,7 +883,8 @@ class CompassApp:
         history); new fits are again judged against it. False when none is pending."""
         if self.pending is None:
             return False
-        self._session.discard_change(self)
+        if self._session.discard_change(self):
+            self._end_session()
         if self.status == STATUS_CHANGED:
             self.status = STATUS_OK
         return True
@@ -895,9 +948,12 @@ def status_line(app):
     Never raises MemoryError: without room for the line, a fixed one says so."""
     try:
         from firmware.status import line
-        return line(app)
+        s = line(app)
     except MemoryError:
         return _NO_MEMORY_LINE
+    if app._saved_shown != app.stored:
+        app._saved_shown = app.stored  # "saved" is shown once after each save
+    return s
 
 
 _NO_MEMORY_VIEW = (b"status line: out of memory (a frozen or ROMFS build needs the least heap: "
@@ -909,6 +965,9 @@ def status_view(app):
     next call), allocating nothing else: what boards/main.py writes every half second."""
     try:
         import firmware.status as status  # (`from ... import` would build a tuple each call)
-        return status.view(app)
+        v = status.view(app)
     except MemoryError:
         return _NO_MEMORY_VIEW
+    if app._saved_shown != app.stored:
+        app._saved_shown = app.stored
+    return v

@@ -85,22 +85,14 @@ def setup(app, i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, s
     app.reinits = 0
     app.reinit_failures = 0
     app.steps = 0
-    app.pending = None         # a calibration whose parameters jumped (see History)
-    app.change = None          # (parameter, value, low, high) of the jump
-    app.history_errors = 0
-    app.history_reason = None
-    app._hist = None           # firmware.calibrate.history.History, from the first accept on
-    app._hist_flags = 0        # flags of the history entry due once the save succeeds
 
     app.store = store
     heading_line(app, cdeg_to_kang(declination_cdeg))
     app._dip_unsaved = False   # this app saved the fit in force before its dip was known
     app.collector = None
-    app._session = None        # firmware.calibrate.session while a calibration session runs
     app._ended = {}            # the counters the last session left (firmware/calibrate/session.py)
     app.calibration = None
 
-    app._slices_per_step = 1
     app._fails = 0             # failed reads in a row
     app._reinit_level = 0
     app._t_last = app._ticks()

@@ -47,7 +47,6 @@ _WRONG = "wrong"          # firmware.calibrate.mountcheck.WRONG: the only verdic
 _OK = "ok"                # firmware.calibrate.mountcheck.OK
 _LINE_MAX = const(80)   # bytes read (persist.py too): a line has at most 59 (a 16-byte
 #                           KIND, MAG_AXES "-x,-y,-z"); as long or longer is no line
-_STATUS = 'check MAG_AXES: the data say "%s"'  # as firmware.calibrate.mountcheck.judge says it
 
 
 def save(app):
@@ -95,11 +94,10 @@ def load(app, data):
         return False
     now = app._mag_map.spec
     if said[0] == now:
-        app.mounting = (_WRONG, said[1])
-        app._axes_status = _STATUS % said[1]
+        app._mounted(_WRONG, said[1])
         return False
     if said[1] == now:
-        app.mounting = (_OK, now)
+        app._mounted(_OK, now)
     return True
 
 

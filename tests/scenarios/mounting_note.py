@@ -6,6 +6,7 @@ import json
 import sys
 
 from firmware import mountnote, persist
+from firmware.app import CompassApp
 from firmware.calibration import Calibration
 from firmware.axes import AxisMap
 from firmware.slots import crc32
@@ -21,6 +22,7 @@ class Mag:
 class App:
     mounting = None
     _axes_status = None
+    _mounted = CompassApp._mounted  # what the app does with a verdict
 
     def __init__(self, store, mag_axes, accel_axes="-x,y,z"):
         self.store = store
