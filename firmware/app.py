@@ -95,7 +95,8 @@ there is no good calibration yet, collect and solve one in the background.
 # the same jump is flagged again. .date_s: None, or a function returning the date in seconds
 # when the board knows it (e.g. after NTP), written with each entry. History errors are
 # counted in .history_errors (the last one in .history_reason) and never stop the loop.
-from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED
+from firmware.axes import apply
+from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED, correct
 from firmware.compass import FLAG_NO_GRAVITY
 from firmware.compat import const, drop, drop_part, free_bytes, ticks_diff
 from firmware.errors import SensorOverflow, DataReadyTimeout
@@ -148,6 +149,7 @@ _GAP_CAP_US = const(0x10000000)  # the time since the last read stops counting a
 _ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
 _ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
 _REPORT_EVERY = const(25)    # run(): steps between reports (0.5 s at 50 Hz)
+_CONFIG_EVERY = const(1)     # samples between configuration read-backs (docs/faults.md)
 
 
 _READ_ERRORS = (OSError, SensorOverflow)  # a module constant: a literal tuple is built per call
@@ -203,11 +205,18 @@ def _status_of(e):
     return STATUS_BUS_ERROR
 
 
-def _collector_attr(name, default, owner="collector"):
-    # an app attribute that is the collector's (or the session's); when not collecting, what
-    # the last session left (firmware/calibrate/session.py ENDED, KEPT), else `default`
-    return property(lambda self: getattr(getattr(self, owner), name)
-                    if getattr(self, owner) is not None else self._ended.get(name, default))
+def _collector_attr(name, default):
+    # an app attribute that is the collector's; when not collecting, what the last session
+    # left (firmware/calibrate/session.py ENDED), else `default`
+    return property(lambda self: getattr(self.collector, name) if self.collector is not None
+                    else self._ended.get(name, default))
+
+
+def _session_attr(name, default):
+    # the same for the session's own (firmware/calibrate/session.py Session, KEPT). (A getter
+    # taking the owner's name would allocate at each read on MicroPython.)
+    return property(lambda self: getattr(self._session, name) if self._session is not None
+                    else self._ended.get(name, default))
 
 
 class CompassApp:
@@ -224,15 +233,24 @@ class CompassApp:
     compass = None
     collector = None
     _session = None  # firmware.calibrate.session.Session while a calibration session runs
-    pending = _collector_attr("pending", None, "_session")  # a fit whose parameters jumped
-    change = _collector_attr("change", None, "_session")  # (parameter, value, low, high)
-    history_errors = _collector_attr("history_errors", 0, "_session")
-    history_reason = _collector_attr("history_reason", None, "_session")
-    stored = 0
-    save_errors = 0
+    pending = _session_attr("pending", None)  # a fit whose parameters jumped
+    change = _session_attr("change", None)  # (parameter, value, low, high)
+    history_errors = _session_attr("history_errors", 0)
+    history_reason = _session_attr("history_reason", None)
     load_reason = None
-    worst_stall_us = 0
-    _ended = {}      # (read only here: a made app has its own)
+    # counters and flags, each set again where it changes: the store's (stored, save_errors,
+    # save_reason, worst_save_us, a save due, a dip not saved yet), the solver's, the
+    # drivers' (re-inits, failed reads in a row, the accelerometer looked for), the clock's
+    # (us since the last step, capped as evidence; since the last good read), the field's
+    stored = save_errors = worst_save_us = worst_stall_us = slices = steps = 0
+    save_reason = last_error = None  # (the exception behind the last failed read)
+    reinits = reinit_failures = accel_retries = _accel_wait_us = _fails = _reinit_level = 0
+    _unsaved = _dip_unsaved = _stalled = _ok = False
+    _since_cfg = _tilt_bad = _dt = _gap_us = _age_us = _interf_us = _save_wait_us = 0
+    _cfg_due = _cfg_ok = True  # the first good sample reads the configuration back
+    verify_every = _CONFIG_EVERY
+    heading_kang = -1
+    _ended = {}      # the counters of the last session (read only here: an app has its own)
     no_memory = None  # what the heap could not hold: "start", "load", "calibrate" (status line)
     _args = None     # the constructor's arguments while the heap could not hold the app
     _saved_shown = 0  # app.stored when the status line last said "saved"
@@ -253,9 +271,6 @@ class CompassApp:
                  reinit_after=_REINIT_AFTER, mag_options=None, learn=None, fast=None):
         self._guard = _ReadGuard()
         self._step_guard = _StepGuard()
-        self.heading_kang = -1
-        self.status = STATUS_STARTING
-        self.steps = 0
         self.errors = {}
         args = (i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, store,
                 delay_us, ticks_us, capacity, solve_every, fallback, reinit_after,
@@ -273,10 +288,19 @@ class CompassApp:
     def _build(self, args):
         from firmware import appsetup  # construction only: dropped when the app is made
         try:
-            appsetup.setup(self, *args)
+            (self.i2c, self.mag, self.accel, self._accel_auto, self.store, self.model,
+             self.capacity, self.solve_every, self.fallback, self.reinit_after, self.learn,
+             self._mag_map, self._acc_map, self._mag_into, self._mag_cfg, self._mm, self._am,
+             self._delay, self._ticks, self._wrap, self._wall, self._wall_diff, self._dt_cap,
+             self.raw, self._cor, self.body, self._acc, self.gravity, self.health, self.tilt,
+             self._kn, self.compass, self.watch) = appsetup.setup(*args)
         finally:
             appsetup = None
             drop("appsetup", "devinit")  # the drivers' start-up and error texts too
+        self.fast = self._kn is not None
+        self.dip = self.watch.dip  # the calibration's dip (firmware/health.py DipCheck)
+        self._t_last = self._ticks()
+        self.status = STATUS_STARTING
         self._args = None
         self.no_memory = None
         self._use(self._load())
@@ -407,6 +431,9 @@ class CompassApp:
             self._axes_status = 'check MAG_AXES: the data say "%s"' % axes
         elif verdict == "ok":
             self._axes_status = None
+
+    def _saved_seen(self):
+        self._saved_shown = self.stored  # the status line said "saved" (firmware/status.py)
 
     def _no_room(self):
         self.no_memory = "calibrate"
@@ -720,8 +747,13 @@ class CompassApp:
                 self.reinits += 1
 
     def _heading(self):
-        self._correct(self._k, self.raw, self._cor)
-        self._apply(self._mm, self._cor, self.body)
+        kn = self._kn  # the kernel set chosen at construction: firmware.fast, or the plain
+        if kn is None:  # functions (the same bits, tests/test_tiers.py)
+            correct(self._k, self.raw, self._cor)
+            apply(self._mm, self._cor, self.body)
+        else:
+            kn.correct(self._k, self.raw, self._cor)
+            kn.apply(self._mm, self._cor, self.body)
         a = self.attitude  # use_gyro(): the gyro step maps gravity (the filter's if bumped)
         if a is not None and a.predict(self):
             self.tilt = True  # (a bumped accelerometer: gravity is the filter's)
@@ -729,7 +761,10 @@ class CompassApp:
         elif self.accel is None or not self.tilt:
             h = self.compass.update(self.body)
         else:
-            self._apply(self._am, self._acc, self.gravity)
+            if kn is None:
+                apply(self._am, self._acc, self.gravity)
+            else:
+                kn.apply(self._am, self._acc, self.gravity)
             h = self.compass.update(self.body, self.gravity)
         if h < 0:
             return STATUS_NO_GRAVITY if self.compass.flags & FLAG_NO_GRAVITY else STATUS_NO_FIELD
@@ -948,12 +983,9 @@ def status_line(app):
     Never raises MemoryError: without room for the line, a fixed one says so."""
     try:
         from firmware.status import line
-        s = line(app)
+        return line(app)
     except MemoryError:
         return _NO_MEMORY_LINE
-    if app._saved_shown != app.stored:
-        app._saved_shown = app.stored  # "saved" is shown once after each save
-    return s
 
 
 _NO_MEMORY_VIEW = (b"status line: out of memory (a frozen or ROMFS build needs the least heap: "
@@ -965,9 +997,6 @@ def status_view(app):
     next call), allocating nothing else: what boards/main.py writes every half second."""
     try:
         import firmware.status as status  # (`from ... import` would build a tuple each call)
-        v = status.view(app)
+        return status.view(app)
     except MemoryError:
         return _NO_MEMORY_VIEW
-    if app._saved_shown != app.stored:
-        app._saved_shown = app.stored
-    return v

@@ -133,7 +133,8 @@ def _story(app):
     calibrated, and why not yet."""
     c = app.calibration
     col = app.collector
-    if app.stored != app._saved_shown:  # (firmware.app.status_line then notes it shown)
+    if app.stored != app._saved_shown:
+        app._saved_seen()
         _sep()
         _put("saved")  # shown once after each save
     _sep()

@@ -211,9 +211,9 @@ def gravity(st, grav):
 # viper mirrors in firmware/gyro/attitude_fast.py where the port has the native emitter (the same
 # bits); only the set in use is loaded (see use_kernels).
 _KERNEL_NAMES = ("rates", "advance", "q_hi", "down", "tilt_error", "tilt_sine", "accel_apply",
-                 "field_error", "yaw_rate", "angles")
+                 "field_error", "yaw_rate", "angles", "apply")
 rates = advance = q_hi = down = tilt_error = tilt_sine = accel_apply = None
-field_error = yaw_rate = angles = None
+field_error = yaw_rate = angles = apply = None  # apply: firmware/axes.py's, or its mirror
 KERNELS = None
 
 
@@ -362,7 +362,7 @@ class Attitude:
         # gravity to use (the app's tilt then holds: CompassApp._heading).
         t = app.tilt
         if t:
-            app._apply(app._am, app._acc, app.gravity)
+            apply(app._am, app._acc, app.gravity)
         elif app.health.asame:  # frozen (firmware/health.py): the chip's fault, not a bump
             self._gap(app, False)
             return False
@@ -424,7 +424,7 @@ class Attitude:
         # another), with an implausible accelerometer (the gyro's own chip: its burst is
         # suspect too), a rate past the range or a chip that lost its setting: the filter then
         # starts again from the compass at the next clean sample.
-        app._apply(self.axes, self.raw, self.gyro)
+        apply(self.axes, self.raw, self.gyro)
         n = app.steps
         skip = n != self._at + 1 or app._stalled or not ok
         self._at = n
