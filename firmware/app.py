@@ -99,21 +99,17 @@ from firmware.axes import apply
 from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED, correct
 from firmware.compass import FLAG_NO_GRAVITY
 from firmware.compat import const, drop, drop_part, free_bytes, ticks_diff
-from firmware.errors import SensorOverflow, DataReadyTimeout
-from firmware.health import SPELL_FIELD, SPELL_JUMP
+from firmware.errors import SensorOverflow
+from firmware.health import (SPELL_FIELD, SPELL_JUMP, STATUS_BUS_ERROR, STATUS_OK,  # noqa: F401
+                             STATUS_OVERFLOW, STATUS_RESET, STATUS_STALE, STATUS_TIMEOUT,
+                             status_of)
 
-STATUS_OK = "ok"
 STATUS_INTERFERENCE = "interference"  # a heading, but |field| is off: a magnet or steel near
-STATUS_BUS_ERROR = "bus_error"        # NACK / EIO: the chip did not answer
-STATUS_TIMEOUT = "timeout"            # no data-ready within the driver's bound
-STATUS_OVERFLOW = "overflow"          # QMC5883L OVL, HMC5883L -4096: sample dropped
 STATUS_NO_FIELD = "no_field"          # corrected field (0, 0, 0): no heading
 STATUS_NO_GRAVITY = "no_gravity"      # accelerometer (0, 0, 0): asleep after a reset, or free fall
 STATUS_STARTING = "starting"          # before the first step
 STATUS_CHANGED = "hardware changed?"  # a new fit jumped outside its history's limits: pending
 # field faults (firmware/health.py, docs/faults.md): user words, never "ok" while they last
-STATUS_STALE = "stale data"           # the magnetometer repeats its last sample: no new data
-STATUS_RESET = "sensor reset"         # its control registers no longer hold our configuration
 STATUS_TILT = "tilt unavailable"      # the accelerometer is implausible: level-board heading
 STATUS_INTERNAL = "internal error"    # step() caught an unexpected exception (e.g. MemoryError)
 STATUS_JUMP = "heading jumped"        # it moved > 4 deg in a sample (or 5 over two at 50 Hz):
@@ -128,10 +124,8 @@ STATUS_GYRO_HELD = "gyro held"        # use_gyro(): the field is not used (inter
 
 SOLVE_EVERY = const(25)       # kept samples between solves: ~1/9 of a full sphere (225 held)
 _REINIT_AFTER = const(5)     # failed reads in a row before the drivers are re-initialised
-_REINIT_MAX_SHIFT = const(4)  # failed re-inits back off to every 2**4 x _REINIT_AFTER reads
 _STALE_US = const(30000000)   # 30 s of interference: the calibration no longer fits the board
 _SAVE_RETRY_US = const(60000000)  # a failed save is retried after 60 s
-_ERROR_BACKOFF_US = const(20000)  # after a bus error: do not hammer a dead bus
 _FIELD_TOL_PCT = const(10)    # interference window floor, % (firmware.compass's default)
 _FIELD_TOL_MAX_PCT = const(50)
 _FIT_SIGMAS = const(3)        # window >= 3 x the fit's RMS radial error
@@ -146,10 +140,7 @@ _CAL_RETRY_US = const(60000000)  # a session that found no room: again in 60 s
 # boot (x86-32 build, boards/main.py; docs/benchmarks.md).
 SESSION_ROOM = const(128 * 1024)
 _GAP_CAP_US = const(0x10000000)  # the time since the last read stops counting at 268 s
-_ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
-_ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
 _REPORT_EVERY = const(25)    # run(): steps between reports (0.5 s at 50 Hz)
-_CONFIG_EVERY = const(1)     # samples between configuration read-backs (docs/faults.md)
 
 
 _READ_ERRORS = (OSError, SensorOverflow)  # a module constant: a literal tuple is built per call
@@ -197,19 +188,16 @@ class _ReadGuard:
         return False
 
 
-def _status_of(e):
-    if isinstance(e, DataReadyTimeout):
-        return STATUS_TIMEOUT
-    if isinstance(e, SensorOverflow):
-        return STATUS_OVERFLOW
-    return STATUS_BUS_ERROR
-
-
 def _collector_attr(name, default):
     # an app attribute that is the collector's; when not collecting, what the last session
     # left (firmware/calibrate/session.py ENDED), else `default`
     return property(lambda self: getattr(self.collector, name) if self.collector is not None
                     else self._ended.get(name, default))
+
+
+def _health_attr(name, default):
+    return property(lambda self: getattr(self.health, name) if self.health is not None
+                    else default)
 
 
 def _session_attr(name, default):
@@ -243,12 +231,14 @@ class CompassApp:
     # drivers' (re-inits, failed reads in a row, the accelerometer looked for), the clock's
     # (us since the last step, capped as evidence; since the last good read), the field's
     stored = save_errors = worst_save_us = worst_stall_us = slices = steps = 0
-    save_reason = last_error = None  # (the exception behind the last failed read)
-    reinits = reinit_failures = accel_retries = _accel_wait_us = _fails = _reinit_level = 0
+    save_reason = None
     _unsaved = _dip_unsaved = _stalled = _ok = False
-    _since_cfg = _tilt_bad = _dt = _gap_us = _age_us = _interf_us = _save_wait_us = 0
-    _cfg_due = _cfg_ok = True  # the first good sample reads the configuration back
-    verify_every = _CONFIG_EVERY
+    _dt = _gap_us = _age_us = _interf_us = _save_wait_us = 0
+    health = None  # firmware/health.py Health: the drivers' faults, their counters below
+    reinits = _health_attr("reinits", 0)
+    reinit_failures = _health_attr("reinit_failures", 0)
+    accel_retries = _health_attr("accel_retries", 0)  # looks for an absent accelerometer
+    last_error = _health_attr("last_error", None)  # the exception behind the last failure
     heading_kang = -1
     _ended = {}      # the counters of the last session (read only here: an app has its own)
     no_memory = None  # what the heap could not hold: "start", "load", "calibrate" (status line)
@@ -552,11 +542,11 @@ class CompassApp:
         if st == STATUS_OK:
             st = self._heading()
         if st != STATUS_OK:
-            self._failed(st)
+            self.health.failed(self, st)
         else:
             self._ok = True
-            self._fails = 0
-            self._reinit_level = 0
+            self.health.fails = 0
+            self.health.level = 0
             if self._check():
                 self._select()
             a = self.attitude
@@ -584,7 +574,8 @@ class CompassApp:
 
     def _internal(self, e):
         self._ok = False
-        self.last_error = e
+        if self.health is not None:
+            self.health.last_error = e
         if isinstance(e, MemoryError):
             self._flag(STATUS_NO_MEMORY)
             return
@@ -657,19 +648,9 @@ class CompassApp:
             self.calibrate()
 
     def _look_for_accel(self, dt):
-        self._accel_wait_us += dt
-        if self._accel_wait_us < _ACCEL_RETRY_US:
-            return
-        self._accel_wait_us = 0
-        self.accel_retries += 1
-        try:
-            from firmware import detect
-            acc = detect.detect_accel(self.i2c)
-        except OSError:
-            acc = None
+        acc = self.health.look_for_accel(self.i2c, dt)
         if acc is not None:
             self.accel = acc
-            self.health.set_accel(acc.counts_per_g)
             self.tilt = False  # until its first plausible sample
 
     def _read(self):
@@ -685,8 +666,8 @@ class CompassApp:
             self._stalled = self._gap_us > self._dt_cap
             self._gap_us = 0
             return STATUS_OK
-        self.last_error = g.error
-        return _status_of(g.error)
+        self.health.last_error = g.error
+        return status_of(g.error)
 
     def _vet(self):
         """The sample's plausibility (firmware/health.py) and, every verify_every samples or
@@ -701,50 +682,11 @@ class CompassApp:
             # followed the last read: DOR says later ones were skipped, so it is that old
             return STATUS_STALE
         if self.accel is not None:
-            self._tilt_check()
-        self._since_cfg += 1
-        if (self._cfg_due or self._since_cfg >= self.verify_every
-                or self.collector is not None):
-            return self._verify()
+            self.tilt = h.tilt_check(self)
+        h.since_cfg += 1
+        if h.cfg_due or h.since_cfg >= h.verify_every or self.collector is not None:
+            return h.verify(self)
         return STATUS_OK
-
-    def _verify(self):
-        self._since_cfg = 0
-        self._cfg_due = False
-        if self._mag_cfg is None:
-            return STATUS_OK
-        self._read_config()
-        e = self._guard.error
-        if e is not None:
-            self.last_error = e
-            return _status_of(e)
-        return STATUS_OK if self._cfg_ok else STATUS_RESET
-
-    def _read_config(self):
-        self._cfg_ok = True
-        g = self._guard
-        with g:
-            g.dev = self.mag
-            self._cfg_ok = self._mag_cfg()
-
-    def _tilt_check(self):
-        if self.health.tilt_ok(self._acc):
-            self.tilt = True
-            self._tilt_bad = 0
-            return
-        self.tilt = False
-        self._tilt_bad += 1
-        if self._tilt_bad % _ACCEL_REINIT_EVERY == 1:
-            self._wake_accel()
-
-    def _wake_accel(self, check=True):
-        # an MPU6050 asleep since a reset or a glitch write (or, check False, one whose
-        # gyroscope setting changed: firmware/gyro/attitude.py): its configure() wakes it
-        g = self._guard
-        with g:
-            if not check or not self.accel.config_ok():
-                self.accel.configure()
-                self.reinits += 1
 
     def _heading(self):
         kn = self._kn  # the kernel set chosen at construction: firmware.fast, or the plain
@@ -801,7 +743,7 @@ class CompassApp:
 
     def _interfered(self):
         self._flag(STATUS_INTERFERENCE)
-        self._cfg_due = True
+        self.health.cfg_due = True
         if self.relearning:
             return True  # the calibration in force is the one that does not fit
         self._interf_us += self._dt
@@ -818,28 +760,6 @@ class CompassApp:
             if c.pairs is not None and self.tilt:  # the mounting check's (firmware/calibrate/mounting.py)
                 c.pairs.feed(self.raw, self._acc)
 
-    def _failed(self, st):
-        self._flag(st)
-        w = self.watch
-        if w is not None:
-            w.restart()
-        if st == STATUS_STALE and w is not None:
-            w.forget(self.health.same)  # a spell begun by this run of repeats: not a field
-        self._cfg_due = True  # any anomaly: read the configuration back at the next sample
-        if st == STATUS_OVERFLOW:
-            return  # the chip answered; re-initialising would not move the magnet
-        if st == STATUS_RESET:
-            self._fails = self.reinit_after << self._reinit_level  # re-initialise now
-        if st == STATUS_BUS_ERROR:
-            self._delay(_ERROR_BACKOFF_US)
-        self._fails += 1
-        lvl = self._reinit_level
-        if self._fails >= self.reinit_after << lvl:
-            self._fails = 0
-            if lvl < _REINIT_MAX_SHIFT:
-                self._reinit_level = lvl + 1
-            self.reinit()
-
     def _stale(self):
         # The flag has been up for _STALE_US: not a passing magnet but a board whose iron
         # changed. Collect afresh and let any new fit replace the stale one.
@@ -854,33 +774,8 @@ class CompassApp:
     def reinit(self):
         """Re-initialise the drivers (a sensor reset by a brown-out powers up in standby):
         each driver re-applies its own configuration. Returns True when both answered; the
-        app keeps whatever did."""
-        ok = True
-        acc = self.accel
-        if acc is not None:
-            try:
-                acc.configure()
-            except OSError as e:  # the magnetometer may still be reachable: go on
-                ok = False
-                self.last_error = e
-        try:
-            try:
-                self.mag.configure()
-            except OSError:
-                if acc is None:
-                    raise
-                acc.enable_bypass()  # GY-87: a reset MPU6050 hides the magnetometer again
-                self.mag.configure()
-        except OSError as e:  # SensorNotFound, BusError, DataReadyTimeout: still not back
-            ok = False
-            self.last_error = e
-        if ok:
-            self.reinits += 1
-        else:
-            self.reinit_failures += 1
-        self._cfg_due = True  # (the runs of repeats go on: a cured chip ends them itself)
-        drop("devinit")  # the drivers' start-up code and error texts
-        return ok
+        app keeps whatever did (firmware/health.py Health.restart)."""
+        return self.health.restart(self)
 
     # --- the calibration session (firmware/calibrate/session.py, while collecting) ----------------
     def _solve(self):

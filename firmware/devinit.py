@@ -129,3 +129,25 @@ def overflow_bit(dev, bit, advice):
     raw = dev.held(0)
     raise overflow(dev, raw, "%s set (an axis is beyond +-%d G), raw %s; %s"
                         % (bit, dev.TABLES[0][dev.range_code], raw, advice))
+
+
+def restart(mag, acc):
+    """Each driver re-applies its own configuration (CompassApp.reinit): None when both
+    answered, else the last error (the app keeps whatever did answer)."""
+    err = None
+    if acc is not None:
+        try:
+            acc.configure()
+        except OSError as e:  # the magnetometer may still be reachable: go on
+            err = e
+    try:
+        try:
+            mag.configure()
+        except OSError:
+            if acc is None:
+                raise
+            acc.enable_bypass()  # GY-87: a reset MPU6050 hides the magnetometer again
+            mag.configure()
+    except OSError as e:  # SensorNotFound, BusError, DataReadyTimeout: still not back
+        err = e
+    return err

@@ -35,11 +35,11 @@ KEPT = ("history_errors", "history_reason")  # the session's own, carried from o
 
 
 class Session:
-    """One calibration session of `app`: its collector, the history, the pending change and
-    the flags of the history entry due; CompassApp holds it while it runs and drops it (and
-    this module) when end_if_done() says so. The owner firmware/calibrate/history.py
-    expects: .store, .calibration (the app's in force, set before each use), .date_s, ._hist,
-    .history_errors, .history_reason."""
+    # One calibration session of `app`: its collector, the history, the pending change and
+    # the flags of the history entry due; CompassApp holds it while it runs and drops it (and
+    # this module) when end_if_done() says so. The owner firmware/calibrate/history.py
+    # expects: .store, .calibration (the app's in force, set before each use), .date_s,
+    # ._hist, .history_errors, .history_reason.
 
     def __init__(self, app, fast=True):
         self.collector = start(app, fast)

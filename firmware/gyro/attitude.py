@@ -454,7 +454,7 @@ class Attitude:
             r.dev = app.accel
             self.config_ok = app.accel.config_ok()
         if not self.config_ok:
-            app._wake_accel(False)  # configure() under the app's read guard, counted in .reinits
+            app.health.wake(app, False)  # configure() under the app's read guard (.reinits)
         return self.config_ok
 
     def update(self, dt, flags):
