@@ -800,20 +800,18 @@ class CompassApp:
         """Put the pending calibration in force: the hardware did change (a new mounting, a
         new chip). It is saved and starts a new baseline of the history. False when none
         is pending."""
-        if self.pending is None:
-            return False
-        if self._session.accept_change(self):
-            self._end_session()
-        if self.status == STATUS_CHANGED:
-            self.status = STATUS_OK
-        return True
+        return self._change(True)
 
     def discard_change(self):
         """Drop the pending calibration: the one in force stays (the evidence stays in the
         history); new fits are again judged against it. False when none is pending."""
-        if self.pending is None:
+        return self._change(False)
+
+    def _change(self, accept):
+        s = self._session
+        if s is None or s.pending is None:
             return False
-        if self._session.discard_change(self):
+        if s.accept_change(self) if accept else s.discard_change(self):
             self._end_session()
         if self.status == STATUS_CHANGED:
             self.status = STATUS_OK
