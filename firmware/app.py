@@ -100,9 +100,8 @@ from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED, corr
 from firmware.compass import FLAG_NO_GRAVITY
 from firmware.compat import const, drop, drop_part, free_bytes, ticks_diff
 from firmware.errors import SensorOverflow
-from firmware.health import (SPELL_FIELD, SPELL_JUMP, STATUS_BUS_ERROR, STATUS_OK,  # noqa: F401
-                             STATUS_OVERFLOW, STATUS_RESET, STATUS_STALE, STATUS_TIMEOUT,
-                             status_of)
+from firmware.health import (CONFIG_EVERY, SPELL_FIELD, SPELL_JUMP, STATUS_OK, STATUS_OVERFLOW,
+                             STATUS_STALE, status_of)
 
 STATUS_INTERFERENCE = "interference"  # a heading, but |field| is off: a magnet or steel near
 STATUS_NO_FIELD = "no_field"          # corrected field (0, 0, 0): no heading
@@ -188,23 +187,16 @@ class _ReadGuard:
         return False
 
 
-def _collector_attr(name, default):
-    # an app attribute that is the collector's; when not collecting, what the last session
-    # left (firmware/calibrate/session.py ENDED), else `default`
-    return property(lambda self: getattr(self.collector, name) if self.collector is not None
-                    else self._ended.get(name, default))
-
-
-def _health_attr(name, default):
-    return property(lambda self: getattr(self.health, name) if self.health is not None
-                    else default)
-
-
-def _session_attr(name, default):
-    # the same for the session's own (firmware/calibrate/session.py Session, KEPT). (A getter
-    # taking the owner's name would allocate at each read on MicroPython.)
-    return property(lambda self: getattr(self._session, name) if self._session is not None
-                    else self._ended.get(name, default))
+# The state the app's owners keep, read through the app (CompassApp.__getattr__: one method,
+# where a property each would cost ~140 B of heap): the collector's while collecting and the
+# session's while it runs, else what the last session left (firmware/calibrate/session.py ENDED,
+# KEPT); Health's (firmware/health.py). Default 0 for the counts, False for relearning, else None.
+_COLLECTED = ("accepted", "refused", "solves", "relearning", "last_reason", "last_detail",
+              "last_model")
+_SESSION_KEPT = ("history_errors", "pending", "change", "history_reason")
+_HEALTH_KEPT = ("reinits", "reinit_failures", "accel_retries", "last_error")
+_COUNTS = ("accepted", "refused", "solves", "history_errors", "reinits", "reinit_failures",
+           "accel_retries")
 
 
 class CompassApp:
@@ -221,10 +213,6 @@ class CompassApp:
     compass = None
     collector = None
     _session = None  # firmware.calibrate.session.Session while a calibration session runs
-    pending = _session_attr("pending", None)  # a fit whose parameters jumped
-    change = _session_attr("change", None)  # (parameter, value, low, high)
-    history_errors = _session_attr("history_errors", 0)
-    history_reason = _session_attr("history_reason", None)
     load_reason = None
     # counters and flags, each set again where it changes: the store's (stored, save_errors,
     # save_reason, worst_save_us, a save due, a dip not saved yet), the solver's, the
@@ -234,16 +222,11 @@ class CompassApp:
     save_reason = None
     _unsaved = _dip_unsaved = _stalled = _ok = False
     _dt = _gap_us = _age_us = _interf_us = _save_wait_us = 0
-    health = None  # firmware/health.py Health: the drivers' faults, their counters below
-    reinits = _health_attr("reinits", 0)
-    reinit_failures = _health_attr("reinit_failures", 0)
-    accel_retries = _health_attr("accel_retries", 0)  # looks for an absent accelerometer
-    last_error = _health_attr("last_error", None)  # the exception behind the last failure
+    health = None  # firmware/health.py Health: the drivers' faults and their counters
     heading_kang = -1
     _ended = {}      # the counters of the last session (read only here: an app has its own)
     no_memory = None  # what the heap could not hold: "start", "load", "calibrate" (status line)
     _args = None     # the constructor's arguments while the heap could not hold the app
-    _saved_shown = 0  # app.stored when the status line last said "saved"
     _gyro_options = None  # use_gyro()'s options while it is in use
     _retry_us = 0
     not_installed = None  # "calibrate": calibrate() found no calibration machinery
@@ -262,6 +245,7 @@ class CompassApp:
         self._guard = _ReadGuard()
         self._step_guard = _StepGuard()
         self.errors = {}
+        self.steps = 0
         args = (i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, store,
                 delay_us, ticks_us, capacity, solve_every, fallback, reinit_after,
                 mag_options, learn, fast)
@@ -290,6 +274,11 @@ class CompassApp:
         self.fast = self._kn is not None
         self.dip = self.watch.dip  # the calibration's dip (firmware/health.py DipCheck)
         self._t_last = self._ticks()
+        # what every step writes, in the app's own dict now (a dict that grew while showing
+        # headings would allocate)
+        self._ok = self._stalled = False
+        self._dt = self._gap_us = self._age_us = self._interf_us = 0
+        self.heading_kang = -1
         self.status = STATUS_STARTING
         self._args = None
         self.no_memory = None
@@ -413,17 +402,13 @@ class CompassApp:
             self._locate()
         return self.collector
 
-    def _mounted(self, verdict, axes):
-        # a mounting check's answer (firmware/calibrate/mountcheck.py, or its note read at boot,
-        # firmware/mountnote.py): "wrong" puts its status in place of "ok", "ok" clears it
+    def _mounted(self, verdict, axes, status):
+        # a mounting check's answer (firmware/calibrate/mountcheck.py judge, or its note read at
+        # boot, firmware/mountnote.py): `status` shown in place of "ok" (None: none; False:
+        # the one shown stays)
         self.mounting = (verdict, axes)
-        if verdict == "wrong":
-            self._axes_status = 'check MAG_AXES: the data say "%s"' % axes
-        elif verdict == "ok":
-            self._axes_status = None
-
-    def _saved_seen(self):
-        self._saved_shown = self.stored  # the status line said "saved" (firmware/status.py)
+        if status is not False:
+            self._axes_status = status
 
     def _no_room(self):
         self.no_memory = "calibrate"
@@ -670,7 +655,7 @@ class CompassApp:
         return status_of(g.error)
 
     def _vet(self):
-        """The sample's plausibility (firmware/health.py) and, every verify_every samples or
+        """The sample's plausibility (firmware/health.py) and, every CONFIG_EVERY samples or
         after an anomaly, the chip's configuration read back."""
         h = self.health
         if h.saturated(self.raw):
@@ -684,7 +669,7 @@ class CompassApp:
         if self.accel is not None:
             self.tilt = h.tilt_check(self)
         h.since_cfg += 1
-        if h.cfg_due or h.since_cfg >= h.verify_every or self.collector is not None:
+        if h.cfg_due or h.since_cfg >= CONFIG_EVERY or self.collector is not None:
             return h.verify(self)
         return STATUS_OK
 
@@ -774,8 +759,12 @@ class CompassApp:
     def reinit(self):
         """Re-initialise the drivers (a sensor reset by a brown-out powers up in standby):
         each driver re-applies its own configuration. Returns True when both answered; the
-        app keeps whatever did (firmware/health.py Health.restart)."""
-        return self.health.restart(self)
+        app keeps whatever did (firmware/devinit.py restart)."""
+        from firmware import devinit  # the drivers' start-up code and error texts
+        ok = devinit.restart(self.health, self.mag, self.accel)
+        devinit = None
+        drop("devinit")
+        return ok
 
     # --- the calibration session (firmware/calibrate/session.py, while collecting) ----------------
     def _solve(self):
@@ -822,13 +811,23 @@ class CompassApp:
     def calibrator(self):
         return self.collector.calibrator if self.collector is not None else None
 
-    accepted = _collector_attr("accepted", 0)
-    refused = _collector_attr("refused", 0)
-    solves = _collector_attr("solves", 0)
-    last_reason = _collector_attr("last_reason", None)
-    last_detail = _collector_attr("last_detail", None)
-    last_model = _collector_attr("last_model", None)
-    relearning = _collector_attr("relearning", False)
+    def __getattr__(self, name):
+        # (only for names the app does not hold: _COLLECTED, _SESSION_KEPT, _HEALTH_KEPT)
+        if name in _COLLECTED:
+            o = self.collector
+        elif name in _SESSION_KEPT:
+            o = self._session
+        elif name in _HEALTH_KEPT:
+            o = self.health
+            if o is None:
+                return 0 if name in _COUNTS else None
+            return getattr(o, name)
+        else:
+            raise AttributeError(name)
+        if o is not None:
+            return getattr(o, name)
+        return self._ended.get(name, 0 if name in _COUNTS else
+                               False if name == "relearning" else None)
 
     @property
     def solving(self):

@@ -131,9 +131,9 @@ def overflow_bit(dev, bit, advice):
                         % (bit, dev.TABLES[0][dev.range_code], raw, advice))
 
 
-def restart(mag, acc):
-    """Each driver re-applies its own configuration (CompassApp.reinit): None when both
-    answered, else the last error (the app keeps whatever did answer)."""
+def restart(health, mag, acc):
+    """Each driver re-applies its own configuration (CompassApp.reinit), counted in `health`
+    (firmware/health.py Health); True when both answered (the app keeps whatever did)."""
     err = None
     if acc is not None:
         try:
@@ -150,4 +150,10 @@ def restart(mag, acc):
             mag.configure()
     except OSError as e:  # SensorNotFound, BusError, DataReadyTimeout: still not back
         err = e
-    return err
+    if err is None:
+        health.reinits += 1
+    else:
+        health.reinit_failures += 1
+        health.last_error = err
+    health.cfg_due = True  # (the runs of repeats go on: a cured chip ends them itself)
+    return err is None

@@ -40,7 +40,7 @@
 # computed on a >> 4, so the squared norm stays below 3 * 2**22.
 from array import array
 
-from firmware.compat import const, drop
+from firmware.compat import const
 from firmware.errors import DataReadyTimeout, SensorOverflow
 
 # a step's outcome (CompassApp.status): the sample's and the chip's
@@ -58,7 +58,7 @@ _G_LO_PCT = const(75)        # |g| window, percent of 1 g
 _G_HI_PCT = const(125)
 _ACCEL_REPEATS = const(3)    # exact repeats of all three axes that mean a frozen accelerometer
 _RUN_CAP = const(0x3FFF)
-_CONFIG_EVERY = const(1)     # samples between configuration read-backs (docs/faults.md)
+CONFIG_EVERY = const(1)     # samples between configuration read-backs (docs/faults.md)
 _REINIT_MAX_SHIFT = const(4)  # failed re-inits back off to every 2**4 x reinit_after reads
 _ERROR_BACKOFF_US = const(20000)  # after a bus error: do not hammer a dead bus
 _ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
@@ -114,6 +114,11 @@ class Health:
         self.asame = 0
         self.g_lo = 0
         self.g_hi = 0
+        # the drivers' faults (below): each written by a step, so here from the start
+        self.fails = self.level = self.since_cfg = self.tilt_bad = self.accel_wait_us = 0
+        self.reinits = self.reinit_failures = self.accel_retries = 0
+        self.cfg_due = self.cfg_ok = True
+        self.last_error = None
         self.set_accel(counts_per_g)
 
     def set_accel(self, counts_per_g):
@@ -162,11 +167,6 @@ class Health:
     # fails: failed reads in a row; level: failed re-inits back off to every 2**level x
     # reinit_after; cfg_due: read the configuration back at the next sample (the first one,
     # after any anomaly); since_cfg: samples since the last read-back.
-    fails = level = since_cfg = tilt_bad = accel_wait_us = 0
-    reinits = reinit_failures = accel_retries = 0
-    cfg_due = cfg_ok = True
-    last_error = None
-    verify_every = _CONFIG_EVERY
 
     def tilt_check(self, app):
         """True when the app's accelerometer sample is plausible; every _ACCEL_REINIT_EVERY
@@ -189,7 +189,7 @@ class Health:
                 self.reinits += 1
 
     def verify(self, app):
-        """The magnetometer's configuration read back (every verify_every samples, after an
+        """The magnetometer's configuration read back (every CONFIG_EVERY samples, after an
         anomaly, and while collecting): STATUS_RESET when it no longer holds ours."""
         self.since_cfg = 0
         self.cfg_due = False
@@ -232,21 +232,6 @@ class Health:
             if lvl < _REINIT_MAX_SHIFT:
                 self.level = lvl + 1
             app.reinit()
-
-    def restart(self, app):
-        """CompassApp.reinit: each driver re-applies its configuration (firmware/devinit.py
-        restart); True when both answered."""
-        from firmware import devinit  # the drivers' start-up code and error texts
-        e = devinit.restart(app.mag, app.accel)
-        devinit = None
-        drop("devinit")
-        if e is None:
-            self.reinits += 1
-        else:
-            self.reinit_failures += 1
-            self.last_error = e
-        self.cfg_due = True  # (the runs of repeats go on: a cured chip ends them itself)
-        return e is None
 
     def look_for_accel(self, i2c, dt):
         """An accelerometer absent at boot, looked for every _ACCEL_RETRY_US: its driver

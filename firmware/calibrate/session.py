@@ -133,10 +133,10 @@ class Session:
         name = "firmware.mountnote"
         try:
             from firmware.calibrate import mountcheck
-            v, axes = mountcheck.judge(app)
+            v, axes, shown = mountcheck.judge(app)
             mountcheck = None
             drop("calibrate.mountcheck")
-            app._mounted(v, axes)
+            app._mounted(v, axes, shown)
             st = app.store
             if v == "ok" and st is not None:
                 try:  # firmware.mountnote.NAME

@@ -72,8 +72,8 @@ CalStore("/", sensor="hmc5883l", fs=fs).save(Calibration(
     field_out=590, fit_error=100, samples=200, coverage=80, dip_kang=10923).to_bytes())
 for axes in ("x,-y,-z", "y,x,-z", "-y,-x,-z"):
     b = App(CalStore("/", fs=fs), axes)
-    cal = persist.load(b)
-    print(json.dumps(["boot", axes, b.load_reason, cal.model, cal.dip_kang,
+    cal, why = persist.load(b)  # (the app keeps why as .load_reason)
+    print(json.dumps(["boot", axes, why, cal.model, cal.dip_kang,
                       b.mounting and list(b.mounting), b._axes_status,
                       "firmware.mountnote" in sys.modules]))
 a.mounting = ("ok", "x,-y,-z")
