@@ -274,10 +274,11 @@ class CompassApp:
         self.fast = self._kn is not None
         self.dip = self.watch.dip  # the calibration's dip (firmware/health.py DipCheck)
         self._t_last = self._ticks()
-        # what every step writes, in the app's own dict now (a dict that grew while showing
-        # headings would allocate)
-        self._ok = self._stalled = False
+        # what every step writes or reads, in the app's own dict now: a dict that grew while
+        # showing headings would allocate, and a name it lacks costs a longer lookup per step
+        self._ok = self._stalled = self._unsaved = False
         self._dt = self._gap_us = self._age_us = self._interf_us = 0
+        self.collector = self._session = self.attitude = self._axes_status = None
         self.heading_kang = -1
         self.status = STATUS_STARTING
         self._args = None
