@@ -13,21 +13,16 @@ there is no good calibration yet, collect and solve one in the background.
 from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED
 from firmware.compass import FIELD_TOL_PCT, FLAG_NO_GRAVITY
 from firmware.compat import const, drop, drop_part, free_bytes, ticks_diff
-from firmware.errors import SensorOverflow, DataReadyTimeout
-from firmware.health import SPELL_FIELD, SPELL_JUMP
+from firmware.errors import SensorOverflow
+from firmware.health import (CONFIG_EVERY, SPELL_FIELD, SPELL_JUMP, STATUS_OK, STATUS_OVERFLOW,
+                             STATUS_STALE, status_of)
 
-STATUS_OK = "ok"
 STATUS_INTERFERENCE = "interference"  # a heading, but |field| is off: a magnet or steel near
-STATUS_BUS_ERROR = "bus_error"        # NACK / EIO: the chip did not answer
-STATUS_TIMEOUT = "timeout"            # no data-ready within the driver's bound
-STATUS_OVERFLOW = "overflow"          # QMC5883L OVL, HMC5883L -4096: sample dropped
 STATUS_NO_FIELD = "no_field"          # corrected field (0, 0, 0): no heading
 STATUS_NO_GRAVITY = "no_gravity"      # accelerometer (0, 0, 0): asleep after a reset, or free fall
 STATUS_STARTING = "starting"          # before the first step
 STATUS_CHANGED = "hardware changed?"  # a new fit jumped outside its history's limits: pending
 # field faults (firmware/health.py, docs/faults.md): user words, never "ok" while they last
-STATUS_STALE = "stale data"           # the magnetometer repeats its last sample: no new data
-STATUS_RESET = "sensor reset"         # its control registers no longer hold our configuration
 STATUS_TILT = "tilt unavailable"      # the accelerometer is implausible: level-board heading
 STATUS_INTERNAL = "internal error"    # step() caught an unexpected exception (e.g. MemoryError)
 STATUS_JUMP = "heading jumped"        # it moved > 4 deg in a sample (or 5 over two at 50 Hz):
@@ -42,10 +37,8 @@ STATUS_GYRO_HELD = "gyro held"        # use_gyro(): the field is not used (inter
 
 SOLVE_EVERY = const(25)       # kept samples between solves: ~1/9 of a full sphere (225 held)
 _REINIT_AFTER = const(5)     # failed reads in a row before the drivers are re-initialised
-_REINIT_MAX_SHIFT = const(4)  # failed re-inits back off to every 2**4 x _REINIT_AFTER reads
 _STALE_US = const(30000000)   # 30 s of interference: the calibration no longer fits the board
 _SAVE_RETRY_US = const(60000000)  # a failed save is retried after 60 s
-_ERROR_BACKOFF_US = const(20000)  # after a bus error: do not hammer a dead bus
 _FIELD_TOL_MAX_PCT = const(50)
 _FIT_SIGMAS = const(3)        # window >= 3 x the fit's RMS radial error
 _US_PER_S = const(1000000)
@@ -59,8 +52,6 @@ _CAL_RETRY_US = const(60000000)  # a session that found no room: again in 60 s
 # boot (x86-32 build, boards/main.py; docs/benchmarks.md).
 SESSION_ROOM = const(128 * 1024)
 _GAP_CAP_US = const(0x10000000)  # the time since the last read stops counting at 268 s
-_ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
-_ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
 _REPORT_EVERY = const(25)    # run(): steps between reports (0.5 s at 50 Hz)
 
 
@@ -109,19 +100,16 @@ class _ReadGuard:
         return False
 
 
-def _status_of(e):
-    if isinstance(e, DataReadyTimeout):
-        return STATUS_TIMEOUT
-    if isinstance(e, SensorOverflow):
-        return STATUS_OVERFLOW
-    return STATUS_BUS_ERROR
-
-
-def _collector_attr(name, default):
-    # an app attribute that is the collector's; when not collecting, what the last session
-    # left (firmware/calibrate/session.py ENDED), else `default`
-    return property(lambda self: getattr(self.collector, name) if self.collector is not None
-                    else self._ended.get(name, default))
+# The state the app's owners keep, read through the app (CompassApp.__getattr__: one method,
+# where a property each would cost ~140 B of heap): the collector's while collecting and the
+# session's while it runs, else what the last session left (firmware/calibrate/session.py ENDED,
+# KEPT); Health's (firmware/health.py). Default 0 for the counts, False for relearning, else None.
+_COLLECTED = ("accepted", "refused", "solves", "relearning", "last_reason", "last_detail",
+              "last_model")
+_SESSION_KEPT = ("history_errors", "pending", "change", "history_reason")
+_HEALTH_KEPT = ("reinits", "reinit_failures", "accel_retries", "last_error")
+_COUNTS = ("accepted", "refused", "solves", "history_errors", "reinits", "reinit_failures",
+           "accel_retries")
 
 
 class CompassApp:
@@ -137,17 +125,21 @@ class CompassApp:
     calibration = UNCALIBRATED
     compass = None
     collector = None
-    pending = None
-    change = None
-    stored = 0
-    save_errors = 0
+    _session = None  # firmware.calibrate.session.Session while a calibration session runs
     load_reason = None
-    worst_stall_us = 0
-    history_errors = 0
-    _ended = {}      # (read only here: a made app has its own)
+    # counters and flags, each set again where it changes: the store's (stored, save_errors,
+    # save_reason, worst_save_us, a save due, a dip not saved yet), the solver's, the
+    # drivers' (re-inits, failed reads in a row, the accelerometer looked for), the clock's
+    # (us since the last step, capped as evidence; since the last good read), the field's
+    stored = save_errors = worst_save_us = worst_stall_us = slices = steps = 0
+    save_reason = None
+    _unsaved = _dip_unsaved = _stalled = _ok = False
+    _dt = _gap_us = _age_us = _interf_us = _save_wait_us = 0
+    health = None  # firmware/health.py Health: the drivers' faults and their counters
+    heading_kang = -1
+    _ended = {}      # the counters of the last session (read only here: an app has its own)
     no_memory = None  # what the heap could not hold: "start", "load", "calibrate" (status line)
     _args = None     # the constructor's arguments while the heap could not hold the app
-    _saved_shown = 0  # app.stored when the status line last said "saved"
     _gyro_options = None  # use_gyro()'s options while it is in use
     _retry_us = 0
     not_installed = None  # "calibrate": calibrate() found no calibration machinery
@@ -165,10 +157,8 @@ class CompassApp:
                  reinit_after=_REINIT_AFTER, mag_options=None, learn=None, fast=None):
         self._guard = _ReadGuard()
         self._step_guard = _StepGuard()
-        self.heading_kang = -1
-        self.status = STATUS_STARTING
-        self.steps = 0
         self.errors = {}
+        self.steps = 0
         args = (i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, store,
                 delay_us, ticks_us, capacity, solve_every, fallback, reinit_after,
                 mag_options, learn, fast)
@@ -185,10 +175,25 @@ class CompassApp:
     def _build(self, args):
         from firmware import app_setup  # construction only: dropped when the app is made
         try:
-            app_setup.setup(self, *args)
+            (self.i2c, self.mag, self.accel, self._accel_auto, self.store, self.model,
+             self.capacity, self.solve_every, self.fallback, self.reinit_after, self.learn,
+             self._mag_map, self._acc_map, self._mag_into, self._mag_cfg, self._mm, self._am,
+             self._delay, self._ticks, self._wrap, self._wall, self._wall_diff, self._dt_cap,
+             self.raw, self._cor, self.body, self._acc, self.gravity, self.health, self.tilt,
+             self._kn, self.compass, self.watch) = app_setup.setup(*args)
         finally:
             app_setup = None
             drop("app_setup", "devinit")  # the drivers' start-up and error texts too
+        self.fast = self._kn is not None
+        self.dip = self.watch.dip  # the calibration's dip (firmware/health.py DipCheck)
+        self._t_last = self._ticks()
+        # what every step writes or reads, in the app's own dict now: a dict that grew while
+        # showing headings would allocate, and a name it lacks costs a longer lookup per step
+        self._ok = self._stalled = self._unsaved = False
+        self._dt = self._gap_us = self._age_us = self._interf_us = 0
+        self.collector = self._session = self.attitude = self._axes_status = None
+        self.heading_kang = -1
+        self.status = STATUS_STARTING
         self._args = None
         self.no_memory = None
         self._use(self._load())
@@ -207,28 +212,44 @@ class CompassApp:
 
     # --- storage (firmware/app_persist.py, loaded for each use) ---------------------------
     def _load(self):
+        self.load_reason = None
         try:
             from firmware import app_persist
-            cal = app_persist.load(self)
+            cal, self.load_reason = app_persist.load(self)
         except MemoryError:  # no room for the store's code: not "uncalibrated" (_retry)
             from firmware.calibration import UNCALIBRATED
             self.load_reason = _LOAD_NO_MEMORY
             cal = UNCALIBRATED
-        persist = None
+        app_persist = None
         drop("app_persist", "store_slots")
         return cal
 
     def _save(self, dip_only=False):
         try:
             from firmware import app_persist
-            app_persist.save(self, dip_only)
+            r = app_persist.save(self, dip_only)
         except MemoryError:  # no room for the store's code: as a failed save (retried)
-            self.save_errors += 1
-            self.save_reason = _LOAD_NO_MEMORY
-            self._unsaved = True
-            self._save_wait_us = 0
-        persist = None
+            r = (_LOAD_NO_MEMORY, 0)
+        app_persist = None
         drop("app_persist", "store_slots")
+        if r is not None:  # (None: no store)
+            self._saved(dip_only, r[0], r[1])
+
+    def _saved(self, dip_only, reason, us):
+        # a save's figures: stored, or failed (.save_errors, .save_reason; retried after
+        # _SAVE_RETRY_US with the dip known then)
+        if reason is None:
+            if not dip_only:
+                self.stored += 1
+            self._dip_unsaved = self.dip is not None and not self.dip.armed
+        else:
+            self._dip_unsaved = False
+            self.save_errors += 1
+            self._save_wait_us = 0
+        self._unsaved = reason is not None
+        self.save_reason = reason
+        if us > self.worst_save_us:
+            self.worst_save_us = us
 
     # --- calibration in force ---------------------------------------------------------
     def _good_enough(self, cal):
@@ -260,9 +281,12 @@ class CompassApp:
         if self._dip_unsaved and not self._unsaved:
             self._save(True)
 
-    def use_calibration(self, cal, save=True):
+    def use_calibration(self, cal, save=True, collect=True):
         """Put `cal` (a Calibration made outside the app, e.g. from MotionCal's packet by
-        firmware/motioncal/mode.py) in force now, and save it to the store when `save`."""
+        firmware/motioncal/mode.py) in force now, and save it to the store when `save`;
+        collect False: stop collecting (the user's choice stands)."""
+        if not collect:
+            self.collector = None
         self._use(cal)
         if save:
             self._save()
@@ -280,8 +304,8 @@ class CompassApp:
                 return self._no_room()
             try:
                 from firmware.calibrate import session
-                self._session = session
-                self.collector = session.start(self)
+                s = self._session = session.Session(self)
+                self.collector = s.collector
             except ImportError:  # package-calibrate.json not installed on this board
                 self.not_installed = "calibrate"
                 return None
@@ -291,6 +315,14 @@ class CompassApp:
                 return self._no_room()
             self._locate()
         return self.collector
+
+    def _mounted(self, verdict, axes, status):
+        # a mounting check's answer (firmware/calibrate/mountcheck.py judge, or its note read at
+        # boot, firmware/mountnote.py): `status` shown in place of "ok" (None: none; False:
+        # the one shown stays)
+        self.mounting = (verdict, axes)
+        if status is not False:
+            self._axes_status = status
 
     def _no_room(self):
         self.no_memory = "calibrate"
@@ -336,7 +368,8 @@ class CompassApp:
         except ImportError:
             raise ImportError("quick_calibrate() needs the field part: install "
                               "package-field.json")
-        return quick_calibrate(self, true_heading_cdeg, refine, samples)
+        self.quick, cal = quick_calibrate(self, true_heading_cdeg, refine, samples)
+        return cal
 
     # --- gyro-aided heading (firmware/gyro/attitude.py) ----------------------------------------
     def use_gyro(self, **options):
@@ -353,7 +386,7 @@ class CompassApp:
         except ImportError:
             raise ImportError("use_gyro() needs the gyro part: install package-gyro.json")
         attitude.use_kernels(None if self.fast else False)  # the app's kernel set
-        a = attach(self, attitude.Attitude, options)
+        a = self.attitude = attach(self, attitude.Attitude, options)
         attach = None
         drop("gyro.attitude_setup")
         self._gyro_options = options if options else ()
@@ -408,23 +441,28 @@ class CompassApp:
         if st == STATUS_OK:
             st = self._heading()
         if st != STATUS_OK:
-            self._failed(st)
+            self.health.failed(self, st)
         else:
             self._ok = True
-            self._fails = 0
-            self._reinit_level = 0
+            self.health.fails = 0
+            self.health.level = 0
             if self._check():
                 self._select()
-            if self.attitude is not None:
-                self.attitude.follow(self)  # use_gyro(): the filter's step
+            a = self.attitude
+            if a is not None:  # use_gyro(): the filter's step, its heading and status
+                st = a.follow(self)
+                if st is not None:
+                    self.heading_kang = a.shown_kang
+                    self.status = st
             if not self.tilt and (self.accel is not None or self._accel_auto) \
                     and self.status == STATUS_OK:
                 self._flag(STATUS_TILT)
         c = self.collector
         if c is not None and (c.job is not None or c.due()):
             self._solve()
-        if self.pending is not None and (self.status == STATUS_OK
-                                         or self.status == STATUS_INTERFERENCE):
+        s = self._session
+        if s is not None and s.pending is not None and (self.status == STATUS_OK
+                                                         or self.status == STATUS_INTERFERENCE):
             self.status = STATUS_CHANGED  # the likely cause of the interference, too
         if self._axes_status is not None and (self.status == STATUS_OK
                                               or self.status == STATUS_INTERFERENCE):
@@ -435,7 +473,8 @@ class CompassApp:
 
     def _internal(self, e):
         self._ok = False
-        self.last_error = e
+        if self.health is not None:
+            self.health.last_error = e
         if isinstance(e, MemoryError):
             self._flag(STATUS_NO_MEMORY)
             return
@@ -508,19 +547,9 @@ class CompassApp:
             self.calibrate()
 
     def _look_for_accel(self, dt):
-        self._accel_wait_us += dt
-        if self._accel_wait_us < _ACCEL_RETRY_US:
-            return
-        self._accel_wait_us = 0
-        self.accel_retries += 1
-        try:
-            from firmware import detect
-            acc = detect.detect_accel(self.i2c)
-        except OSError:
-            acc = None
+        acc = self.health.look_for_accel(self.i2c, dt)
         if acc is not None:
             self.accel = acc
-            self.health.set_accel(acc.counts_per_g)
             self.tilt = False  # until its first plausible sample
 
     def _read(self):
@@ -536,11 +565,11 @@ class CompassApp:
             self._stalled = self._gap_us > self._dt_cap
             self._gap_us = 0
             return STATUS_OK
-        self.last_error = g.error
-        return _status_of(g.error)
+        self.health.last_error = g.error
+        return status_of(g.error)
 
     def _vet(self):
-        """The sample's plausibility (firmware/health.py) and, every verify_every samples or
+        """The sample's plausibility (firmware/health.py) and, every CONFIG_EVERY samples or
         after an anomaly, the chip's configuration read back."""
         h = self.health
         if h.saturated(self.raw):
@@ -552,60 +581,31 @@ class CompassApp:
             # followed the last read: DOR says later ones were skipped, so it is that old
             return STATUS_STALE
         if self.accel is not None:
-            self._tilt_check()
-        self._since_cfg += 1
-        if (self._cfg_due or self._since_cfg >= self.verify_every
-                or self.collector is not None):
-            return self._verify()
+            self.tilt = h.tilt_check(self)
+        h.since_cfg += 1
+        if h.cfg_due or h.since_cfg >= CONFIG_EVERY or self.collector is not None:
+            return h.verify(self)
         return STATUS_OK
 
-    def _verify(self):
-        self._since_cfg = 0
-        self._cfg_due = False
-        if self._mag_cfg is None:
-            return STATUS_OK
-        self._read_config()
-        e = self._guard.error
-        if e is not None:
-            self.last_error = e
-            return _status_of(e)
-        return STATUS_OK if self._cfg_ok else STATUS_RESET
-
-    def _read_config(self):
-        self._cfg_ok = True
-        g = self._guard
-        with g:
-            g.dev = self.mag
-            self._cfg_ok = self._mag_cfg()
-
-    def _tilt_check(self):
-        if self.health.tilt_ok(self._acc):
-            self.tilt = True
-            self._tilt_bad = 0
-            return
-        self.tilt = False
-        self._tilt_bad += 1
-        if self._tilt_bad % _ACCEL_REINIT_EVERY == 1:
-            self._wake_accel()
-
-    def _wake_accel(self):
-        # an MPU6050 asleep since a reset or a glitch write: its configure() wakes it
-        g = self._guard
-        with g:
-            if not self.accel.config_ok():
-                self.accel.configure()
-                self.reinits += 1
-
     def _heading(self):
-        self._correct(self._k, self.raw, self._cor)
-        self._apply(self._mm, self._cor, self.body)
+        kn = self._kn  # the kernel set chosen at construction: firmware.fast, or the plain
+        if kn is None:  # functions (the same bits, tests/test_tiers.py)
+            correct(self._k, self.raw, self._cor)
+            apply(self._mm, self._cor, self.body)
+        else:
+            kn.correct(self._k, self.raw, self._cor)
+            kn.apply(self._mm, self._cor, self.body)
         a = self.attitude  # use_gyro(): the gyro step maps gravity (the filter's if bumped)
         if a is not None and a.predict(self):
+            self.tilt = True  # (a bumped accelerometer: gravity is the filter's)
             h = self.compass.update(self.body, self.gravity)
         elif self.accel is None or not self.tilt:
             h = self.compass.update(self.body)
         else:
-            self._apply(self._am, self._acc, self.gravity)
+            if kn is None:
+                apply(self._am, self._acc, self.gravity)
+            else:
+                kn.apply(self._am, self._acc, self.gravity)
             h = self.compass.update(self.body, self.gravity)
         if h < 0:
             return STATUS_NO_GRAVITY if self.compass.flags & FLAG_NO_GRAVITY else STATUS_NO_FIELD
@@ -642,7 +642,7 @@ class CompassApp:
 
     def _interfered(self):
         self._flag(STATUS_INTERFERENCE)
-        self._cfg_due = True
+        self.health.cfg_due = True
         if self.relearning:
             return True  # the calibration in force is the one that does not fit
         self._interf_us += self._dt
@@ -659,28 +659,6 @@ class CompassApp:
             if c.pairs is not None and self.tilt:  # the mounting check's (firmware/calibrate/mounting.py)
                 c.pairs.feed(self.raw, self._acc)
 
-    def _failed(self, st):
-        self._flag(st)
-        w = self.watch
-        if w is not None:
-            w.restart()
-        if st == STATUS_STALE and w is not None:
-            w.forget(self.health.same)  # a spell begun by this run of repeats: not a field
-        self._cfg_due = True  # any anomaly: read the configuration back at the next sample
-        if st == STATUS_OVERFLOW:
-            return  # the chip answered; re-initialising would not move the magnet
-        if st == STATUS_RESET:
-            self._fails = self.reinit_after << self._reinit_level  # re-initialise now
-        if st == STATUS_BUS_ERROR:
-            self._delay(_ERROR_BACKOFF_US)
-        self._fails += 1
-        lvl = self._reinit_level
-        if self._fails >= self.reinit_after << lvl:
-            self._fails = 0
-            if lvl < _REINIT_MAX_SHIFT:
-                self._reinit_level = lvl + 1
-            self.reinit()
-
     def _stale(self):
         # The flag has been up for _STALE_US: not a passing magnet but a board whose iron
         # changed. Collect afresh and let any new fit replace the stale one.
@@ -695,37 +673,29 @@ class CompassApp:
     def reinit(self):
         """Re-initialise the drivers (a sensor reset by a brown-out powers up in standby):
         each driver re-applies its own configuration. Returns True when both answered; the
-        app keeps whatever did."""
-        ok = True
-        acc = self.accel
-        if acc is not None:
-            try:
-                acc.configure()
-            except OSError as e:  # the magnetometer may still be reachable: go on
-                ok = False
-                self.last_error = e
-        try:
-            try:
-                self.mag.configure()
-            except OSError:
-                if acc is None:
-                    raise
-                acc.enable_bypass()  # GY-87: a reset MPU6050 hides the magnetometer again
-                self.mag.configure()
-        except OSError as e:  # SensorNotFound, BusError, DataReadyTimeout: still not back
-            ok = False
-            self.last_error = e
-        if ok:
-            self.reinits += 1
-        else:
-            self.reinit_failures += 1
-        self._cfg_due = True  # (the runs of repeats go on: a cured chip ends them itself)
-        drop("devinit")  # the drivers' start-up code and error texts
+        app keeps whatever did (firmware/devinit.py restart)."""
+        from firmware import devinit  # the drivers' start-up code and error texts
+        ok = devinit.restart(self.health, self.mag, self.accel)
+        devinit = None
+        drop("devinit")
         return ok
 
     # --- the calibration session (firmware/calibrate/session.py, while collecting) ----------------
     def _solve(self):
-        self._session.solve(self)
+        t = self._wall()
+        done = self._session.solve(self)
+        d = self._wall_diff(self._wall(), t)
+        self.slices = (self.slices + 1) & 0x3FFFFFFF
+        if d > self.worst_stall_us:
+            self.worst_stall_us = d
+        if done:
+            self._end_session()
+
+    def _end_session(self):
+        # the session's job is done: its counters stay, it and the calibration machinery go
+        self._ended = self._session.ended()
+        self.collector = self._session = None
+        drop_part("calibrate")
 
     date_s = None  # a function returning the date in seconds, when the board knows it
 
@@ -733,19 +703,19 @@ class CompassApp:
         """Put the pending calibration in force: the hardware did change (a new mounting, a
         new chip). It is saved and starts a new baseline of the history. False when none
         is pending."""
-        if self.pending is None:
-            return False
-        self._session.accept_change(self)
-        if self.status == STATUS_CHANGED:
-            self.status = STATUS_OK
-        return True
+        return self._change(True)
 
     def discard_change(self):
         """Drop the pending calibration: the one in force stays (the evidence stays in the
         history); new fits are again judged against it. False when none is pending."""
-        if self.pending is None:
+        return self._change(False)
+
+    def _change(self, accept):
+        s = self._session
+        if s is None or s.pending is None:
             return False
-        self._session.discard_change(self)
+        if s.accept_change(self) if accept else s.discard_change(self):
+            self._end_session()
         if self.status == STATUS_CHANGED:
             self.status = STATUS_OK
         return True
@@ -755,13 +725,23 @@ class CompassApp:
     def calibrator(self):
         return self.collector.calibrator if self.collector is not None else None
 
-    accepted = _collector_attr("accepted", 0)
-    refused = _collector_attr("refused", 0)
-    solves = _collector_attr("solves", 0)
-    last_reason = _collector_attr("last_reason", None)
-    last_detail = _collector_attr("last_detail", None)
-    last_model = _collector_attr("last_model", None)
-    relearning = _collector_attr("relearning", False)
+    def __getattr__(self, name):
+        # (only for names the app does not hold: _COLLECTED, _SESSION_KEPT, _HEALTH_KEPT)
+        if name in _COLLECTED:
+            o = self.collector
+        elif name in _SESSION_KEPT:
+            o = self._session
+        elif name in _HEALTH_KEPT:
+            o = self.health
+            if o is None:
+                return 0 if name in _COUNTS else None
+            return getattr(o, name)
+        else:
+            raise AttributeError(name)
+        if o is not None:
+            return getattr(o, name)
+        return self._ended.get(name, 0 if name in _COUNTS else
+                               False if name == "relearning" else None)
 
     @property
     def solving(self):

@@ -23,11 +23,11 @@ LOAD_NO_MEMORY = "no_memory"          # .load_reason / .save_reason: MemoryError
 
 
 def load(app):
-    app.load_reason = None
+    """(the stored Calibration or UNCALIBRATED, the reason why not or None): the app keeps
+    the reason as .load_reason."""
     st = app.store
     if st is None:
-        app.load_reason = "no_store"
-        return UNCALIBRATED
+        return UNCALIBRATED, "no_store"
     # records are tied to the sensor and its range: bind the store to the chip found
     st.sensor = app.mag.KIND
     st.range_code = app.mag.range_code
@@ -55,51 +55,38 @@ def load(app):
                     cal = cal.with_dip(None)  # measured through another MAG_AXES
             finally:
                 drop(name[9:])
-        return cal
+        return cal, None
     except StoreError as e:
-        app.load_reason = e.reason
+        reason = e.reason
     except ValueError:
-        app.load_reason = LOAD_BAD_PAYLOAD
+        reason = LOAD_BAD_PAYLOAD
     except OSError:
-        app.load_reason = LOAD_IO_ERROR
+        reason = LOAD_IO_ERROR
     except MemoryError:
-        app.load_reason = LOAD_NO_MEMORY
-    return UNCALIBRATED
+        reason = LOAD_NO_MEMORY
+    return UNCALIBRATED, reason
 
 
 def save(app, dip_only):
+    """(None when saved, else the reason of the failure, the microseconds it took); None
+    without a store. The app keeps the figures (CompassApp._saved)."""
     if app.store is None:
-        return
+        return None
     t = app._wall()
+    reason = None
     try:
         app.store.save(_record(app))
-        if not dip_only:
-            app.stored += 1
-        app._dip_unsaved = app.dip is not None and not app.dip.armed
-        app._unsaved = False
-        app.save_reason = None
-        if app._hist_flags and not dip_only and app._session is not None:
-            app._session.saved(app, app._hist_flags)  # the history follows the store
-            app._hist_flags = 0
+        if not dip_only and app._session is not None:
+            app._session.saved(app)  # the history follows the store
     except StoreError as e:
-        _failed(app, e.reason)
+        reason = e.reason
     except OSError as e:
-        _failed(app, "os_error %s" % (e.args[0] if e.args else "?"))
+        reason = "os_error %s" % (e.args[0] if e.args else "?")
     except MemoryError:
-        _failed(app, LOAD_NO_MEMORY)
+        reason = LOAD_NO_MEMORY
     except ValueError as e:  # a payload the store refuses: a bug, never a crash
-        _failed(app, "bad_payload %s" % (e,))
-    d = app._wall_diff(app._wall(), t)
-    if d > app.worst_save_us:
-        app.worst_save_us = d
-
-
-def _failed(app, reason):
-    app._dip_unsaved = False  # the retry saves the record with the dip known then
-    app.save_errors += 1
-    app.save_reason = reason
-    app._unsaved = True
-    app._save_wait_us = 0
+        reason = "bad_payload %s" % (e,)
+    return reason, app._wall_diff(app._wall(), t)
 
 
 def _record(app):

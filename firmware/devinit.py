@@ -129,3 +129,31 @@ def overflow_bit(dev, bit, advice):
     raw = dev.held(0)
     raise overflow(dev, raw, "%s set (an axis is beyond +-%d G), raw %s; %s"
                         % (bit, dev.TABLES[0][dev.range_code], raw, advice))
+
+
+def restart(health, mag, acc):
+    """Each driver re-applies its own configuration (CompassApp.reinit), counted in `health`
+    (firmware/health.py Health); True when both answered (the app keeps whatever did)."""
+    err = None
+    if acc is not None:
+        try:
+            acc.configure()
+        except OSError as e:  # the magnetometer may still be reachable: go on
+            err = e
+    try:
+        try:
+            mag.configure()
+        except OSError:
+            if acc is None:
+                raise
+            acc.enable_bypass()  # GY-87: a reset MPU6050 hides the magnetometer again
+            mag.configure()
+    except OSError as e:  # SensorNotFound, BusError, DataReadyTimeout: still not back
+        err = e
+    if err is None:
+        health.reinits += 1
+    else:
+        health.reinit_failures += 1
+        health.last_error = err
+    health.cfg_due = True  # (the runs of repeats go on: a cured chip ends them itself)
+    return err is None

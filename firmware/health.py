@@ -11,6 +11,15 @@
 from array import array
 
 from firmware.compat import const
+from firmware.errors import DataReadyTimeout, SensorOverflow
+
+# a step's outcome (CompassApp.status): the sample's and the chip's
+STATUS_OK = "ok"
+STATUS_BUS_ERROR = "bus_error"        # NACK / EIO: the chip did not answer
+STATUS_TIMEOUT = "timeout"            # no data-ready within the driver's bound
+STATUS_OVERFLOW = "overflow"          # QMC5883L OVL, HMC5883L -4096: sample dropped
+STATUS_STALE = "stale data"           # the magnetometer repeats its last sample: no new data
+STATUS_RESET = "sensor reset"         # its control registers no longer hold our configuration
 
 _SAT_HI = const(32767)
 _SAT_LO = const(-32768)
@@ -19,10 +28,24 @@ _G_LO_PCT = const(75)        # |g| window, percent of 1 g
 _G_HI_PCT = const(125)
 _ACCEL_REPEATS = const(3)    # exact repeats of all three axes that mean a frozen accelerometer
 _RUN_CAP = const(0x3FFF)
+CONFIG_EVERY = const(1)     # samples between configuration read-backs (docs/faults.md)
+_REINIT_MAX_SHIFT = const(4)  # failed re-inits back off to every 2**4 x reinit_after reads
+_ERROR_BACKOFF_US = const(20000)  # after a bus error: do not hammer a dead bus
+_ACCEL_RETRY_US = const(5000000)   # an accelerometer absent at boot is looked for every 5 s
+_ACCEL_REINIT_EVERY = const(16)    # implausible accelerometer samples between its re-inits
 DIP_TOL_KANG = const(546)       # 3 deg (65536 KANG per turn): firmware/fieldwatch.py DipCheck
 SPELL_JUMP = const(1)           # FieldWatch spells, by weight: a heading jump...
 SPELL_SHIFT = const(2)          # ...|B| or the dip left their short averages...
 SPELL_FIELD = const(3)          # ...|B| or the dip outside their windows
+
+
+def status_of(e):
+    """The status of a failed read's exception."""
+    if isinstance(e, DataReadyTimeout):
+        return STATUS_TIMEOUT
+    if isinstance(e, SensorOverflow):
+        return STATUS_OVERFLOW
+    return STATUS_BUS_ERROR
 
 
 def mag_repeats(counts_per_gauss):
@@ -61,6 +84,11 @@ class Health:
         self.asame = 0
         self.g_lo = 0
         self.g_hi = 0
+        # the drivers' faults (below): each written by a step, so here from the start
+        self.fails = self.level = self.since_cfg = self.tilt_bad = self.accel_wait_us = 0
+        self.reinits = self.reinit_failures = self.accel_retries = 0
+        self.cfg_due = self.cfg_ok = True
+        self.last_error = None
         self.set_accel(counts_per_g)
 
     def set_accel(self, counts_per_g):
@@ -104,3 +132,90 @@ class Health:
         if self._frozen(a):
             return False
         return self.g_lo <= n <= self.g_hi
+
+    # --- the drivers' faults (CompassApp: its read guard, drivers, watch and reinit_after) ---
+    # fails: failed reads in a row; level: failed re-inits back off to every 2**level x
+    # reinit_after; cfg_due: read the configuration back at the next sample (the first one,
+    # after any anomaly); since_cfg: samples since the last read-back.
+
+    def tilt_check(self, app):
+        """True when the app's accelerometer sample is plausible; every _ACCEL_REINIT_EVERY
+        implausible ones the chip is woken (wake)."""
+        if self.tilt_ok(app._acc):
+            self.tilt_bad = 0
+            return True
+        self.tilt_bad += 1
+        if self.tilt_bad % _ACCEL_REINIT_EVERY == 1:
+            self.wake(app, True)
+        return False
+
+    def wake(self, app, check):
+        # an MPU6050 asleep since a reset or a glitch write (or, check False, one whose
+        # gyroscope setting changed: firmware/gyro/attitude.py): its configure() wakes it
+        g = app._guard
+        with g:
+            if not check or not app.accel.config_ok():
+                app.accel.configure()
+                self.reinits += 1
+
+    def verify(self, app):
+        """The magnetometer's configuration read back (every CONFIG_EVERY samples, after an
+        anomaly, and while collecting): STATUS_RESET when it no longer holds ours."""
+        self.since_cfg = 0
+        self.cfg_due = False
+        if app._mag_cfg is None:
+            return STATUS_OK
+        self._read_config(app)
+        e = app._guard.error
+        if e is not None:
+            self.last_error = e
+            return status_of(e)
+        return STATUS_OK if self.cfg_ok else STATUS_RESET
+
+    def _read_config(self, app):
+        self.cfg_ok = True
+        g = app._guard
+        with g:
+            g.dev = app.mag
+            self.cfg_ok = app._mag_cfg()
+
+    def failed(self, app, st):
+        """A step that gave no heading: its status counted, the field watch restarted, and
+        after reinit_after failures in a row (backing off) the drivers re-initialised."""
+        app._flag(st)
+        w = app.watch
+        if w is not None:
+            w.restart()
+            if st == STATUS_STALE:
+                w.forget(self.same)  # a spell begun by this run of repeats: not a field
+        self.cfg_due = True  # any anomaly: read the configuration back at the next sample
+        if st == STATUS_OVERFLOW:
+            return  # the chip answered; re-initialising would not move the magnet
+        if st == STATUS_RESET:
+            self.fails = app.reinit_after << self.level  # re-initialise now
+        if st == STATUS_BUS_ERROR:
+            app._delay(_ERROR_BACKOFF_US)
+        self.fails += 1
+        lvl = self.level
+        if self.fails >= app.reinit_after << lvl:
+            self.fails = 0
+            if lvl < _REINIT_MAX_SHIFT:
+                self.level = lvl + 1
+            app.reinit()
+
+    def look_for_accel(self, i2c, dt):
+        """An accelerometer absent at boot, looked for every _ACCEL_RETRY_US: its driver
+        when one answered (its window set), else None."""
+        self.accel_wait_us += dt
+        if self.accel_wait_us < _ACCEL_RETRY_US:
+            return None
+        self.accel_wait_us = 0
+        self.accel_retries += 1
+        try:
+            from firmware import detect
+            acc = detect.detect_accel(i2c)
+        except OSError:
+            return None
+        if acc is not None:
+            self.set_accel(acc.counts_per_g)
+        return acc

@@ -15,9 +15,9 @@ from firmware.compat import const
 NAME = "_mounting.txt"    # after the store's prefix (app_persist.py and session.py hold it too)
 _WRONG = "wrong"          # firmware.calibrate.mountcheck.WRONG: the only verdict written
 _OK = "ok"                # firmware.calibrate.mountcheck.OK
-_LINE_MAX = const(80)   # bytes read (app_persist.py too): a line has at most 59 (a 16-byte
-#                           KIND, MAG_AXES "-x,-y,-z"); as long or longer is no line
 _STATUS = 'check MAG_AXES: the data say "%s"'  # as firmware.calibrate.mountcheck.judge says it
+_LINE_MAX = const(80)   # bytes read (persist.py too): a line has at most 59 (a 16-byte
+#                           KIND, MAG_AXES "-x,-y,-z"); as long or longer is no line
 
 
 def save(app):
@@ -65,11 +65,10 @@ def load(app, data):
         return False
     now = app._mag_map.spec
     if said[0] == now:
-        app.mounting = (_WRONG, said[1])
-        app._axes_status = _STATUS % said[1]
+        app._mounted(_WRONG, said[1], _STATUS % said[1])
         return False
     if said[1] == now:
-        app.mounting = (_OK, now)
+        app._mounted(_OK, now, None)
     return True
 
 

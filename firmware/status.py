@@ -19,6 +19,8 @@ PROGRAM_NEED_KB = const(128)
 _buf = bytearray(_LINE_MAX)
 _mv = memoryview(_buf)
 _n = 0
+_seen_app = None  # the app whose line was made last, and its .stored when it said "saved"
+_seen = 0
 
 
 def progress(app):
@@ -122,8 +124,12 @@ def _story(app):
     calibrated, and why not yet."""
     c = app.calibration
     col = app.collector
-    if app.stored != app._saved_shown:
-        app._saved_shown = app.stored
+    global _seen_app, _seen
+    if _seen_app is not app:  # another app: none of its saves shown yet
+        _seen_app = app
+        _seen = 0
+    if app.stored != _seen:
+        _seen = app.stored
         _sep()
         _put("saved")  # shown once after each save
     _sep()

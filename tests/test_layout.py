@@ -120,6 +120,52 @@ def test_no_import_cycles_in_firmware():
         visit(m, [])
 
 
+def _app_assignments(src):
+    """(line, text) of each assignment into a CompassApp in the source src: `app.x = ...`,
+    `app.x += ...`, a tuple target holding app.x, setattr(app, ...)."""
+    out = []
+    tree = ast.parse(src)
+
+    def into_app(t):
+        if isinstance(t, (ast.Tuple, ast.List)):
+            return any(into_app(e) for e in t.elts)
+        return (isinstance(t, ast.Attribute) and isinstance(t.value, ast.Name)
+                and t.value.id == "app")
+
+    for n in ast.walk(tree):
+        if isinstance(n, ast.Assign):
+            hit = any(into_app(t) for t in n.targets)
+        elif isinstance(n, (ast.AugAssign, ast.AnnAssign)):
+            hit = into_app(n.target)
+        elif isinstance(n, ast.Call) and isinstance(n.func, ast.Name):
+            hit = (n.func.id == "setattr" and n.args and isinstance(n.args[0], ast.Name)
+                   and n.args[0].id == "app")
+        else:
+            continue
+        if hit:
+            out.append((n.lineno, ast.unparse(n).split("\n")[0]))
+    return out
+
+
+def test_no_module_but_the_app_assigns_into_the_app():
+    # CompassApp's state has owners: the app itself, or the objects it holds (the session,
+    # the compass, the field watch, health); another module returns what the app assigns
+    found = {}
+    for m in _modules(FW):
+        if m != "app":
+            with open(_path(m)) as f:
+                hits = _app_assignments(f.read())
+            if hits:
+                found[m] = hits
+    assert found == {}
+
+
+def test_the_assignment_finder_sees_every_form():
+    src = "app.a = 1\napp.b += 1\nx, app.c = 1, 2\nsetattr(app, 'd', 1)\napp.e.f = 1\nself.g = 1\n"
+    assert [t for n, t in _app_assignments(src)] == [
+        "app.a = 1", "app.b += 1", "x, app.c = (1, 2)", "setattr(app, 'd', 1)"]
+
+
 def test_chip_drivers_import_only_the_device_base_and_errors():
     g = _graph()
     for chip in DRIVERS:

@@ -164,17 +164,14 @@ def check(pairs, cal, mag_axes, accel_axes):
 
 def judge(app):
     # The check of a CompassApp's calibration session (firmware/calibrate/session.py mount_check):
-    # the pairs its collector kept, the calibration in force, the app's maps. Sets
-    # app.mounting = (verdict, axes) and, when the verdict is WRONG, app._axes_status, the
-    # status the app shows in place of "ok" (`check MAG_AXES: the data say "y,x,-z"`); OK
-    # clears it; SPREAD and UNSTEADY leave it as it was. Returns the verdict.
+    # the pairs its collector kept, the calibration in force, the app's maps. Returns
+    # (verdict, axes, status) for CompassApp._mounted: WRONG's status is shown in place of
+    # "ok" (`check MAG_AXES: the data say "y,x,-z"`); OK clears it (None); SPREAD and
+    # UNSTEADY leave it as it was (False).
     v, axes, sigma, best = check(app.collector.pairs, app.calibration, app._mm, app._am)
-    app.mounting = (v, axes)
     if v == WRONG:
-        app._axes_status = 'check MAG_AXES: the data say "%s"' % axes
-    elif v == OK:
-        app._axes_status = None
-    return v
+        return v, axes, 'check MAG_AXES: the data say "%s"' % axes
+    return v, axes, None if v == OK else False
 
 
 def _sigma(s, q, n):

@@ -152,7 +152,7 @@ def quick_calibrate(app, true_heading_cdeg, refine=False, samples=32):
     # `samples` samples (the board held still; tilt from the accelerometer, or level without
     # one), puts the result in force and saves it. refine=True adds this pose to those of the
     # previous calls and averages them (poses at opposite headings cancel most soft-iron
-    # error). Returns the Calibration; raises CalibrationRejected (.reason: no_location,
+    # error). Returns (the QuickCal, the Calibration); raises CalibrationRejected (.reason: no_location,
     # blackout_zone, no_samples, offset_out_of_range, field_mismatch) and keeps the
     # calibration in force; TypeError / ValueError for bad arguments. Needs
     # app.set_location() first.
@@ -172,12 +172,11 @@ def quick_calibrate(app, true_heading_cdeg, refine=False, samples=32):
     qc.add(raw, g, n, cdeg_to_kang(true_heading_cdeg))
     cal = qc.result()
     acceptance.check_calibration(cal, app.mag.counts_per_gauss)  # the board's own bar
-    app.quick = qc
     app._use(cal)
     if app.collector is not None:
         app.collector.calibrator.current = cal  # a later full fit must beat it
     app._save()
-    return cal
+    return qc, cal  # (the app keeps qc as .quick: refine=True adds to it)
 
 
 def _still_samples(app, n):

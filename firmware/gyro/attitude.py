@@ -152,9 +152,9 @@ def gravity(st, grav):
 # viper mirrors in firmware/gyro/attitude_fast.py where the port has the native emitter (the same
 # bits); only the set in use is loaded (see use_kernels).
 _KERNEL_NAMES = ("rates", "advance", "q_hi", "down", "tilt_error", "tilt_sine", "accel_apply",
-                 "field_error", "yaw_rate", "angles")
+                 "field_error", "yaw_rate", "angles", "apply")
 rates = advance = q_hi = down = tilt_error = tilt_sine = accel_apply = None
-field_error = yaw_rate = angles = None
+field_error = yaw_rate = angles = apply = None  # apply: firmware/axes.py's, or its mirror
 KERNELS = None
 
 
@@ -287,6 +287,7 @@ class Attitude:
     # --- the app's step (attach, CompassApp.use_gyro) ------------------------------------
     _run = -2  # predict(): the app step whose gyro step ran
     _acc_ok = False  # predict(): the accelerometer was plausible (app.tilt)
+    shown_kang = -1  # follow(): the heading the app shows (with the declination)
 
     def predict(self, app):
         # The app's step before its compass update, on the sample just read: the
@@ -299,10 +300,10 @@ class Attitude:
         # fault): the compass's tilt and the field checks (the dip, its steadiness:
         # firmware/health.py) then see the filter's gravity, and a clean field keeps
         # correcting the heading while the board accelerates. True when app.gravity holds the
-        # gravity to use (then app.tilt is True).
+        # gravity to use (the app's tilt then holds: CompassApp._heading).
         t = app.tilt
         if t:
-            app._apply(app._am, app._acc, app.gravity)
+            apply(app._am, app._acc, app.gravity)
         elif app.health.asame:  # frozen (firmware/health.py): the chip's fault, not a bump
             self._gap(app, False)
             return False
@@ -316,8 +317,7 @@ class Attitude:
         if self._step(app._dt, 6 if t else 2) and t or not (  # FIELD | ACC_OK; turning
                 self.known or st[_SETTLE] <= 0):  # fast, the accelerometer is taken as it is
             return t
-        app.tilt = True  # (a bumped accelerometer: gravity is the filter's)
-        gravity(st, self.gravity)
+        gravity(st, self.gravity)  # (a bumped accelerometer: gravity is the filter's)
         return True
 
     def follow(self, app):
@@ -330,13 +330,15 @@ class Attitude:
         # FieldWatch: the magnet has gone, or holds still); the filter takes it only within mag_reject of its own
         # heading, and to end a hold within the held heading's uncertainty. While it holds the heading
         # without the field and vouches for it the status is "gyro held" in place of
-        # interference / heading jumped; "ok" when this sample's field corrected it.
+        # interference / heading jumped; "ok" when this sample's field corrected it. Returns
+        # the status to show with the heading .shown_kang (CompassApp._step), None to keep the
+        # compass's.
         n = app.steps
         st = self.st
         if st[_RUN] != n:  # predict() found a gap, or did not run: the next clean
             if self._at != n:  # sample starts the filter
                 self.reset()
-            return
+            return None
         s = app.status
         f = 6 if st[_ACCOK] else 2  # FIELD | ACC_OK
         if s == _OK or s == _JUMP or (s == _INTERFERENCE and app.watch.clean_us >= _OFFER_US
@@ -344,16 +346,16 @@ class Attitude:
             f += 1  # | MAG_OK
         h = self._correct(app._dt, f) if self.started else self._start(f)
         if h < 0 or not self.known:
-            return
+            return None
         n = st[_D]  # -sin(pitch), Q14
         if n > _GIMBAL or n < -_GIMBAL:  # near vertical the heading is the compass's: a
-            return  # small tilt error moves psi by tan(pitch) (AN4248 sec. 6)
-        app.heading_kang = (h + self.compass.declination_kang) & 0xFFFF
+            return None  # small tilt error moves psi by tan(pitch) (AN4248 sec. 6)
+        self.shown_kang = (h + self.compass.declination_kang) & 0xFFFF
         if st[_SINCE] == 0:  # this sample's field corrected the heading
-            if s != _OK:
-                app.status = _OK
-        elif s == _OK or s == _INTERFERENCE or s == _JUMP:
-            app.status = _GYRO_HELD if self.vouched else _INTERFERENCE
+            return _OK
+        if s == _OK or s == _INTERFERENCE or s == _JUMP:
+            return _GYRO_HELD if self.vouched else _INTERFERENCE
+        return s
 
     def _gap(self, app, ok):
         # The gyroscope into the body frame (.axes: the accelerometer's axis map negated, as
@@ -363,7 +365,7 @@ class Attitude:
         # another), with an implausible accelerometer (the gyro's own chip: its burst is
         # suspect too), a rate past the range or a chip that lost its setting: the filter then
         # starts again from the compass at the next clean sample.
-        app._apply(self.axes, self.raw, self.gyro)
+        apply(self.axes, self.raw, self.gyro)
         n = app.steps
         skip = n != self._at + 1 or app._stalled or not ok
         self._at = n
@@ -393,14 +395,8 @@ class Attitude:
             r.dev = app.accel
             self.config_ok = app.accel.config_ok()
         if not self.config_ok:
-            self._configure(app)
+            app.health.wake(app, False)  # configure() under the app's read guard (.reinits)
         return self.config_ok
-
-    def _configure(self, app):
-        r = app._guard
-        with r:
-            app.accel.configure()
-            app.reinits += 1
 
     def update(self, dt, flags):
         if not self.started:

@@ -14,7 +14,7 @@
 # original on the native tiers.
 import micropython
 
-from firmware.fast import atan2
+from firmware.fast import apply, atan2  # (apply: the app's axis map, firmware/axes.py)
 
 
 @micropython.viper

@@ -7,6 +7,7 @@
 # allocated. Products of a Q28 and a Q14 are written out as (a >> 14) b + ((a & 0x3FFF) b >>
 # 14), exact, and below 2**30 (tests/test_attitude.py drives an instrumented copy).
 from firmware.compat import const
+from firmware.axes import apply  # (the app's axis map, re-exported for the kernel set)
 from firmware.trig import atan2
 
 _ONE28 = const(0x10000000)

@@ -138,5 +138,4 @@ def attach(app, cls, options):
     m = app._am  # the accelerometer's map negated: it turns specific force into AN4248's
     a.axes = array("b", (m[0], m[1], m[2], 1 - m[3], 1 - m[4], 1 - m[5]))  # gravity (Gp = -f)
     acc.gyro_into = a.raw  # its sample_into() reads the gyroscope in the same burst
-    app.attitude = a
     return a

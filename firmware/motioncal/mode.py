@@ -275,9 +275,8 @@ class MotionCalMode:
             self._refused(STATUS_REJECTED, REASON_NOT_A_CALIBRATION, str(e))
             return None
         app = self.app
-        app.collector = None  # the user's choice stands (docs/design.md, module notes)
         stored = app.stored
-        app.use_calibration(cal)
+        app.use_calibration(cal, collect=False)  # the user's choice stands (the module's opening comment)
         self.applied += 1
         self.cal_packet = bytes(packet)
         self.status = STATUS_APPLIED

@@ -5,7 +5,8 @@
 import json
 import sys
 
-from firmware import app_persist, mountnote
+from firmware import mountnote, persist
+from firmware.app import CompassApp
 from firmware.calibration import Calibration
 from firmware.axes import AxisMap
 from firmware.store_slots import crc32
@@ -21,6 +22,7 @@ class Mag:
 class App:
     mounting = None
     _axes_status = None
+    _mounted = CompassApp._mounted  # what the app does with a verdict
 
     def __init__(self, store, mag_axes, accel_axes="-x,y,z"):
         self.store = store
@@ -70,8 +72,8 @@ CalStore("/", sensor="hmc5883l", fs=fs).save(Calibration(
     field_out=590, fit_error=100, samples=200, coverage=80, dip_kang=10923).to_bytes())
 for axes in ("x,-y,-z", "y,x,-z", "-y,-x,-z"):
     b = App(CalStore("/", fs=fs), axes)
-    cal = app_persist.load(b)
-    print(json.dumps(["boot", axes, b.load_reason, cal.model, cal.dip_kang,
+    cal, why = app_persist.load(b)  # (the app keeps why as .load_reason)
+    print(json.dumps(["boot", axes, why, cal.model, cal.dip_kang,
                       b.mounting and list(b.mounting), b._axes_status,
                       "firmware.mountnote" in sys.modules]))
 a.mounting = ("ok", "x,-y,-z")
