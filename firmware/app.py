@@ -10,7 +10,8 @@ there is no good calibration yet, collect and solve one in the background.
 # it; calibrate() starts collecting now. Options and attributes: docs/api.md (the app). One
 # step's named stages, interference, storage and history, and what is loaded when: the app in
 # docs/design.md (module notes) and docs/design.md#memory.
-from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED
+from firmware.axes import apply
+from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED, correct
 from firmware.compass import FIELD_TOL_PCT, FLAG_NO_GRAVITY
 from firmware.compat import const, drop, drop_part, free_bytes, ticks_diff
 from firmware.errors import SensorOverflow

@@ -6,7 +6,7 @@ history, save; then leave. Imported by CompassApp.calibrate(), dropped when the 
 #
 # When a session ends and what leaves with it: docs/design.md#memory; its steps (solve,
 # accept): docs/design.md (module notes, session).
-from firmware.compat import const, drop, drop_part, kernels
+from firmware.compat import const, drop, kernels
 from firmware.i2cdevice import DEFAULT_PERIOD_US
 
 _FLAG_ACCEPTED = const(1)     # firmware.calibrate.history.FLAG_ACCEPTED

@@ -5,7 +5,7 @@
 import json
 import sys
 
-from firmware import mountnote, persist
+from firmware import app_persist, mountnote
 from firmware.app import CompassApp
 from firmware.calibration import Calibration
 from firmware.axes import AxisMap
