@@ -11,7 +11,8 @@ by the rules and the short list below. No bench run: the blocks are bench's reco
 What is checked, on every page alike: heap and file sizes (KB, B, bytes), interned names,
 times (ms, us, ns), and seconds, angles and percentages quoted with decimals. Whole numbers in
 s / deg / % are not checked: they are periods, thresholds and scenario settings (5 s, 5 deg,
-+-3 %), so a page states a measured one with its decimals, or states the limit a test or a
++-3 %; every whole number the pages quote was read and is one of those, or was rewritten),
+so a page states a measured one with its decimals, or states the limit a test or a
 command holds ("within the 5 deg the test allows") and names it. Not checked: MB (third-party
 download sizes, docs/install.md). A scenario's one-off result (a soak seed, a test's scenario,
 a MotionCal session) is not quoted as a figure: the page names the test or the command that
