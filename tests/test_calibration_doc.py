@@ -19,3 +19,17 @@ def test_the_progress_transcript_is_what_the_simulated_board_prints(tmp_path):
         while i < len(out) and out[i] != ln:
             i += 1
         assert i < len(out), ln
+
+
+def test_the_status_line_examples_are_what_the_simulated_app_prints():
+    # the example of a session beside the heading and the one of a wrong MAG_AXES: each is a
+    # line the app prints on the simulated GY-271 + GY-521 (tests/scenarios/status_examples.py)
+    text = open(DOC).read()
+    shown = [ln for ln in text.splitlines()
+             if ln.startswith("heading ") and ("| saved |" in ln or "check MAG_AXES" in ln)
+             and "..." not in ln]
+    assert len(shown) == 2, shown
+    out = mp.run(["tests/scenarios/status_examples.py"], micro=False).splitlines()
+    assert len(out) > 200, out[-3:]
+    for ln in shown:
+        assert ln in out, ln
