@@ -114,43 +114,18 @@ _COUNTS = ("accepted", "refused", "solves", "history_errors", "reinits", "reinit
 
 
 class CompassApp:
-    # See docs/design.md, module notes. Attributes after each step(): heading_kang, compass, raw,
-    # body, gravity, status, calibration, calibrator (None until collecting), collector,
-    # last_reason, last_detail, accepted, refused, worst_stall_us, errors, stored,
-    # save_errors, load_reason, reinits, relearning, fast, pending, change, history_errors,
-    # location, quick, accuracy, watch (firmware/fieldwatch.py FieldWatch), dip (its DipCheck).
-
-    location = None  # a firmware.field.location.Location after set_location()
-    # the documented state, here too so that it exists while the heap could not hold the app
-    # (.no_memory "start"): each is set again by the constructor (firmware/app_setup.py)
+    # Its attributes and their meanings: docs/api.md (the app). The documented state is here
+    # too, so that it exists while the heap could not hold the app (.no_memory "start"); the
+    # constructor (firmware/app_setup.py) and each change set it again on the app itself.
     calibration = UNCALIBRATED
-    compass = None
-    collector = None
-    _session = None  # firmware.calibrate.session.Session while a calibration session runs
-    load_reason = None
-    # counters and flags, each set again where it changes: the store's (stored, save_errors,
-    # save_reason, worst_save_us, a save due, a dip not saved yet), the solver's, the
-    # drivers' (re-inits, failed reads in a row, the accelerometer looked for), the clock's
-    # (us since the last step, capped as evidence; since the last good read), the field's
-    stored = save_errors = worst_save_us = worst_stall_us = slices = steps = 0
-    save_reason = None
-    _unsaved = _dip_unsaved = _stalled = _ok = False
+    location = compass = collector = _session = load_reason = save_reason = health = None
+    no_memory = _args = _gyro_options = not_installed = quick = attitude = mounting = None
+    _axes_status = date_s = None
+    stored = save_errors = worst_save_us = worst_stall_us = slices = steps = _retry_us = 0
     _dt = _gap_us = _age_us = _interf_us = _save_wait_us = 0
-    health = None  # firmware/health.py Health: the drivers' faults and their counters
+    _unsaved = _dip_unsaved = _stalled = _ok = relearn_due = False
     heading_kang = -1
-    _ended = {}      # the counters of the last session (read only here: an app has its own)
-    no_memory = None  # what the heap could not hold: "start", "load", "calibrate" (status line)
-    _args = None     # the constructor's arguments while the heap could not hold the app
-    _gyro_options = None  # use_gyro()'s options while it is in use
-    _retry_us = 0
-    not_installed = None  # "calibrate": calibrate() found no calibration machinery
-    relearn_due = False  # the iron changed and no session fits beside the heading: the
-    #                      calibration program should run (boards/main.py restarts into it)
-    quick = None     # the firmware.field.quickcal.QuickCal of the last quick_calibrate()
-    attitude = None  # the firmware.gyro.attitude.Attitude of use_gyro()
-    mounting = None  # (verdict, MAG_AXES the data say) of the last mounting check
-    #                  (firmware/calibrate/mountcheck.py), None before any
-    _axes_status = None  # the status while that check names another MAG_AXES
+    _ended = {}  # the counters of the last session (read only here: an app has its own)
 
     def __init__(self, i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z",
                  model=10, declination_cdeg=0, store=None, delay_us=None, ticks_us=None,
@@ -165,8 +140,8 @@ class CompassApp:
                 mag_options, learn, fast)
         try:
             self._build(args)
-        except MemoryError:  # no room for the app itself: step() tries again, the status
-            self._args = args  # line says so (a board never stops at a traceback)
+        except MemoryError:  # no room for the app: step() tries again (docs/api.md)
+            self._args = args
             self.no_memory = "start"
             self.status = STATUS_NO_MEMORY
             from firmware import compat  # run()'s clock meanwhile
@@ -186,10 +161,10 @@ class CompassApp:
             app_setup = None
             drop("app_setup", "devinit")  # the drivers' start-up and error texts too
         self.fast = self._kn is not None
-        self.dip = self.watch.dip  # the calibration's dip (firmware/health.py DipCheck)
+        self.dip = self.watch.dip
         self._t_last = self._ticks()
-        # what every step writes or reads, in the app's own dict now: a dict that grew while
-        # showing headings would allocate, and a name it lacks costs a longer lookup per step
+        # what every step writes or reads, in the app's own dict now: one that grew while
+        # showing headings would allocate; a name it lacks costs a longer lookup per step
         self._ok = self._stalled = self._unsaved = False
         self._dt = self._gap_us = self._age_us = self._interf_us = 0
         self.collector = self._session = self.attitude = self._axes_status = None
@@ -201,8 +176,8 @@ class CompassApp:
         self._start_learning()
 
     def _start_learning(self):
-        # a calibration session when asked for, or while no good one is in force; not while
-        # the stored one could not be read for lack of memory (it is not "uncalibrated")
+        # a session when asked for or while no good calibration is in force (not for a load
+        # that found no room: that is not "uncalibrated")
         if self.load_reason == _LOAD_NO_MEMORY:
             self.no_memory = "load"
             self._retry_us = _LOAD_RETRY_US
@@ -211,7 +186,6 @@ class CompassApp:
         if learn or learn is None and not self._good_enough(self.calibration):
             self.calibrate()
 
-    # --- storage (firmware/app_persist.py, loaded for each use) ---------------------------
     def _load(self):
         self.load_reason = None
         try:
@@ -237,8 +211,7 @@ class CompassApp:
             self._saved(dip_only, r[0], r[1])
 
     def _saved(self, dip_only, reason, us):
-        # a save's figures: stored, or failed (.save_errors, .save_reason; retried after
-        # _SAVE_RETRY_US with the dip known then)
+        # stored, or failed (.save_errors, .save_reason; retried after _SAVE_RETRY_US)
         if reason is None:
             if not dip_only:
                 self.stored += 1
@@ -252,17 +225,14 @@ class CompassApp:
         if us > self.worst_save_us:
             self.worst_save_us = us
 
-    # --- calibration in force ---------------------------------------------------------
     def _good_enough(self, cal):
-        """A loaded calibration that makes collecting unnecessary: the configured model, fit
-        within GOOD_FIT_ERROR."""
+        """No collecting needed: the configured model, fit within GOOD_FIT_ERROR."""
         m = self.model
         return (cal.model is not None and cal.fit_error <= GOOD_FIT_ERROR
                 and (cal.model == m or m == "auto" and cal.model != "minmax"))
 
     def _use(self, cal):
-        # another calibration: its dip (saved with it, else learned afresh), the short
-        # averages and any spell start over (firmware/fieldwatch.py FieldWatch.use)
+        # its dip, the short averages and any spell start over (FieldWatch.use)
         self.calibration = cal
         self._k = cal.k  # _heading's
         self.watch.use(cal)
@@ -275,17 +245,13 @@ class CompassApp:
         self._locate()
 
     def _dip_learned(self):
-        # the dip reference is armed: a fit this app saved before it knew its dip (an
-        # accepted fit, use_calibration, quick_calibrate) is saved again, once, with it; a
-        # record loaded without one (made elsewhere or by older firmware) is not rewritten
-        # at boot: its dip is learned at each boot
+        # a fit this app saved before it knew its dip is saved again, once, with it (one
+        # loaded without a dip is not rewritten: docs/design.md, module notes)
         if self._dip_unsaved and not self._unsaved:
             self._save(True)
 
     def use_calibration(self, cal, save=True, collect=True):
-        """Put `cal` (a Calibration made outside the app, e.g. from MotionCal's packet by
-        firmware/motioncal/mode.py) in force now, and save it to the store when `save`;
-        collect False: stop collecting (the user's choice stands)."""
+        """Put the Calibration `cal` in force (docs/api.md)."""
         if not collect:
             self.collector = None
         self._use(cal)
@@ -293,12 +259,7 @@ class CompassApp:
             self._save()
 
     def calibrate(self):
-        # Start collecting samples for a new calibration beside the heading line (imports the
-        # calibration machinery, firmware/calibrate/session.py); the calibration in force stays
-        # until a better one is accepted. Returns the collector; None when the calibrate part
-        # is not installed (.not_installed) or the heap has no room for a session beside the
-        # heading (.no_memory "calibrate": the calibration program does it alone,
-        # firmware/calibrate/program.py; boards/main.py restarts into it).
+        """Start a calibration session beside the heading line (docs/api.md)."""
         if self.collector is None and self._args is None:  # (no app yet: nothing to collect for)
             f = free_bytes()
             if f is not None and f < SESSION_ROOM:
@@ -318,9 +279,8 @@ class CompassApp:
         return self.collector
 
     def _mounted(self, verdict, axes, status):
-        # a mounting check's answer (firmware/calibrate/mountcheck.py judge, or its note read at
-        # boot, firmware/mountnote.py): `status` shown in place of "ok" (None: none; False:
-        # the one shown stays)
+        # a mounting check's answer (firmware/calibrate/mountcheck.py, firmware/mountnote.py):
+        # `status` shown in place of "ok" (None: none; False: the one shown stays)
         self.mounting = (verdict, axes)
         if status is not False:
             self._axes_status = status
@@ -330,26 +290,13 @@ class CompassApp:
         self._retry_us = _CAL_RETRY_US
         return None
 
-    # --- where the board is (firmware/field/location.py, firmware/field/quickcal.py) ----------------
     def set_location(self, lat_e7, lon_e7, year_e3=None, table=None):
-        # The board's place (1e-7 deg, north and east positive) and date (decimal year *
-        # 1000, firmware.field.wmm.decimal_year_e3; None: unknown). With a usable field model the
-        # declination becomes the model's, a new fit's B is checked against the model's |B|
-        # (field_mismatch) and the interference window and dip come from the model
-        # (firmware/field/location.py). Returns the location's status: "ok", "no date", "caution
-        # zone", "blackout zone", or why the model cannot be used ("no field model: ...",
-        # "outside model validity") - then the declination given to the constructor stays.
-        # TypeError / ValueError name a bad argument and its unit. `table`: the table file
-        # (None: wmm2025.bin next to firmware/field/wmm.py).
+        """The board's place and date; returns the location's status (docs/api.md)."""
         try:
-            from firmware.field.location import Location
+            from firmware.field.location import place
         except ImportError:  # an optional part (docs/design.md, parts)
             raise ImportError("set_location() needs the field part: install package-field.json")
-        loc = Location(lat_e7, lon_e7, year_e3, table)
-        prev = self.location
-        loc.manual_declination_kang = (prev.manual_declination_kang if prev is not None
-                                       else self.compass.declination_kang)
-        self.location = loc
+        loc = self.location = place(self, lat_e7, lon_e7, year_e3, table)
         self._use(self.calibration)  # the window afresh, then the location applied
         return loc.status
 
@@ -360,10 +307,7 @@ class CompassApp:
                 drop("field.wmm", "calibrate.acceptance")  # the field check leave (docs/design.md)
 
     def quick_calibrate(self, true_heading_cdeg, refine=False, samples=32):
-        """Hard iron from this pose and its known true heading (firmware/field/quickcal.py
-        quick_calibrate has the whole story): puts the result in force, saves it and returns
-        it; raises CalibrationRejected with a reason and keeps the calibration in force.
-        Needs set_location() first."""
+        """Hard iron from this pose and its true heading, in force and saved (docs/api.md)."""
         try:
             from firmware.field.quickcal import quick_calibrate
         except ImportError:
@@ -372,22 +316,14 @@ class CompassApp:
         self.quick, cal = quick_calibrate(self, true_heading_cdeg, refine, samples)
         return cal
 
-    # --- gyro-aided heading (firmware/gyro/attitude.py) ----------------------------------------
     def use_gyro(self, **options):
-        # Let the MPU6050's gyroscope hold the heading through magnets, motors and shaking
-        # (docs/gyro.md): loads firmware/gyro/attitude.py, reads the gyroscope with the accelerometer
-        # (one burst) and makes the filter's heading the app's, with the status "gyro held"
-        # while it holds the heading without the field. `options` are Attitude's (gain,
-        # mag_gain, bias_gain, accel_reject_cdeg, mag_reject_cdeg, recovery_us,
-        # max_uncertainty_cdeg). Returns the Attitude (.attitude); ValueError when there is no
-        # MPU6050.
+        """The MPU6050's gyroscope holds the heading; returns the Attitude (docs/gyro.md)."""
         try:
             from firmware.gyro.attitude_setup import attach
             from firmware.gyro import attitude
         except ImportError:
             raise ImportError("use_gyro() needs the gyro part: install package-gyro.json")
-        attitude.use_kernels(None if self.fast else False)  # the app's kernel set
-        a = self.attitude = attach(self, attitude.Attitude, options)
+        a = self.attitude = attach(self, attitude, options)
         attach = None
         drop("gyro.attitude_setup")
         self._gyro_options = options if options else ()
@@ -395,12 +331,12 @@ class CompassApp:
 
     @property
     def accuracy(self):
-        """Accuracy level 0..3, Android's meaning (firmware/accuracy.py has the table)."""
+        """Accuracy level 0..3, Android's meaning (firmware/accuracy.py)."""
         from firmware.accuracy import assess
         return assess(self)[0]
 
     def accuracy_reason(self):
-        """Why the accuracy level is what it is (a reason of firmware/accuracy.py's table)."""
+        """Why the accuracy level is what it is (firmware/accuracy.py)."""
         from firmware.accuracy import assess
         return assess(self)[1]
 
@@ -672,16 +608,13 @@ class CompassApp:
             self.relearn_due = True  # no room: the calibration program's job (boards/main.py)
 
     def reinit(self):
-        """Re-initialise the drivers (a sensor reset by a brown-out powers up in standby):
-        each driver re-applies its own configuration. Returns True when both answered; the
-        app keeps whatever did (firmware/devinit.py restart)."""
+        """Re-initialise the drivers; True when both answered (docs/api.md)."""
         from firmware import devinit  # the drivers' start-up code and error texts
         ok = devinit.restart(self.health, self.mag, self.accel)
         devinit = None
         drop("devinit")
         return ok
 
-    # --- the calibration session (firmware/calibrate/session.py, while collecting) ----------------
     def _solve(self):
         t = self._wall()
         done = self._session.solve(self)
@@ -698,17 +631,12 @@ class CompassApp:
         self.collector = self._session = None
         drop_part("calibrate")
 
-    date_s = None  # a function returning the date in seconds, when the board knows it
-
     def accept_change(self):
-        """Put the pending calibration in force: the hardware did change (a new mounting, a
-        new chip). It is saved and starts a new baseline of the history. False when none
-        is pending."""
+        """Put the pending calibration in force (docs/api.md); False when none is pending."""
         return self._change(True)
 
     def discard_change(self):
-        """Drop the pending calibration: the one in force stays (the evidence stays in the
-        history); new fits are again judged against it. False when none is pending."""
+        """Drop the pending calibration (docs/api.md); False when none is pending."""
         return self._change(False)
 
     def _change(self, accept):
@@ -721,7 +649,6 @@ class CompassApp:
             self.status = STATUS_OK
         return True
 
-    # --- reporting --------------------------------------------------------------------
     @property
     def calibrator(self):
         return self.collector.calibrator if self.collector is not None else None
@@ -759,26 +686,13 @@ class CompassApp:
         return progress(self)
 
     def run(self, n=None, report=None, every=_REPORT_EVERY, every_us=None):
-        """step() n times (None: forever, or until .relearn_due: the calibration program is
-        needed); report(app) every `every` steps, or every `every_us` microseconds of the app's
-        clock. Returns the steps with a heading."""
-        good = 0
-        i = 0
-        last = self._ticks()
-        while (n is None or i < n) and not self.relearn_due:
-            if self.step():
-                good += 1
-            i += 1
-            if report is None:
-                continue
-            if every_us:
-                now = self._ticks()
-                if (ticks_diff(now, last) if self._wrap else now - last) >= every_us:
-                    last = now
-                    report(self)
-            elif i % every == 0:
-                report(self)
-        return good
+        """step() n times, report(app) every `every` steps or `every_us` (docs/api.md)."""
+        from firmware import app_run
+        try:
+            return app_run.run(self, n, report, every, every_us)
+        finally:
+            app_run = None
+            drop("app_run")
 
 
 _NO_MEMORY_LINE = ("status line: out of memory (a frozen or ROMFS build needs the least heap: "

@@ -21,9 +21,9 @@ PIPELINE = ["compat", "errors", "fixedpoint", "i2cdevice", "detect"] + DRIVERS +
             "fieldwatch", "app", "fast",
             # the app's capabilities, each loaded for its job and dropped after it (boot,
             # construction, the drivers' start-up and error texts, the store's load and save,
-            # the calibration session, calibration mode where the heap holds one job at a
+            # run()'s loop, the calibration session, calibration mode where the heap holds one job at a
             # time, the status line)
-            "boot", "app_setup", "devinit", "app_persist", "calibrate.session", "status", "hints",
+            "boot", "app_setup", "devinit", "app_persist", "app_run", "calibrate.session", "status", "hints",
             # the calibration program, and what a board's main.py runs
             "calibrate.program", "runner"]
 CALIBRATION_MACHINERY = {"firmware.calibrate.calibrator", "firmware.calibrate.solve", "firmware.calibrate.accum",

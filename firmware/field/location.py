@@ -139,6 +139,16 @@ class Location:
         c.set_window(lo - lo * tol // 100, hi + hi * tol // 100)
 
 
+def place(app, lat_e7, lon_e7, year_e3, table):
+    """CompassApp.set_location's Location: the declination given to the app stays for when
+    the model cannot be used."""
+    loc = Location(lat_e7, lon_e7, year_e3, table)
+    prev = app.location
+    loc.manual_declination_kang = (prev.manual_declination_kang if prev is not None
+                                   else app.compass.declination_kang)
+    return loc
+
+
 def _matches(field, expected):
     from firmware.calibrate.acceptance import field_matches
     return field_matches(field, expected)

@@ -9,8 +9,8 @@ and CompassApp.use_gyro()'s attach.
 # init(a, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g, options): the
 #     Attitude a's attributes and state array (its slots: firmware/gyro/attitude.py's numbers,
 #     tests/test_attitude.py checks they agree).
-# attach(app, cls, options) -> the Attitude (cls) on the app's arrays, its MPU6050 reading the gyroscope in
-#     the accelerometer's burst (driver .gyro_into), app.attitude set.
+# attach(app, attitude, options) -> an attitude.Attitude (the app's kernel set) on the app's
+#     arrays, its MPU6050 reading the gyroscope in the accelerometer's burst (.gyro_into).
 from array import array
 
 from firmware.compat import const
@@ -127,12 +127,13 @@ def init(a, gyro, gravity, field, compass, counts_per_dps_x10, counts_per_g, opt
     st[_Q] = 0x10000000  # 1 in Q28
 
 
-def attach(app, cls, options):
+def attach(app, attitude, options):
+    attitude.use_kernels(None if app.fast else False)  # the app's kernel set
     acc = app.accel
     if acc is None or not hasattr(acc, "sample_all_into"):
         raise ValueError("use_gyro: no gyroscope - it is the MPU6050's (GY-87, GY-521) and no "
                          "MPU6050 answered on this bus")
-    a = cls(array("h", (0, 0, 0)), app.gravity, app.body, app.compass,
+    a = attitude.Attitude(array("h", (0, 0, 0)), app.gravity, app.body, app.compass,
                  acc.counts_per_dps_x10, acc.counts_per_g, **options)
     a.raw = array("h", (0, 0, 0))
     m = app._am  # the accelerometer's map negated: it turns specific force into AN4248's
