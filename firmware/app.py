@@ -13,7 +13,7 @@ there is no good calibration yet, collect and solve one in the background.
 from firmware.axes import apply
 from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED, correct
 from firmware.compass import FIELD_TOL_PCT, FLAG_NO_GRAVITY
-from firmware.compat import const, drop, drop_part, free_bytes, ticks_diff
+from firmware.compat import const, drop, drop_part, free_bytes, sleep_us, ticks_diff
 from firmware.errors import SensorOverflow
 from firmware.health import (CONFIG_EVERY, SPELL_FIELD, SPELL_JUMP, STATUS_OK, STATUS_OVERFLOW,
                              STATUS_STALE, status_of)
@@ -192,7 +192,6 @@ class CompassApp:
             from firmware import app_persist
             cal, self.load_reason = app_persist.load(self)
         except MemoryError:  # no room for the store's code: not "uncalibrated" (_retry)
-            from firmware.calibration import UNCALIBRATED
             self.load_reason = _LOAD_NO_MEMORY
             cal = UNCALIBRATED
         app_persist = None
@@ -360,12 +359,7 @@ class CompassApp:
         # the app itself did not fit: a sample period's pause per step (the loop does not
         # spin), another try every 256 steps
         self._ok = False
-        d = self._args[8]  # delay_us
-        if d is not None:
-            d(_RETRY_PAUSE_US)
-        else:
-            from firmware.compat import sleep_us
-            sleep_us(_RETRY_PAUSE_US)
+        (self._args[8] or sleep_us)(_RETRY_PAUSE_US)  # delay_us, else the port's
         if self.steps & 0xFF == 0:
             self._build(self._args)
 
@@ -403,8 +397,7 @@ class CompassApp:
             self.status = STATUS_CHANGED  # the likely cause of the interference, too
         if self._axes_status is not None and (self.status == STATUS_OK
                                               or self.status == STATUS_INTERFERENCE):
-            self.status = self._axes_status  # the mounting check: MAG_AXES is wrong (the
-            #                                  dip it swings is the interference's cause too)
+            self.status = self._axes_status  # MAG_AXES is wrong (the interference's cause too)
         if self.no_memory is not None and self._ok:
             self.status = STATUS_NO_MEMORY  # a heading, but not the calibrated one it should be
 
@@ -474,12 +467,9 @@ class CompassApp:
         self.no_memory = None
         if what == "load":
             cal = self._load()
-            if self.load_reason == _LOAD_NO_MEMORY:
-                self.no_memory = "load"
-                self._retry_us = _LOAD_RETRY_US
-                return
-            self._use(cal)
-            self._start_learning()
+            if self.load_reason != _LOAD_NO_MEMORY:
+                self._use(cal)
+            self._start_learning()  # (or "load" again, while it finds no room)
         elif what == "calibrate":
             self.calibrate()
 
@@ -514,8 +504,7 @@ class CompassApp:
         if h.mag_stale(self.raw, getattr(self.mag, "suspect", False)):
             return STATUS_STALE
         if self._stalled and getattr(self.mag, "suspect", False):
-            # after a gap (a stall, a run of bus errors) a QMC5883L still holds the set that
-            # followed the last read: DOR says later ones were skipped, so it is that old
+            # a QMC5883L's set after a gap is that old (docs/design.md, app)
             return STATUS_STALE
         if self.accel is not None:
             self.tilt = h.tilt_check(self)
@@ -550,9 +539,7 @@ class CompassApp:
         return STATUS_OK
 
     def _check(self):
-        """Interference bookkeeping (firmware/health.py FieldWatch: the windows, the dip,
-        shifts, jumps and the spell they start); True when the sample may go to the
-        collector."""
+        """The field checks (firmware/fieldwatch.py); True when the sample may be kept."""
         w = self.watch
         k = w.sample(self.tilt and self.accel is not None, self._dt)
         if k == SPELL_FIELD:
@@ -566,10 +553,8 @@ class CompassApp:
         return True
 
     def _spelled(self, k):
-        # a spell: its status until the evidence says the field is clean. The collector
-        # still takes the samples that raise no flag, and a jump's (a fast turn while
-        # calibrating looks the same): a rough calibration in force must not stop the fit
-        # that replaces it
+        # a spell's status until the field is clean; what the collector still takes:
+        # docs/design.md (app, interference)
         st = STATUS_JUMP if self.watch.spell == SPELL_JUMP else STATUS_INTERFERENCE
         if k:
             self._flag(st)
@@ -588,8 +573,7 @@ class CompassApp:
         return False
 
     def _select(self):
-        # while collecting, _vet read the configuration back after every sample: no sample
-        # taken at another gain or range reaches the fit
+        # (while collecting, _vet read the configuration back after every sample)
         c = self.collector
         if c is not None:
             c.feed(self.raw)
@@ -597,8 +581,7 @@ class CompassApp:
                 c.pairs.feed(self.raw, self._acc)
 
     def _stale(self):
-        # The flag has been up for _STALE_US: not a passing magnet but a board whose iron
-        # changed. Collect afresh and let any new fit replace the stale one.
+        # flagged for _STALE_US: the board's iron changed (docs/design.md, app): relearn
         self._interf_us = 0
         self.dip.reset()  # the dip too is learned afresh
         c = self.calibrate()

@@ -160,6 +160,17 @@ def test_no_module_but_the_app_assigns_into_the_app():
     assert found == {}
 
 
+# CompassApp holds the per-sample path and thin public methods; cold code lives in modules
+# loaded for their job (docs/design.md, names). The goal is 400 lines; this bound only goes down.
+APP_CLASS_MAX = 563
+
+
+def test_the_app_class_stays_short():
+    tree = ast.parse(open(_path("app")).read())
+    (c,) = [n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "CompassApp"]
+    assert c.end_lineno - c.lineno + 1 <= APP_CLASS_MAX, c.end_lineno - c.lineno + 1
+
+
 def test_the_assignment_finder_sees_every_form():
     src = "app.a = 1\napp.b += 1\nx, app.c = 1, 2\nsetattr(app, 'd', 1)\napp.e.f = 1\nself.g = 1\n"
     assert [t for n, t in _app_assignments(src)] == [
