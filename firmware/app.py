@@ -670,12 +670,24 @@ class CompassApp:
 
     def run(self, n=None, report=None, every=_REPORT_EVERY, every_us=None):
         """step() n times, report(app) every `every` steps or `every_us` (docs/api.md)."""
-        from firmware import app_run
-        try:
-            return app_run.run(self, n, report, every, every_us)
-        finally:
-            app_run = None
-            drop("app_run")
+        # in the class, not a cold module: boards/main.py runs the board through it, and a
+        # module it had to load could find no room (firmware/runner.py retries run())
+        good = i = 0
+        last = self._ticks()
+        while (n is None or i < n) and not self.relearn_due:
+            if self.step():
+                good += 1
+            i += 1
+            if report is None:
+                continue
+            if every_us:
+                now = self._ticks()
+                if (ticks_diff(now, last) if self._wrap else now - last) >= every_us:
+                    last = now
+                    report(self)
+            elif i % every == 0:
+                report(self)
+        return good
 
 
 _NO_MEMORY_LINE = ("status line: out of memory (a frozen or ROMFS build needs the least heap: "
