@@ -197,8 +197,8 @@ def test_each_condition_of_the_check_can_spare_a_fit():
 
 
 def test_halves_that_cannot_be_compared_wait_while_the_residual_is_beyond_the_noise():
-    # no verdict (too few shared directions): accepted while the residual is the noise,
-    # too_few_samples (keep the samples, wait for more) while it is not
+    # no verdict (too few shared directions, or a change within the noise): accepted while
+    # the residual is the noise, too_few_samples (keep the samples, wait for more) while not
     n, e = 150, 2 * 1000 * 20
     ee = n * e * e
     acceptance.check_comparable(n, ee, acceptance.PI4_DEN * (n - 1) ** 2 * e * e)
@@ -206,3 +206,11 @@ def test_halves_that_cannot_be_compared_wait_while_the_residual_is_beyond_the_no
         acceptance.check_comparable(n, ee, acceptance.PI4_DEN * (n - 1) ** 2 * (e // 2) ** 2)
     assert x.value.reason == acceptance.REASON_TOO_FEW_SAMPLES
     assert "too few of the same directions" in x.value.detail
+    # and a change over 3 % of B within the noise (no verdict either) likewise
+    d2, den2 = (1000 * 31) ** 2, 1000 ** 2
+    acceptance.check_consistency(d2, den2, 1000, n, 16, 1, ee,
+                                 acceptance.PI4_DEN * (n - 1) ** 2 * e * e)
+    with pytest.raises(CalibrationRejected) as x:
+        acceptance.check_consistency(d2, den2, 1000, n, 16, 1, ee,
+                                     acceptance.PI4_DEN * (n - 1) ** 2 * (e // 2) ** 2)
+    assert x.value.reason == acceptance.REASON_TOO_FEW_SAMPLES

@@ -60,8 +60,8 @@ _COVERAGE_FIT_DEN = const(2)        # a fit over part of the sphere looks better
 # freedom: 16.3 is exceeded once in 1000 by chance), unless the change is within the fit's RMS
 # residual and that residual is the noise (mean square within _MIXED_RESIDUAL times the
 # noise's: a mix of two states spreads the samples about any one fit); shared directions
-# flatter than det < (trace / 3)^3 / 20 give no verdict, and no fit while the residual is
-# beyond that. The noise: sigma = sqrt(pi) / 2 mean|d| over consecutive samples' differences
+# flatter than det < (trace / 3)^3 / 20, or a change over 3 % within the noise, give no
+# verdict, and no fit while the residual is beyond the noise's (check_comparable). The noise: sigma = sqrt(pi) / 2 mean|d| over consecutive samples' differences
 # d (variance 2 sigma^2), which a few jumps (a switching iron, a glitch) do not inflate as
 # they do a mean square; pi / 4 ~ 355 / 452.
 CONSISTENCY_PCT = const(3)
@@ -205,8 +205,9 @@ def mixed_residual(n, ee, spread):
 
 
 def check_comparable(n, ee, spread):
-    """too_few_samples when the halves saw too few of the same directions to compare and the
-    fit's residual is beyond the noise (mixed_residual): wait for more, do not accept."""
+    """too_few_samples when the halves cannot tell one hard iron from two (too few shared
+    directions, or a change over the limit within the noise) and the fit's residual is beyond
+    the noise (mixed_residual): wait for more samples, do not accept."""
     if mixed_residual(n, ee, spread):
         reject(REASON_TOO_FEW_SAMPLES, "the fit's residual is beyond the noise and the older "
                "and newer halves of the %d samples saw too few of the same directions to "
@@ -224,7 +225,9 @@ def check_consistency(d2, den2, field, n, chi, noise, ee, spread):
     if d2 * 10000 <= CONSISTENCY_PCT * CONSISTENCY_PCT * f2:
         return
     if chi <= _CHI2 * noise:
-        return  # within the noise: no second state in it
+        # within the noise: no verdict, as for halves that cannot be compared
+        check_comparable(n, ee, spread)
+        return
     if d2 * n * field * field <= ee * den2 and not mixed_residual(n, ee, spread):
         return  # |c| / 2 within the RMS residual, and that residual is the noise
     from firmware.fixedpoint import isqrt
