@@ -61,9 +61,9 @@ _COVERAGE_FIT_DEN = const(2)        # a fit over part of the sphere looks better
 # residual and that residual is the noise (mean square within _MIXED_RESIDUAL times the
 # noise's: a mix of two states spreads the samples about any one fit); shared directions
 # flatter than det < (trace / 3)^3 / 20, or a change over 3 % within the noise, give no
-# verdict, and no fit while the residual is beyond the noise's (check_comparable). The noise: sigma = sqrt(pi) / 2 mean|d| over consecutive samples' differences
-# d (variance 2 sigma^2), which a few jumps (a switching iron, a glitch) do not inflate as
-# they do a mean square; pi / 4 ~ 355 / 452.
+# verdict, and no fit while the residual is beyond the noise's (check_comparable). Noise:
+# sigma = sqrt(pi) / 2 mean|d| over consecutive samples' differences d (variance 2 sigma^2),
+# which a few jumps (a switching iron, a glitch) do not inflate as a mean square; pi/4 ~ 355/452.
 CONSISTENCY_PCT = const(3)
 _CHI2 = const(16)
 _FLAT_HALF = const(20)
