@@ -209,9 +209,7 @@ def check_comparable(n, ee, spread):
     directions, or a change over the limit within the noise) and the fit's residual is beyond
     the noise (mixed_residual): wait for more samples, do not accept."""
     if mixed_residual(n, ee, spread):
-        reject(REASON_TOO_FEW_SAMPLES, "the fit's residual is beyond the noise and the older "
-               "and newer halves of the %d samples saw too few of the same directions to "
-               "tell one hard iron from two: keep turning" % n)
+        reject(REASON_TOO_FEW_SAMPLES, "%d samples: one hard iron or two? keep turning" % n)
 
 
 def check_consistency(d2, den2, field, n, chi, noise, ee, spread):

@@ -412,6 +412,9 @@ class Calibrator:
         # the sample noise sigma^2 = spread / (PI4_DEN (n - 1)^2): sigma from the mean absolute
         # difference of consecutive samples, (pi / 4) mean|d|^2 (d has variance 2 sigma^2)
         spread = acceptance.PI4_NUM * da * da
+        # at least one unit of radius (2 f in e): the sums' resolution after >> s
+        f4 = acceptance.PI4_DEN * (n - 1) * (n - 1) * 4 * (field_out >> s) * (field_out >> s)
+        spread = f4 if spread < f4 else spread
         if used >= 3:
             adj = solve.adj3(m)
             yield
