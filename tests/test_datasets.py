@@ -228,9 +228,9 @@ def _consistency(name, *extra):
     seen = []
     orig = acceptance.check_consistency
 
-    def spy(d2, den2, field, n, chi, noise, ee):
+    def spy(d2, den2, field, n, chi, noise, ee, spread):
         seen.append((100 * (d2 / den2) ** 0.5 / field, chi / noise))
-        return orig(d2, den2, field, n, chi, noise, ee)
+        return orig(d2, den2, field, n, chi, noise, ee, spread)
 
     acceptance.check_consistency = spy
     try:

@@ -57,11 +57,19 @@ _COVERAGE_FIT_NUM = const(3)        # ...if its fit error is within 3/2 of the c
 _COVERAGE_FIT_DEN = const(2)        # a fit over part of the sphere looks better than it is
 # inconsistent_samples: the hard iron changed by more than 3 % of B between the halves where
 # they saw the same directions, with a chi-square above 16 against the noise (3 degrees of
-# freedom: 16.3 is exceeded once in 1000 by chance), and by more than twice the fit's RMS
-# residual; shared directions flatter than det < (trace / 3)^3 / 20 are not judged.
+# freedom: 16.3 is exceeded once in 1000 by chance), unless the change is within the fit's RMS
+# residual and that residual is the noise (mean square within _MIXED_RESIDUAL times the
+# noise's: a mix of two states spreads the samples about any one fit); shared directions
+# flatter than det < (trace / 3)^3 / 20, or a change over 3 % within the noise, give no
+# verdict, and no fit while the residual is beyond the noise's (check_comparable). Noise:
+# sigma = sqrt(pi) / 2 mean|d| over consecutive samples' differences d (variance 2 sigma^2),
+# which a few jumps (a switching iron, a glitch) do not inflate as a mean square; pi/4 ~ 355/452.
 CONSISTENCY_PCT = const(3)
 _CHI2 = const(16)
 _FLAT_HALF = const(20)
+_MIXED_RESIDUAL = const(2)
+PI4_NUM = const(355)
+PI4_DEN = const(452)
 
 
 _MAX_SCALE_DOWN = const(8)   # InvW shrinks |B| by at most 8 (cube root of det >= 1/8): a fit
@@ -189,19 +197,37 @@ def half_is_flat(det, tr):
     return tr <= 0 or 27 * _FLAT_HALF * det < tr * tr * tr
 
 
-def check_consistency(d2, den2, field, n, chi, noise, ee):
+def mixed_residual(n, ee, spread):
+    """True when the fit's mean square residual ee / n (ee: the sum of the n samples'
+    (|b|^2 - B^2)^2) is more than _MIXED_RESIDUAL times the noise's, sigma^2 =
+    spread / (PI4_DEN (n - 1)^2)."""
+    return ee * PI4_DEN * (n - 1) * (n - 1) > _MIXED_RESIDUAL * spread * n
+
+
+def check_comparable(n, ee, spread):
+    """too_few_samples when the halves cannot tell one hard iron from two (too few shared
+    directions, or a change over the limit within the noise) and the fit's residual is beyond
+    the noise (mixed_residual): wait for more samples, do not accept."""
+    if mixed_residual(n, ee, spread):
+        reject(REASON_TOO_FEW_SAMPLES, "%d samples: one hard iron or two? keep turning" % n)
+
+
+def check_consistency(d2, den2, field, n, chi, noise, ee, spread):
     # inconsistent_samples when the hard-iron change between the halves, |c|^2 = d2 / den2 (in
     # the units of `field`, the fit's |B| in those units), is more than CONSISTENCY_PCT of B,
-    # beyond the noise of the n samples (its chi-square chi / noise above _CHI2), and more
-    # than twice the fit's RMS residual, sqrt(ee / n) / (2 B) (ee: the sum of the samples'
-    # (|b|^2 - B^2)^2): a mix moves the fit's centre by |c| / 2, the fit's largest error then.
+    # beyond the noise of the n samples (its chi-square chi / noise above _CHI2), and either
+    # more than twice the fit's RMS residual, sqrt(ee / n) / (2 B) (a mix moves the fit's
+    # centre by |c| / 2), or with a residual beyond the noise (mixed_residual; spread: its
+    # sigma^2 times PI4_DEN (n - 1)^2).
     f2 = field * field * den2
     if d2 * 10000 <= CONSISTENCY_PCT * CONSISTENCY_PCT * f2:
         return
     if chi <= _CHI2 * noise:
-        return  # within the noise: no second state in it
-    if d2 * n * field * field <= ee * den2:
-        return  # |c| / 2 within the fit's RMS residual: its fit error says more
+        # within the noise: no verdict, as for halves that cannot be compared
+        check_comparable(n, ee, spread)
+        return
+    if d2 * n * field * field <= ee * den2 and not mixed_residual(n, ee, spread):
+        return  # |c| / 2 within the RMS residual, and that residual is the noise
     from firmware.fixedpoint import isqrt
     pct = isqrt(d2 * 100000000 // f2)  # hundredths of a percent
     reject(REASON_INCONSISTENT, "the older and newer halves of the %d samples put the hard "

@@ -408,23 +408,31 @@ class Calibrator:
         k = array("h", tuple(invw) + tuple(offset))
         r = [None]
         yield from _consistency_sums(self.buffer, k, s, field_out >> s, r)
-        m, g, used, dd, ee = r[0]
+        m, g, used, da, ee = r[0]
+        # the sample noise sigma^2 = spread / (PI4_DEN (n - 1)^2): sigma from the mean absolute
+        # difference of consecutive samples, (pi / 4) mean|d|^2 (d has variance 2 sigma^2)
+        spread = acceptance.PI4_NUM * da * da
+        # at least one unit of radius (2 f in e): the sums' resolution after >> s
+        f4 = acceptance.PI4_DEN * (n - 1) * (n - 1) * 4 * (field_out >> s) * (field_out >> s)
+        spread = f4 if spread < f4 else spread
+        if used >= 3:
+            adj = solve.adj3(m)
+            yield
+            det = m[0][0] * adj[0][0] + m[0][1] * adj[1][0] + m[0][2] * adj[2][0]
+            used = 0 if acceptance.half_is_flat(det, m[0][0] + m[1][1] + m[2][2]) else used
         if used < 3:
-            return  # fewer than 3 directions seen by both halves: no verdict
-        adj = solve.adj3(m)
-        yield
-        det = m[0][0] * adj[0][0] + m[0][1] * adj[1][0] + m[0][2] * adj[2][0]
-        if acceptance.half_is_flat(det, m[0][0] + m[1][1] + m[2][2]):
-            return  # the shared directions do not span 3D: no verdict
+            # fewer than 3 directions seen by both halves, or near a plane: no verdict, and
+            # no fit while its residual says more than the noise (acceptance.check_comparable)
+            self._verify(acceptance.check_comparable, n, ee, spread)
+            return
         p = solve.mat_vec3(adj, g)
         yield
         # the change is p / (2 det) (|.|^2 = d2 / den2); its chi-square against the sample
-        # noise, g^T M^-1 g / sigma^2 with sigma^2 = dd / (2 (n - 1)), is chi / noise; ee is
-        # the fit's sum of squared residuals e
+        # noise, g^T M^-1 g / sigma^2, is chi / noise; ee is the fit's sum of squared residuals
         d2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2]
-        chi = (g[0] * p[0] + g[1] * p[1] + g[2] * p[2]) * 2 * (n - 1)
+        chi = (g[0] * p[0] + g[1] * p[1] + g[2] * p[2]) * acceptance.PI4_DEN * (n - 1) * (n - 1)
         self._verify(acceptance.check_consistency, d2, 4 * det * det, field_out >> s, n,
-                     chi, dd * det, ee)
+                     chi, spread * det, ee, spread)
 
     def _finish(self, model, n, offset, w, b_q16, fe, accept):
         # InvW in Q15, the checks of firmware/calibrate/acceptance.py in order, then the record
@@ -471,10 +479,10 @@ def _consistency_sums(buf, k, s, f, out):
     # e = |b|^2 - f^2 = a_r + 2 b.c [newer] + noise, a free level a_r per region absorbing
     # whatever misfit depends on the direction (least squares with region effects). Pass 1
     # sums, per region, the samples, the newer ones, sum e and the newer ones' sum b, and
-    # dd = sum (e' - e)^2 over consecutive samples (the noise) and ee = sum e^2; pass 2, over
+    # da = sum |e' - e| over consecutive samples (the noise) and ee = sum e^2; pass 2, over
     # the newer samples in shared regions, S = sum b b^T and G = sum e b. Then
     # M = S - sum_r P P^T / N_r and g = G - sum_r P E_r / N_r give M c = g / 2.
-    # out[0] = (M, g, shared regions, dd, ee); _CONSISTENCY_CHUNK samples a slice.
+    # out[0] = (M, g, shared regions, da, ee); _CONSISTENCY_CHUNK samples a slice.
     n = buf.count
     h = n // 2
     reg = bytearray(n)                     # each sample's region (_NO_REGION: none)
@@ -485,7 +493,7 @@ def _consistency_sums(buf, k, s, f, out):
     raw = array("h", (0, 0, 0))
     b = array("h", (0, 0, 0))
     f2 = f * f
-    dd = 0
+    da = 0
     ee = 0
     prev = 0
     for age in range(n):
@@ -497,8 +505,7 @@ def _consistency_sums(buf, k, s, f, out):
         e = x * x + y * y + z * z - f2
         ee += e * e
         if age:
-            d = e - prev
-            dd += d * d
+            da += e - prev if e > prev else prev - e
         prev = e
         r = region(x, y, z)
         if r < 0:
@@ -559,7 +566,7 @@ def _consistency_sums(buf, k, s, f, out):
         t[8] -= rdiv(pz * es[r], c)
         yield
     m, g = _sym(t)
-    out[0] = (m, g, used, dd, ee)
+    out[0] = (m, g, used, da, ee)
 
 
 def _sym(t):
