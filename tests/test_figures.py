@@ -68,6 +68,8 @@ ALLOW = [
     ("docs/api.md", "8 ms", "MPU6050 register map, DLPF_CFG table: the 21 Hz setting's delay"),
     ("docs/design.md", "100 us", "AK09916 datasheet: the wait after a mode change"),
     ("docs/design.md", "6.6 ms", "MMC5603 datasheet: the measurement time at BW 0"),
+    ("docs/api.md", "1.2 ms", "MMC5603 datasheet: the measurement time at BW 3"),
+    ("docs/hardware.md", "1.2 ms", "MMC5603 datasheet: the measurement time at BW 3"),
     ("docs/design.md", "29 us", "2**29 us: the limit of a wait that stays a small int"),
     ("docs/design.md", "23 ms", "computed: 1 KiB x 9 bits at 400 kHz (an SSD1306 frame)"),
     ("docs/design.md", "0.0055 deg", "a KANG's resolution: 360 / 65536 deg (computed)"),
