@@ -221,3 +221,15 @@ def test_the_bench_sweeps_boards_main_and_no_run_ends_in_a_traceback(smoke):
     assert bs["mpy_stored"]["smallest_kb"] is not None  # 160 and 320 KB boot a calibrated board
     lines = bench.board_sweep_rows(d["results"])
     assert any(ln.startswith("| .mpy files") for ln in lines)
+
+
+def test_a_run_without_every_real_log_leaves_the_log_table_alone(capsys):
+    # docs/calibration.md's table lists every log (tests/test_datasets.py): a bench run on a
+    # clone without `make datasets` must not cut it down to the shipped ones
+    from desktop import bench as B
+    path = os.path.join(ROOT, "docs", "calibration.md")
+    before = open(path).read()
+    res = {"accuracy": {"cpython": {"commands": {"qmc5883l_tomisuarez_filtered": {}}}}}
+    assert B.splice_logs(res) is False
+    assert open(path).read() == before
+    assert "make datasets" in capsys.readouterr().out
