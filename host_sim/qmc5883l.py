@@ -169,6 +169,10 @@ class QMC5883LSim(MagnetometerModel):
     def glitch(self, reg, value):
         self.write_reg(reg, value)
 
+    def glitch_range(self):
+        """A glitch that flips CTRL1's RNG between +-2 G and +-8 G (12000 <-> 3000 counts/G)."""
+        self.glitch(0x09, self.ctrl1 ^ 0x10)
+
     # --- lazy time --------------------------------------------------------------------
     def update(self, now_us):
         if self._t0 is None:

@@ -107,6 +107,10 @@ class QMC5883PSim(MagnetometerModel):
     def glitch(self, reg, value):
         self.write_reg(reg, value)
 
+    def glitch_range(self):
+        """A glitch that flips CTRL2's lower RNG bit (+-2 <-> +-8 G, +-12 <-> +-30 G)."""
+        self.glitch(0x0B, self.ctrl2 ^ 0x04)
+
     def update(self, now_us):
         if self._t0 is None:
             return
