@@ -138,6 +138,10 @@ class AKMagSim(MagnetometerModel):
     def ut_per_count(self):
         return self.UT_PER_COUNT
 
+    def period_us(self):
+        """The continuous mode's measurement period, None in any other mode."""
+        return self.PERIODS.get(self.mode)
+
     def counts_per_gauss(self):
         """Output counts per gauss of the output width now set (before any ASA trim)."""
         return UT_PER_GAUSS / self.ut_per_count()

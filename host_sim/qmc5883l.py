@@ -138,6 +138,8 @@ class QMC5883LSim(MagnetometerModel):
     def odr_period_us(self):
         return _ODR_PERIOD_US[(self.ctrl1 >> 2) & 0x03]
 
+    period_us = odr_period_us     # the name the other models give it
+
     def osr(self):
         return _OSR[(self.ctrl1 >> 6) & 0x03]
 

@@ -93,6 +93,10 @@ class QMC5883PSim(MagnetometerModel):
     def counts_per_gauss(self):
         return _COUNTS_PER_G[(self.ctrl2 >> 2) & 0x03]
 
+    def period_us(self):
+        """The output period CTRL1's ODR sets."""
+        return _ODR_PERIOD_US[(self.ctrl1 >> 2) & 0x03]
+
     def status(self):
         return (_STATUS_DRDY if self.drdy else 0) | (_STATUS_OVFL if self.ovfl else 0)
 
