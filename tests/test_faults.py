@@ -11,8 +11,7 @@ import math
 
 import pytest
 
-from tests.test_reliability import POSE, settled
-from tests.test_reliability import Good, good_qmc  # noqa: F401  (the same fixture)
+from tests.test_reliability import POSE, Good, settled
 from host_sim.world import mat_vec, mount_apply
 from firmware.health import DIP_TOL_KANG
 from tests.scenarios import app_world as W
