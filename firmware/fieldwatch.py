@@ -19,7 +19,8 @@ _JUMP_KANG = const(728)         # the jump limit: 4 deg at least...
 _JUMP_MAX_KANG = const(1456)    # ...8 deg at most, else 3.5 x the heading's noise...
 _JUMP_HALVES = const(7)         # ...(7 halves of it)...
 _NOISE_SHIFT = const(6)         # ...its mean change of step over ~2**6 still steps
-_TURN_KANG_PER_S = const(4551) # 25 deg/s: the turn a step may add to the limit
+_TURN_KANG_PER_S = const(4551) # 25 deg/s: the turn two steps may add to the limit
+_RATE_SHIFT = const(3)          # one step is judged against the mean of ~2**3 still steps
 _TILT_STILL_KANG = const(182)   # 1 deg of pitch and of roll from one sample to the next
 _LEVEL_KANG = const(8192)       # 45 deg: jumps are judged within this of level
 _STEADY_SHIFT = const(3)        # short averages over ~2**3 samples
@@ -133,6 +134,7 @@ class FieldWatch:
         self.step_us = 0                  # ...and its time
         self.noise = (_JUMP_KANG << (_NOISE_SHIFT + 1)) // _JUMP_HALVES  # 2**6 x that mean
         self.jump = _JUMP_KANG            # the jump limit (KANG)
+        self.rate = 0                     # 2**3 x the mean still step: the turn per step
         self.dt = 0                       # this sample's time (sample())
         self.mag8, self.dip8 = 0, 0
         self.shift = 2
@@ -244,10 +246,10 @@ class FieldWatch:
         return tilt and (d > a or d < -a)
 
     def _jumped(self, tilt):
-        # more than .jump plus a turn at _TURN_KANG_PER_S over one still step or two;
-        # .step_h is the last step's change (0 when that step was not still or raised a
-        # flag), .step_us its time. No more locals: a larger frame would go on MicroPython's
-        # heap (tests/scenarios/app_alloc.py)
+        # a still step more than .jump off the recent turn per step (.rate), or two more than
+        # .jump plus a turn at _TURN_KANG_PER_S; .step_h is the last step's change (0 when
+        # that step was not still or raised a flag), .step_us its time. No more locals: a
+        # larger frame would go on MicroPython's heap (tests/scenarios/app_alloc.py)
         c = self.c
         if tilt and (_off(c.pitch_kang - self.prev_pitch, _TILT_STILL_KANG)
                      or _off(c.roll_kang - self.prev_roll, _TILT_STILL_KANG)
@@ -257,18 +259,22 @@ class FieldWatch:
         d = ((c.heading_kang - self.prev_h + 32768) & 0xFFFF) - 32768
         p = self.step_h
         self.step_h = 0
-        if _off(d, self.jump + _turn(self.dt)) or \
+        if _off(d - (self.rate >> _RATE_SHIFT), self.jump) or \
                 _off(p + d, self.jump + _turn(self.step_us + self.dt)):
             return True
         if p:
-            self._noise(d - p)
+            self._noise(d, p)
         self.step_h = d
         self.step_us = self.dt
         return False
 
-    def _noise(self, e):
-        # the heading's noise from two still steps in a row: the change of step e (a steady
-        # turn cancels); |e| <= 2**16, so .noise < 2**22 and the product below < 2**25
+    def _noise(self, d, p):
+        # two still steps in a row, d after p: the turn per step (.rate) and the heading's
+        # noise, from the change of step (a steady turn cancels); |d|, |p| <= 2**15, so
+        # |.rate| < 2**18, .noise < 2**22 and the product below < 2**25
+        r = self.rate
+        self.rate = r + d - (r >> _RATE_SHIFT)
+        e = d - p
         n = self.noise
         n += (e if e > 0 else -e) - (n >> _NOISE_SHIFT)
         self.noise = n
@@ -329,8 +335,8 @@ def _off(d, lim):
 
 
 def _turn(us):
-    # what two steps lasting `us` add to the one-step limit: the turn at _TURN_KANG_PER_S;
-    # `us` held to 8 s (two of the app's steps are at most 8 sample periods), so the product
+    # what two steps lasting `us` add to .jump: the turn at _TURN_KANG_PER_S; `us`
+    # held to 8 s (two of the app's steps are at most 8 sample periods), so the product
     # stays below 2**26
     if us > 8000000:
         us = 8000000

@@ -137,6 +137,20 @@ def test_a_drift_under_4_deg_a_step_is_a_jump_once_two_steps_pass_4_deg_and_25_d
     assert b.turn(0, 3.5, 2) == [0, SPELL_JUMP]
 
 
+def test_one_step_is_judged_against_the_recent_turn_per_step():
+    # at 15 Hz a steady 30 deg/s turn is 2 deg a step: a step of 5 deg is 3 deg off it (and
+    # 7 deg over two, within 4 + 25 x 0.133 = 7.3), not a jump; from a board held still the
+    # same step is one
+    b = Board(dip=DIP60)
+    b.run(5, 66667, mag=4527, dip=DIP60, heading=0)
+    assert b.turn(0, 2.0, 20, dt=66667) == [0] * 20
+    h = b.c.heading_kang
+    assert b.run(1, 66667, mag=4527, dip=DIP60, heading=h + k(5)) == [0]
+    b = Board(dip=DIP60)
+    b.run(20, 66667, mag=4527, dip=DIP60, heading=0)
+    assert b.run(1, 66667, mag=4527, dip=DIP60, heading=k(5)) == [SPELL_JUMP]
+
+
 def test_two_steps_count_only_still_unflagged_ones():
     # a step that tilted, or that was itself flagged, does not count towards the next one
     b = Board(dip=DIP60)
@@ -226,7 +240,7 @@ def noisy(b, n, sd_deg, seed=1, turn_deg=0.0, dt=PERIOD):
 
 def test_the_jump_limit_is_3_5_x_the_headings_measured_noise_within_4_to_8_deg():
     # a noisier chip moves its heading more between samples: the limit follows 3.5 x the
-    # mean change of step (~5 sigma of a step's noise), plus 25 deg/s over the step's time
+    # mean change of step (~5 sigma of a step's noise)
     b = Board(dip=DIP60)
     assert b.w.jump == k(4)
     assert noisy(b, 600, 0.8, turn_deg=0.9) == [0] * 600    # 1.1 deg a step (LIS3MDL at 20 Hz)
@@ -253,4 +267,4 @@ def test_the_measured_noise_and_the_jump_limit_stay_small_ints(steps):
     for d, tilting, dt in steps:
         h += d
         b.run(1, dt, mag=4527, dip=DIP60, heading=h, pitch=k(2) if tilting else 0)
-        assert 0 <= b.w.noise < 2 ** 22 and k(4) <= b.w.jump <= k(8)
+        assert 0 <= b.w.noise < 2 ** 22 and abs(b.w.rate) < 2 ** 18 and k(4) <= b.w.jump <= k(8)
