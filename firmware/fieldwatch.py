@@ -15,8 +15,12 @@ _DIP_LEARN_US = const(500000)   # 0.5 s of steady, clean samples make the refere
 _DIP_MIN_SAMPLES = const(8)     # ...and at least 8 of them (the mean's noise < 0.1 deg)
 _DIP_MAX_SAMPLES = const(2048)  # sums stay below 2**26
 _KANG_PER_RAD = const(10430)    # 65536 / (2 pi): a fit error (1e-4 rad of direction) -> KANG
-_JUMP_KANG = const(728)         # 4 deg from one sample to the next (see FieldWatch above)
-_TURN_KANG_PER_S = const(4551) # 25 deg/s: the turn two steps may add to that (FieldWatch above)
+_JUMP_KANG = const(728)         # the jump limit: 4 deg at least...
+_JUMP_MAX_KANG = const(1456)    # ...8 deg at most, else 3.5 x the heading's noise...
+_JUMP_HALVES = const(7)         # ...(7 halves of it)...
+_NOISE_SHIFT = const(6)         # ...its mean change of step over ~2**6 still steps
+_TURN_KANG_PER_S = const(4551) # 25 deg/s: the turn two steps may add to the limit
+_RATE_SHIFT = const(3)          # one step is judged against the mean of ~2**3 still steps
 _TILT_STILL_KANG = const(182)   # 1 deg of pitch and of roll from one sample to the next
 _LEVEL_KANG = const(8192)       # 45 deg: jumps are judged within this of level
 _STEADY_SHIFT = const(3)        # short averages over ~2**3 samples
@@ -103,7 +107,8 @@ class FieldWatch:
     # reference) and .dip (the DipCheck). forget(run) ends a spell that began within the last
     # `run` samples (a run of stale repeats: not a field). A dip outside the DipCheck's
     # tolerance raises c.interference like the compass's own windows. Small ints only:
-    # field differences are taken on body >> .shift (|body| <= 2**16, B >> shift < 2**11).
+    # field differences are taken on body >> .shift (B >> shift < 2**11; a smaller B, such as
+    # an AKM chip's ~330 counts, keeps every count) and held to 2**14.
 
     def __init__(self, c, body):
         self.c = c
@@ -127,6 +132,9 @@ class FieldWatch:
         self.prev_h, self.prev_tilt, self.prev_pitch, self.prev_roll = -1, False, 0, 0
         self.step_h = 0                   # the last still, clean step's heading change...
         self.step_us = 0                  # ...and its time
+        self.noise = (_JUMP_KANG << (_NOISE_SHIFT + 1)) // _JUMP_HALVES  # 2**6 x that mean
+        self.jump = _JUMP_KANG            # the jump limit (KANG)
+        self.rate = 0                     # 2**3 x the mean still step: the turn per step
         self.dt = 0                       # this sample's time (sample())
         self.mag8, self.dip8 = 0, 0
         self.shift = 2
@@ -160,7 +168,7 @@ class FieldWatch:
         t = t if t > _LEARN_FIELD_PCT else _LEARN_FIELD_PCT
         self.lo = f - f * t // 100
         self.hi = f + f * t // 100
-        s = 2
+        s = 0
         while f >> s >= 1 << 11:
             s += 1
         self.shift = s
@@ -238,8 +246,10 @@ class FieldWatch:
         return tilt and (d > a or d < -a)
 
     def _jumped(self, tilt):
-        # one step, then two: .step_h is the last step's change (0 when that step was not
-        # still or raised a flag), .step_us its time
+        # a still step more than .jump off the recent turn per step (.rate), or two more than
+        # .jump plus a turn at _TURN_KANG_PER_S; .step_h is the last step's change (0 when
+        # that step was not still or raised a flag), .step_us its time. No more locals: a
+        # larger frame would go on MicroPython's heap (tests/scenarios/app_alloc.py)
         c = self.c
         if tilt and (_off(c.pitch_kang - self.prev_pitch, _TILT_STILL_KANG)
                      or _off(c.roll_kang - self.prev_roll, _TILT_STILL_KANG)
@@ -247,13 +257,29 @@ class FieldWatch:
             self.step_h = 0
             return False
         d = ((c.heading_kang - self.prev_h + 32768) & 0xFFFF) - 32768
-        s = self.step_h + d
+        p = self.step_h
         self.step_h = 0
-        if _off(d, _JUMP_KANG) or _off(s, _two_steps(self.step_us + self.dt)):
+        if _off(d - (self.rate >> _RATE_SHIFT), self.jump) or \
+                _off(p + d, self.jump + _turn(self.step_us + self.dt)):
             return True
+        if p:
+            self._noise(d, p)
         self.step_h = d
         self.step_us = self.dt
         return False
+
+    def _noise(self, d, p):
+        # two still steps in a row, d after p: the turn per step (.rate) and the heading's
+        # noise, from the change of step (a steady turn cancels); |d|, |p| <= 2**15, so
+        # |.rate| < 2**18, .noise < 2**22 and the product below < 2**25
+        r = self.rate
+        self.rate = r + d - (r >> _RATE_SHIFT)
+        e = d - p
+        n = self.noise
+        n += (e if e > 0 else -e) - (n >> _NOISE_SHIFT)
+        self.noise = n
+        n = n * _JUMP_HALVES >> (_NOISE_SHIFT + 1)
+        self.jump = _JUMP_KANG if n < _JUMP_KANG else n if n < _JUMP_MAX_KANG else _JUMP_MAX_KANG
 
     def _mark(self, k):
         # a flag (re)starts the spell; the turn is measured from this sample's field
@@ -290,6 +316,8 @@ class FieldWatch:
 
     def _sq(self, a, i):
         d = (self.body[i] - a[i]) >> self.shift
+        if d > 16383 or d < -16383:  # past every limit compared (B >> shift < 2**11)
+            d = 16383
         return d * d
 
     def _remember(self, tilt):
@@ -306,13 +334,13 @@ def _off(d, lim):
     return d > lim or d < -lim
 
 
-def _two_steps(us):
-    # the limit over two steps lasting `us`: _JUMP_KANG and the turn at _TURN_KANG_PER_S;
-    # `us` held to 8 s (two of the app's steps are at most 8 sample periods), so the product
+def _turn(us):
+    # what two steps lasting `us` add to .jump: the turn at _TURN_KANG_PER_S; `us`
+    # held to 8 s (two of the app's steps are at most 8 sample periods), so the product
     # stays below 2**26
     if us > 8000000:
         us = 8000000
-    return _JUMP_KANG + (us // 1000) * _TURN_KANG_PER_S // 1000
+    return (us // 1000) * _TURN_KANG_PER_S // 1000
 
 
 def _copy(a, b):

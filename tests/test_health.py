@@ -137,6 +137,20 @@ def test_a_drift_under_4_deg_a_step_is_a_jump_once_two_steps_pass_4_deg_and_25_d
     assert b.turn(0, 3.5, 2) == [0, SPELL_JUMP]
 
 
+def test_one_step_is_judged_against_the_recent_turn_per_step():
+    # at 15 Hz a steady 30 deg/s turn is 2 deg a step: a step of 5 deg is 3 deg off it (and
+    # 7 deg over two, within 4 + 25 x 0.133 = 7.3), not a jump; from a board held still the
+    # same step is one
+    b = Board(dip=DIP60)
+    b.run(5, 66667, mag=4527, dip=DIP60, heading=0)
+    assert b.turn(0, 2.0, 20, dt=66667) == [0] * 20
+    h = b.c.heading_kang
+    assert b.run(1, 66667, mag=4527, dip=DIP60, heading=h + k(5)) == [0]
+    b = Board(dip=DIP60)
+    b.run(20, 66667, mag=4527, dip=DIP60, heading=0)
+    assert b.run(1, 66667, mag=4527, dip=DIP60, heading=k(5)) == [SPELL_JUMP]
+
+
 def test_two_steps_count_only_still_unflagged_ones():
     # a step that tilted, or that was itself flagged, does not count towards the next one
     b = Board(dip=DIP60)
@@ -196,18 +210,61 @@ def test_a_spell_begun_by_a_run_of_repeats_is_forgotten():
 
 
 def test_the_field_differences_stay_small_ints():
-    # the largest body difference (int16 extremes) squared and summed, at every field size
+    # the largest body difference (int16 extremes), held, squared and summed, at every field
+    # size; a small field (an AKM chip's ~330 counts) keeps its every count
     for f in (200, 411, 4527, 16000, 32767):
         b = Board()
         b.w.use(Calibration(model=10, field=f, field_out=f))
-        d = (32767 + 32768) >> b.w.shift
-        assert 3 * d * d < 2 ** 30 and (f >> b.w.shift) < 2 ** 11
+        for i in range(3):
+            b.body[i] = 32767
+        assert b.w._d2(array("h", (-32768,) * 3)) <= 3 * 16383 ** 2 < 2 ** 30
+        assert (f >> b.w.shift) < 2 ** 11 and (f < 2 ** 11) == (b.w.shift == 0)
 
 
 @given(st.integers(0, 2 ** 31 - 1), st.integers(-32768, 32767), st.integers(-32768, 32767))
 def test_the_two_step_jump_limit_stays_a_small_int(us, d, s):
     # any two steps' time (the app caps each at 4 sample periods; here anything) and any two
     # wrapped heading changes
-    t = fieldwatch._two_steps(us)
-    assert 728 <= t <= 728 + 8000 * 4551 // 1000 and abs(d + s) < 2 ** 17
-    assert fieldwatch._two_steps(40000) == 728 + 182     # 4 deg + 25 deg/s x 40 ms: 5 deg
+    t = fieldwatch._turn(us)
+    assert 0 <= t <= 8000 * 4551 // 1000 and abs(d + s) < 2 ** 17
+    assert fieldwatch._turn(40000) == 182     # 25 deg/s x 40 ms: 1 deg
+
+
+def noisy(b, n, sd_deg, seed=1, turn_deg=0.0, dt=PERIOD):
+    """n still samples whose heading turns by turn_deg a step plus Gaussian noise: flags."""
+    import random
+    g = random.Random(seed)
+    return [b.run(1, dt, mag=4527, dip=DIP60,
+                  heading=k(turn_deg * i + g.gauss(0.0, sd_deg)))[0] for i in range(n)]
+
+
+def test_the_jump_limit_is_3_5_x_the_headings_measured_noise_within_4_to_8_deg():
+    # a noisier chip moves its heading more between samples: the limit follows 3.5 x the
+    # mean change of step (~5 sigma of a step's noise)
+    b = Board(dip=DIP60)
+    assert b.w.jump == k(4)
+    assert noisy(b, 600, 0.8, turn_deg=0.9) == [0] * 600    # 1.1 deg a step (LIS3MDL at 20 Hz)
+    assert k(5) < b.w.jump < k(6)
+    assert b.run(1, mag=4527, dip=DIP60, heading=b.c.heading_kang + k(7)) == [SPELL_JUMP]
+    # a quiet one keeps 4 deg, and a steady turn is no noise (the change of step cancels it)
+    b = Board(dip=DIP60)
+    assert noisy(b, 600, 0.3, turn_deg=1.0) == [0] * 600
+    assert b.w.jump == k(4)
+    assert b.run(1, mag=4527, dip=DIP60, heading=b.c.heading_kang + k(5)) == [SPELL_JUMP]
+    # however noisy, 8 deg at most
+    b = Board(dip=DIP60)
+    noisy(b, 2000, 5.0)
+    assert b.w.jump == k(8)
+
+
+@given(st.lists(st.tuples(st.integers(-32768, 32767), st.booleans(), st.integers(0, 8000000)),
+                max_size=300))
+def test_the_measured_noise_and_the_jump_limit_stay_small_ints(steps):
+    # any headings, still or tilting, any step times: .noise (2**6 x the mean change of step,
+    # each at most 2**16) stays below 2**22, the limit within 4..8 deg
+    b = Board(dip=DIP60)
+    h = 0
+    for d, tilting, dt in steps:
+        h += d
+        b.run(1, dt, mag=4527, dip=DIP60, heading=h, pitch=k(2) if tilting else 0)
+        assert 0 <= b.w.noise < 2 ** 22 and abs(b.w.rate) < 2 ** 18 and k(4) <= b.w.jump <= k(8)

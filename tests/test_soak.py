@@ -125,7 +125,8 @@ def test_with_the_gyro_aided_heading_no_exception_no_loss_and_nothing_wrong_pres
 def test_the_campaign_on_the_akm_boards_has_no_exception_no_loss_and_no_wrong_but_ok():
     # the GY-9250 (AK8963) and the ICM-20948 (AK09916), every fault class but the absent
     # accelerometer (its own chip there): as above, and the fault-free sessions' false alarms
-    # within what docs/faults.md states for them (heading noise at 100 Hz and 0.15 uT/LSB)
+    # at most 1 in 1000 samples like the other boards' (their heading noise at 100 Hz and
+    # 0.15 uT/LSB sets their jump limit: docs/faults.md, heading jump)
     st = soak.campaign(sessions=40, seconds=40, seed=5, setups=soak.AKM_SETUPS)
     assert st["steps"] > 100000 and set(st["faults"]) >= set(soak.CLASSES) - {"accel_absent"}
     assert st["exceptions"] == 0 and st["lost"] == 0
@@ -137,8 +138,7 @@ def test_the_campaign_on_the_akm_boards_has_no_exception_no_loss_and_no_wrong_bu
         assert n == st["faults"][cls], cls
     c = st["clean"]
     assert c["steps"] > 9000 and c["wrong_but_ok"] == 0
-    # (the fixed jump limits against these boards' 100 Hz noise: docs/faults.md, known limits)
-    assert c["not_ok"] <= 20 * c["steps"] // 1000, c
+    assert c["not_ok"] <= c["steps"] // 1000, c
 
 
 @pytest.mark.parametrize("setup", soak.CHIP_SETUPS, ids=[s for s, _ in soak.CHIP_SETUPS])
@@ -167,14 +167,14 @@ def test_a_short_campaign_on_each_other_chip_has_no_exception_no_loss_and_no_wro
            {"gy9250": JUMP_NOISE, "icm20948": JUMP_NOISE}, c)
 
 
-@pytest.mark.xfail(strict=True, reason="docs/chips.md, known limits: fault-free LIS3MDL and "
-                   "LIS2MDL sessions at 20 Hz say 'heading jumped' with the heading within "
-                   "1.5 deg (85 and 136 of 1200 samples on these two streams)")
 @pytest.mark.parametrize("setup", [("lis3mdl", True), ("lis2mdl", True)], ids=["lis3mdl",
                                                                              "lis2mdl"])
 def test_the_st_chips_fault_free_turning_raises_no_false_alarm(setup):
     # the campaign above's fault-free streams 6 and 7 of seed 5 (turning 18 deg/s and
-    # tilting): no fault, so every non-ok sample is a false alarm
+    # tilting): no fault, so every non-ok sample is a false alarm. These chips' heading moves
+    # by ~1 deg between samples at 20 Hz; a fixed 4 deg jump limit said "heading jumped" on
+    # 85 and 136 of these 1200 samples, the limit from the measured noise on none
+    # (docs/faults.md, heading jump)
     st = soak.campaign(sessions=6, seconds=30, seed=5, setups=(setup,), only=[6, 7])
     c = st["clean"]
     assert c["steps"] == 1200 and c["wrong_but_ok"] == 0
