@@ -8,6 +8,7 @@ of a field that moved (FieldWatch). Loaded with the heading line."""
 from array import array
 
 from firmware.compat import const
+from firmware.compass import FIELD_TOL_PCT
 from firmware.health import DIP_TOL_KANG, SPELL_FIELD, SPELL_JUMP, SPELL_SHIFT
 
 _DIP_STEADY_KANG = const(273)   # 1.5 deg: a learning stretch restarts beyond this
@@ -28,6 +29,7 @@ _RETURN_US = const(100000)      # ...for 0.1 s of clean samples
 _CLEAN_US = const(2000000)      # 2 s of clean samples over a turn of B / 4...
 _HOLD_MAX_US = const(10000000)  # ...or 10 s of clean samples end a spell
 _LEARN_FIELD_PCT = const(3)     # the dip is learned from samples with |B| this close
+_FIELD_TOL_MAX_PCT = const(50)  # use(): the compass's |B| window at most +-50 %
 
 
 class DipCheck:
@@ -140,6 +142,15 @@ class FieldWatch:
         self.cal = None
 
     def use(self, cal):
+        # the compass's |B| window afresh: max(FIELD_TOL_PCT, 3 x the fit's RMS error, which
+        # is no evidence of a magnet), at most _FIELD_TOL_MAX_PCT; the same calibration again
+        # keeps the rest
+        t = 3 * cal.fit_error // 100
+        if t < FIELD_TOL_PCT:
+            t = FIELD_TOL_PCT
+        elif t > _FIELD_TOL_MAX_PCT:
+            t = _FIELD_TOL_MAX_PCT
+        self.c.set_field(cal.field_out if cal.model is not None else 0, t)
         if cal is self.cal:
             return
         self.cal = cal

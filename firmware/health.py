@@ -88,6 +88,7 @@ class Health:
         self.fails = self.level = self.since_cfg = self.tilt_bad = self.accel_wait_us = 0
         self.reinits = self.reinit_failures = self.accel_retries = 0
         self.cfg_due = self.cfg_ok = True
+        self.tilt = False  # the app's last accelerometer sample was plausible: a tilt to use
         self.last_error = None
         self.set_accel(counts_per_g)
 
@@ -137,6 +138,25 @@ class Health:
     # fails: failed reads in a row; level: failed re-inits back off to every 2**level x
     # reinit_after; cfg_due: read the configuration back at the next sample (the first one,
     # after any anomaly); since_cfg: samples since the last read-back.
+
+    def vet(self, app):
+        """The app's sample: STATUS_OK when it is plausible and, every CONFIG_EVERY samples,
+        after an anomaly or while collecting, the chip's configuration read back holds."""
+        raw = app.raw
+        if self.saturated(raw):
+            return STATUS_OVERFLOW
+        suspect = getattr(app.mag, "suspect", False)
+        if self.mag_stale(raw, suspect):
+            return STATUS_STALE
+        if app._stalled and suspect:
+            # a QMC5883L's set after a gap is that old (docs/design.md, app)
+            return STATUS_STALE
+        if app.accel is not None:
+            self.tilt = self.tilt_check(app)
+        self.since_cfg += 1
+        if self.cfg_due or self.since_cfg >= CONFIG_EVERY or app.collector is not None:
+            return self.verify(app)
+        return STATUS_OK
 
     def tilt_check(self, app):
         """True when the app's accelerometer sample is plausible; every _ACCEL_REINIT_EVERY
@@ -218,4 +238,5 @@ class Health:
             return None
         if acc is not None:
             self.set_accel(acc.counts_per_g)
+            self.tilt = False  # until its first plausible sample
         return acc
