@@ -15,7 +15,8 @@ from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED, corr
 from firmware.compass import FLAG_NO_GRAVITY
 from firmware.compat import const, drop, drop_part, free_bytes, sleep_us, ticks_diff
 from firmware.errors import SensorOverflow
-from firmware.health import SPELL_FIELD, SPELL_JUMP, STATUS_OK, status_of
+from firmware.fieldwatch import W_FIELD, W_FLAG, W_JUMP, W_KEEP, W_STALE
+from firmware.health import STATUS_OK, status_of
 
 STATUS_INTERFERENCE = "interference"  # a heading, but |field| is off: a magnet or steel near
 STATUS_NO_FIELD = "no_field"          # corrected field (0, 0, 0): no heading
@@ -37,7 +38,6 @@ STATUS_GYRO_HELD = "gyro held"        # use_gyro(): the field is not used (inter
 
 SOLVE_EVERY = const(25)       # kept samples between solves: ~1/9 of a full sphere (225 held)
 _REINIT_AFTER = const(5)     # failed reads in a row before the drivers are re-initialised
-_STALE_US = const(30000000)   # 30 s of interference: the calibration no longer fits the board
 _SAVE_RETRY_US = const(60000000)  # a failed save is retried after 60 s
 _US_PER_S = const(1000000)
 _LOAD_NO_MEMORY = "no_memory"  # firmware.app_persist.LOAD_NO_MEMORY
@@ -117,7 +117,7 @@ class CompassApp:
     no_memory = _args = _gyro_options = not_installed = quick = attitude = mounting = None
     _axes_status = date_s = None
     stored = save_errors = worst_save_us = worst_stall_us = slices = steps = _retry_us = 0
-    _dt = _gap_us = _age_us = _interf_us = _save_wait_us = 0
+    _dt = _gap_us = _age_us = _save_wait_us = 0
     _unsaved = _dip_unsaved = _stalled = _ok = relearn_due = False
     heading_kang = -1
     _ended = {}  # the counters of the last session (read only here: an app has its own)
@@ -160,7 +160,7 @@ class CompassApp:
         self._t_last = self._ticks()
         # what every step writes or reads, in its own dict now (a dict that grows allocates)
         self._ok = self._stalled = self._unsaved = False
-        self._dt = self._gap_us = self._age_us = self._interf_us = 0
+        self._dt = self._gap_us = self._age_us = 0
         self.collector = self._session = self.attitude = self._axes_status = None
         self.heading_kang = -1
         self.status = STATUS_STARTING
@@ -480,37 +480,25 @@ class CompassApp:
         return STATUS_OK
 
     def _check(self):
-        """The field checks (firmware/fieldwatch.py); True when the sample may be kept."""
-        w = self.watch
-        k = w.sample(self.health.tilt and self.accel is not None, self._dt)
-        if k == SPELL_FIELD:
-            return self._interfered()
-        if w.spell:
-            return self._spelled(k)
-        self.status = STATUS_OK
-        self._interf_us = 0
-        if w.learned and self._dip_unsaved and not self._unsaved:
-            self._save(True)  # saved before its dip was known: once more, with it
-        return True
-
-    def _spelled(self, k):
+        """The field checks (firmware/fieldwatch.py FieldWatch.check); True when the sample
+        may be kept."""
+        k = self.watch.check(self)
+        if k == 0:
+            self.status = STATUS_OK
+            if self.watch.learned and self._dip_unsaved and not self._unsaved:
+                self._save(True)  # saved before its dip was known: once more, with it
+            return True
         # a spell's status until the field is clean (docs/design.md, app, interference)
-        st = STATUS_JUMP if self.watch.spell == SPELL_JUMP else STATUS_INTERFERENCE
-        if k:
+        st = STATUS_JUMP if k & W_JUMP else STATUS_INTERFERENCE
+        if k & W_FLAG:
             self._flag(st)
         else:
             self.status = st
-        return self.relearning or k == 0 or k == SPELL_JUMP
-
-    def _interfered(self):
-        self._flag(STATUS_INTERFERENCE)
-        self.health.cfg_due = True
-        if self.relearning:
-            return True  # the calibration in force is the one that does not fit
-        self._interf_us += self._dt
-        if self._interf_us >= _STALE_US:
+        if k & W_FIELD:
+            self.health.cfg_due = True  # the chip's set read back at the next sample
+        if k & W_STALE:
             self._stale()
-        return False
+        return (k & W_KEEP) != 0
 
     def _select(self):
         c = self.collector  # (while collecting, Health.vet reads the configuration back)
@@ -520,9 +508,7 @@ class CompassApp:
                 c.pairs.feed(self.raw, self._acc)
 
     def _stale(self):
-        # flagged for _STALE_US: the board's iron changed (docs/design.md, app): relearn
-        self._interf_us = 0
-        self.dip.reset()  # the dip too is learned afresh
+        # the board's iron changed (docs/design.md, app): relearn
         c = self.calibrate()
         if c is not None:
             c.relearn(STALE_AGE_S)
