@@ -151,23 +151,18 @@ class Health:
         if app._stalled and suspect:
             # a QMC5883L's set after a gap is that old (docs/design.md, app)
             return STATUS_STALE
-        if app.accel is not None:
-            self.tilt = self.tilt_check(app)
+        if app.accel is not None:  # every _ACCEL_REINIT_EVERY implausible samples: wake()
+            self.tilt = self.tilt_ok(app._acc)
+            if self.tilt:
+                self.tilt_bad = 0
+            else:
+                self.tilt_bad += 1
+                if self.tilt_bad % _ACCEL_REINIT_EVERY == 1:
+                    self.wake(app, True)
         self.since_cfg += 1
         if self.cfg_due or self.since_cfg >= CONFIG_EVERY or app.collector is not None:
             return self.verify(app)
         return STATUS_OK
-
-    def tilt_check(self, app):
-        """True when the app's accelerometer sample is plausible; every _ACCEL_REINIT_EVERY
-        implausible ones the chip is woken (wake)."""
-        if self.tilt_ok(app._acc):
-            self.tilt_bad = 0
-            return True
-        self.tilt_bad += 1
-        if self.tilt_bad % _ACCEL_REINIT_EVERY == 1:
-            self.wake(app, True)
-        return False
 
     def wake(self, app, check):
         # an MPU6050 asleep since a reset or a glitch write (or, check False, one whose
@@ -193,6 +188,8 @@ class Health:
         return STATUS_OK if self.cfg_ok else STATUS_RESET
 
     def _read_config(self, app):
+        # its own small frame: inlined in vet(), the `with` made each sample allocate
+        # (tests/scenarios/app_alloc.py)
         self.cfg_ok = True
         g = app._guard
         with g:
