@@ -180,13 +180,11 @@ class CompassApp:
             self.calibrate()
 
     def _load(self):
-        self.load_reason = None
         try:
             from firmware import app_persist
             cal, self.load_reason = app_persist.load(self)
         except MemoryError:  # no room for the store's code: not "uncalibrated" (_retry)
-            self.load_reason = _LOAD_NO_MEMORY
-            cal = UNCALIBRATED
+            cal, self.load_reason = UNCALIBRATED, _LOAD_NO_MEMORY
         app_persist = None
         drop("app_persist", "store_slots")
         return cal
