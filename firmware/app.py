@@ -12,11 +12,11 @@ there is no good calibration yet, collect and solve one in the background.
 # docs/design.md (module notes) and docs/design.md#memory.
 from firmware.axes import apply
 from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED, correct
-from firmware.compass import FIELD_TOL_PCT, FLAG_NO_GRAVITY
+from firmware.compass import FLAG_NO_GRAVITY
 from firmware.compat import const, drop, drop_part, free_bytes, sleep_us, ticks_diff
 from firmware.errors import SensorOverflow
-from firmware.health import (CONFIG_EVERY, SPELL_FIELD, SPELL_JUMP, STATUS_OK, STATUS_OVERFLOW,
-                             STATUS_STALE, status_of)
+from firmware.fieldwatch import W_FIELD, W_FLAG, W_JUMP, W_KEEP, W_STALE
+from firmware.health import STATUS_OK, status_of
 
 STATUS_INTERFERENCE = "interference"  # a heading, but |field| is off: a magnet or steel near
 STATUS_NO_FIELD = "no_field"          # corrected field (0, 0, 0): no heading
@@ -38,10 +38,7 @@ STATUS_GYRO_HELD = "gyro held"        # use_gyro(): the field is not used (inter
 
 SOLVE_EVERY = const(25)       # kept samples between solves: ~1/9 of a full sphere (225 held)
 _REINIT_AFTER = const(5)     # failed reads in a row before the drivers are re-initialised
-_STALE_US = const(30000000)   # 30 s of interference: the calibration no longer fits the board
 _SAVE_RETRY_US = const(60000000)  # a failed save is retried after 60 s
-_FIELD_TOL_MAX_PCT = const(50)
-_FIT_SIGMAS = const(3)        # window >= 3 x the fit's RMS radial error
 _US_PER_S = const(1000000)
 _LOAD_NO_MEMORY = "no_memory"  # firmware.app_persist.LOAD_NO_MEMORY
 _LOAD_RETRY_US = const(5000000)  # a load (or the heading line) that found no room: again in 5 s
@@ -108,21 +105,19 @@ class _ReadGuard:
 _COLLECTED = ("accepted", "refused", "solves", "relearning", "last_reason", "last_detail",
               "last_model")
 _SESSION_KEPT = ("history_errors", "pending", "change", "history_reason")
-_HEALTH_KEPT = ("reinits", "reinit_failures", "accel_retries", "last_error")
+_HEALTH_KEPT = ("reinits", "reinit_failures", "accel_retries", "last_error", "tilt")
 _COUNTS = ("accepted", "refused", "solves", "history_errors", "reinits", "reinit_failures",
            "accel_retries")
 
 
 class CompassApp:
-    # Its attributes and their meanings: docs/api.md (the app). The documented state is here
-    # too, so that it exists while the heap could not hold the app (.no_memory "start"); the
-    # constructor (firmware/app_setup.py) and each change set it again on the app itself.
+    # the documented state (docs/api.md, the app), here too so that it exists at every heap
     calibration = UNCALIBRATED
     location = compass = collector = _session = load_reason = save_reason = health = None
     no_memory = _args = _gyro_options = not_installed = quick = attitude = mounting = None
     _axes_status = date_s = None
     stored = save_errors = worst_save_us = worst_stall_us = slices = steps = _retry_us = 0
-    _dt = _gap_us = _age_us = _interf_us = _save_wait_us = 0
+    _dt = _gap_us = _age_us = _save_wait_us = 0
     _unsaved = _dip_unsaved = _stalled = _ok = relearn_due = False
     heading_kang = -1
     _ended = {}  # the counters of the last session (read only here: an app has its own)
@@ -155,7 +150,7 @@ class CompassApp:
              self.capacity, self.solve_every, self.fallback, self.reinit_after, self.learn,
              self._mag_map, self._acc_map, self._mag_into, self._mag_cfg, self._mm, self._am,
              self._delay, self._ticks, self._wrap, self._wall, self._wall_diff, self._dt_cap,
-             self.raw, self._cor, self.body, self._acc, self.gravity, self.health, self.tilt,
+             self.raw, self._cor, self.body, self._acc, self.gravity, self.health,
              self._kn, self.compass, self.watch) = app_setup.setup(*args)
         finally:
             app_setup = None
@@ -163,10 +158,9 @@ class CompassApp:
         self.fast = self._kn is not None
         self.dip = self.watch.dip
         self._t_last = self._ticks()
-        # what every step writes or reads, in the app's own dict now: one that grew while
-        # showing headings would allocate; a name it lacks costs a longer lookup per step
+        # what every step writes or reads, in its own dict now (a dict that grows allocates)
         self._ok = self._stalled = self._unsaved = False
-        self._dt = self._gap_us = self._age_us = self._interf_us = 0
+        self._dt = self._gap_us = self._age_us = 0
         self.collector = self._session = self.attitude = self._axes_status = None
         self.heading_kang = -1
         self.status = STATUS_STARTING
@@ -176,8 +170,7 @@ class CompassApp:
         self._start_learning()
 
     def _start_learning(self):
-        # a session when asked for or while no good calibration is in force (not for a load
-        # that found no room: that is not "uncalibrated")
+        # a session when asked for or while no good calibration is in force (docs/api.md)
         if self.load_reason == _LOAD_NO_MEMORY:
             self.no_memory = "load"
             self._retry_us = _LOAD_RETRY_US
@@ -187,42 +180,28 @@ class CompassApp:
             self.calibrate()
 
     def _load(self):
-        self.load_reason = None
         try:
             from firmware import app_persist
             cal, self.load_reason = app_persist.load(self)
         except MemoryError:  # no room for the store's code: not "uncalibrated" (_retry)
-            self.load_reason = _LOAD_NO_MEMORY
-            cal = UNCALIBRATED
+            cal, self.load_reason = UNCALIBRATED, _LOAD_NO_MEMORY
         app_persist = None
         drop("app_persist", "store_slots")
         return cal
 
     def _save(self, dip_only=False):
+        # the store's figures after the save (firmware/app_persist.py), retried when it failed
         try:
             from firmware import app_persist
             r = app_persist.save(self, dip_only)
-        except MemoryError:  # no room for the store's code: as a failed save (retried)
-            r = (_LOAD_NO_MEMORY, 0)
+        except MemoryError:  # no room for the store's code: as a failed save
+            r = (self.stored, False, self.save_errors + 1, 0, True, _LOAD_NO_MEMORY,
+                 self.worst_save_us)
         app_persist = None
         drop("app_persist", "store_slots")
         if r is not None:  # (None: no store)
-            self._saved(dip_only, r[0], r[1])
-
-    def _saved(self, dip_only, reason, us):
-        # stored, or failed (.save_errors, .save_reason; retried after _SAVE_RETRY_US)
-        if reason is None:
-            if not dip_only:
-                self.stored += 1
-            self._dip_unsaved = self.dip is not None and not self.dip.armed
-        else:
-            self._dip_unsaved = False
-            self.save_errors += 1
-            self._save_wait_us = 0
-        self._unsaved = reason is not None
-        self.save_reason = reason
-        if us > self.worst_save_us:
-            self.worst_save_us = us
+            (self.stored, self._dip_unsaved, self.save_errors, self._save_wait_us,
+             self._unsaved, self.save_reason, self.worst_save_us) = r
 
     def _good_enough(self, cal):
         """No collecting needed: the configured model, fit within GOOD_FIT_ERROR."""
@@ -231,23 +210,11 @@ class CompassApp:
                 and (cal.model == m or m == "auto" and cal.model != "minmax"))
 
     def _use(self, cal):
-        # its dip, the short averages and any spell start over (FieldWatch.use)
+        # the compass's |B| window, its dip, the short averages and any spell start over
         self.calibration = cal
         self._k = cal.k  # _heading's
-        self.watch.use(cal)
-        tol = _FIT_SIGMAS * cal.fit_error // 100
-        if tol < FIELD_TOL_PCT:  # the interference window's floor: the compass's default
-            tol = FIELD_TOL_PCT
-        elif tol > _FIELD_TOL_MAX_PCT:
-            tol = _FIELD_TOL_MAX_PCT
-        self.compass.set_field(cal.field_out if cal.model is not None else 0, tol)
+        self.watch.use(cal)  # (FieldWatch.use)
         self._locate()
-
-    def _dip_learned(self):
-        # a fit this app saved before it knew its dip is saved again, once, with it (one
-        # loaded without a dip is not rewritten: docs/design.md, module notes)
-        if self._dip_unsaved and not self._unsaved:
-            self._save(True)
 
     def use_calibration(self, cal, save=True, collect=True):
         """Put the Calibration `cal` in force (docs/api.md)."""
@@ -278,8 +245,7 @@ class CompassApp:
         return self.collector
 
     def _mounted(self, verdict, axes, status):
-        # a mounting check's answer (firmware/calibrate/mountcheck.py, firmware/mountnote.py):
-        # `status` shown in place of "ok" (None: none; False: the one shown stays)
+        # a mounting check's answer (firmware/calibrate/mountcheck.py); status False: kept
         self.mounting = (verdict, axes)
         if status is not False:
             self._axes_status = status
@@ -339,7 +305,6 @@ class CompassApp:
         from firmware.accuracy import assess
         return assess(self)[1]
 
-    # --- the loop ---------------------------------------------------------------------
     def step(self):
         """One sample and a bounded slice of background work; True if a heading came out.
         Never raises: an unexpected exception becomes the status "internal error", a
@@ -356,8 +321,7 @@ class CompassApp:
         return self._ok
 
     def _retry_build(self):
-        # the app itself did not fit: a sample period's pause per step (the loop does not
-        # spin), another try every 256 steps
+        # the app itself did not fit: a pause per step (no spinning), a try every 256 steps
         self._ok = False
         (self._args[8] or sleep_us)(_RETRY_PAUSE_US)  # delay_us, else the port's
         if self.steps & 0xFF == 0:
@@ -368,7 +332,7 @@ class CompassApp:
         self._clock()
         st = self._read()
         if st == STATUS_OK:
-            st = self._vet()
+            st = self.health.vet(self)
         if st == STATUS_OK:
             st = self._heading()
         if st != STATUS_OK:
@@ -385,7 +349,7 @@ class CompassApp:
                 if st is not None:
                     self.heading_kang = a.shown_kang
                     self.status = st
-            if not self.tilt and (self.accel is not None or self._accel_auto) \
+            if not self.health.tilt and (self.accel is not None or self._accel_auto) \
                     and self.status == STATUS_OK:
                 self._flag(STATUS_TILT)
         c = self.collector
@@ -430,8 +394,8 @@ class CompassApp:
             self._retry_save(dt)
         if self.no_memory is not None:
             self._retry(dt)
-        if self.accel is None and self._accel_auto:
-            self._look_for_accel(dt)
+        if self.accel is None and self._accel_auto:  # None until one answers
+            self.accel = self.health.look_for_accel(self.i2c, dt)
         if self._gap_us < _GAP_CAP_US:
             self._gap_us += dt
         if dt > self._dt_cap:
@@ -458,8 +422,7 @@ class CompassApp:
             self._save_wait_us = 0
 
     def _retry(self, dt):
-        # what the heap could not hold, tried again: the load every 5 s, a calibration
-        # session every _CAL_RETRY_US
+        # what the heap could not hold, again: the load every 5 s, a session every 60 s
         self._retry_us -= dt
         if self._retry_us > 0:
             return
@@ -472,12 +435,6 @@ class CompassApp:
             self._start_learning()  # (or "load" again, while it finds no room)
         elif what == "calibrate":
             self.calibrate()
-
-    def _look_for_accel(self, dt):
-        acc = self.health.look_for_accel(self.i2c, dt)
-        if acc is not None:
-            self.accel = acc
-            self.tilt = False  # until its first plausible sample
 
     def _read(self):
         g = self._guard
@@ -495,24 +452,6 @@ class CompassApp:
         self.health.last_error = g.error
         return status_of(g.error)
 
-    def _vet(self):
-        """The sample's plausibility (firmware/health.py) and, every CONFIG_EVERY samples or
-        after an anomaly, the chip's configuration read back."""
-        h = self.health
-        if h.saturated(self.raw):
-            return STATUS_OVERFLOW
-        if h.mag_stale(self.raw, getattr(self.mag, "suspect", False)):
-            return STATUS_STALE
-        if self._stalled and getattr(self.mag, "suspect", False):
-            # a QMC5883L's set after a gap is that old (docs/design.md, app)
-            return STATUS_STALE
-        if self.accel is not None:
-            self.tilt = h.tilt_check(self)
-        h.since_cfg += 1
-        if h.cfg_due or h.since_cfg >= CONFIG_EVERY or self.collector is not None:
-            return h.verify(self)
-        return STATUS_OK
-
     def _heading(self):
         kn = self._kn  # the kernel set chosen at construction: firmware.fast, or the plain
         if kn is None:  # functions (the same bits, tests/test_tiers.py)
@@ -523,9 +462,9 @@ class CompassApp:
             kn.apply(self._mm, self._cor, self.body)
         a = self.attitude  # use_gyro(): the gyro step maps gravity (the filter's if bumped)
         if a is not None and a.predict(self):
-            self.tilt = True  # (a bumped accelerometer: gravity is the filter's)
+            self.health.tilt = True  # (a bumped accelerometer: gravity is the filter's)
             h = self.compass.update(self.body, self.gravity)
-        elif self.accel is None or not self.tilt:
+        elif self.accel is None or not self.health.tilt:
             h = self.compass.update(self.body)
         else:
             if kn is None:
@@ -539,51 +478,35 @@ class CompassApp:
         return STATUS_OK
 
     def _check(self):
-        """The field checks (firmware/fieldwatch.py); True when the sample may be kept."""
-        w = self.watch
-        k = w.sample(self.tilt and self.accel is not None, self._dt)
-        if k == SPELL_FIELD:
-            return self._interfered()
-        if w.spell:
-            return self._spelled(k)
-        self.status = STATUS_OK
-        self._interf_us = 0
-        if w.learned:
-            self._dip_learned()
-        return True
-
-    def _spelled(self, k):
-        # a spell's status until the field is clean; what the collector still takes:
-        # docs/design.md (app, interference)
-        st = STATUS_JUMP if self.watch.spell == SPELL_JUMP else STATUS_INTERFERENCE
-        if k:
+        """The field checks (firmware/fieldwatch.py FieldWatch.check); True when the sample
+        may be kept."""
+        k = self.watch.check(self)
+        if k == 0:
+            self.status = STATUS_OK
+            if self.watch.learned and self._dip_unsaved and not self._unsaved:
+                self._save(True)  # saved before its dip was known: once more, with it
+            return True
+        # a spell's status until the field is clean (docs/design.md, app, interference)
+        st = STATUS_JUMP if k & W_JUMP else STATUS_INTERFERENCE
+        if k & W_FLAG:
             self._flag(st)
         else:
             self.status = st
-        return self.relearning or k == 0 or k == SPELL_JUMP
-
-    def _interfered(self):
-        self._flag(STATUS_INTERFERENCE)
-        self.health.cfg_due = True
-        if self.relearning:
-            return True  # the calibration in force is the one that does not fit
-        self._interf_us += self._dt
-        if self._interf_us >= _STALE_US:
+        if k & W_FIELD:
+            self.health.cfg_due = True  # the chip's set read back at the next sample
+        if k & W_STALE:
             self._stale()
-        return False
+        return (k & W_KEEP) != 0
 
     def _select(self):
-        # (while collecting, _vet read the configuration back after every sample)
-        c = self.collector
+        c = self.collector  # (while collecting, Health.vet reads the configuration back)
         if c is not None:
             c.feed(self.raw)
-            if c.pairs is not None and self.tilt:  # the mounting check's (firmware/calibrate/mounting.py)
+            if c.pairs is not None and self.health.tilt:  # the mounting check's pairs
                 c.pairs.feed(self.raw, self._acc)
 
     def _stale(self):
-        # flagged for _STALE_US: the board's iron changed (docs/design.md, app): relearn
-        self._interf_us = 0
-        self.dip.reset()  # the dip too is learned afresh
+        # the board's iron changed (docs/design.md, app): relearn
         c = self.calibrate()
         if c is not None:
             c.relearn(STALE_AGE_S)
@@ -670,8 +593,7 @@ class CompassApp:
 
     def run(self, n=None, report=None, every=_REPORT_EVERY, every_us=None):
         """step() n times, report(app) every `every` steps or `every_us` (docs/api.md)."""
-        # in the class, not a cold module: boards/main.py runs the board through it, and a
-        # module it had to load could find no room (firmware/runner.py retries run())
+        # in the class: a cold module could find no room (firmware/runner.py retries run())
         good = i = 0
         last = self._ticks()
         while (n is None or i < n) and not self.relearn_due:

@@ -68,8 +68,8 @@ def load(app):
 
 
 def save(app, dip_only):
-    """(None when saved, else the reason of the failure, the microseconds it took); None
-    without a store. The app keeps the figures (CompassApp._saved)."""
+    """The app's save figures after saving: (stored, dip_unsaved, save_errors, save_wait_us,
+    unsaved, save_reason, worst_save_us), which the app assigns; None without a store."""
     if app.store is None:
         return None
     t = app._wall()
@@ -86,7 +86,13 @@ def save(app, dip_only):
         reason = LOAD_NO_MEMORY
     except ValueError as e:  # a payload the store refuses: a bug, never a crash
         reason = "bad_payload %s" % (e,)
-    return reason, app._wall_diff(app._wall(), t)
+    us = app._wall_diff(app._wall(), t)
+    if reason is not None:  # retried after CompassApp's _SAVE_RETRY_US
+        return (app.stored, False, app.save_errors + 1, 0, True, reason,
+                max(us, app.worst_save_us))
+    # a fit saved before its dip was learned is saved once more with it (dip_unsaved)
+    return (app.stored + (0 if dip_only else 1), app.dip is not None and not app.dip.armed,
+            app.save_errors, 0, False, None, max(us, app.worst_save_us))
 
 
 def _record(app):

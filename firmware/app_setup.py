@@ -35,6 +35,7 @@ def setup(i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, store,
                else "x,-y,-z"))
     health = Health(mag.counts_per_gauss, getattr(mag, "OVERFLOW", -32768),  # HMC5883L: -4096
                     acc.counts_per_g if acc is not None else 16384)
+    health.tilt = acc is not None  # False: the level formula (no or implausible accel)
     body = array("h", (0, 0, 0))      # corrected, body frame (AN4248)
     kn = kernels() if fast is None or fast is True else None
     compass.use_kernels(kn or False)
@@ -55,8 +56,7 @@ def setup(i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, store,
             body,
             array("h", (0, 0, 0)),   # the accelerometer's sample
             array("h", (0, 0, 0)),   # gravity: body frame, AN4248 sign (+1 g down, level)
-            health, acc is not None,  # tilt False: the level formula (no or implausible accel)
-            kn, c, watch)
+            health, kn, c, watch)
 
 
 def _check_options(model, declination_cdeg, solve_every, reinit_after):

@@ -8,6 +8,7 @@ of a field that moved (FieldWatch). Loaded with the heading line."""
 from array import array
 
 from firmware.compat import const
+from firmware.compass import FIELD_TOL_PCT
 from firmware.health import DIP_TOL_KANG, SPELL_FIELD, SPELL_JUMP, SPELL_SHIFT
 
 _DIP_STEADY_KANG = const(273)   # 1.5 deg: a learning stretch restarts beyond this
@@ -32,6 +33,14 @@ _RETURN_US = const(100000)      # ...for 0.1 s of clean samples
 _CLEAN_US = const(2000000)      # 2 s of clean samples over a turn of B / 4...
 _HOLD_MAX_US = const(10000000)  # ...or 10 s of clean samples end a spell
 _LEARN_FIELD_PCT = const(3)     # the dip is learned from samples with |B| this close
+_STALE_US = const(30000000)     # 30 s of interference: the calibration no longer fits the board
+# check(app): what the app shows for a sample in a spell (0: the field is clean)
+W_JUMP = const(1)               # "heading jumped" (else "interference")
+W_FLAG = const(2)               # this sample raised a flag: counted in app.errors
+W_FIELD = const(4)              # |B| or the dip outside their windows: read the chip's set back
+W_STALE = const(8)              # flagged for _STALE_US: the board's iron changed, relearn
+W_KEEP = const(16)              # the collector may take the sample
+_FIELD_TOL_MAX_PCT = const(50)  # use(): the compass's |B| window at most +-50 %
 
 
 class DipCheck:
@@ -104,7 +113,8 @@ class FieldWatch:
     # sample starts the short averages afresh. sample(tilt, dt_us) after each compass update
     # returns the flag this sample raised (0, SPELL_JUMP, SPELL_SHIFT, SPELL_FIELD) and leaves
     # .spell (0 when the status may be ok), .learned (True on the sample that armed the dip
-    # reference) and .dip (the DipCheck). forget(run) ends a spell that began within the last
+    # reference) and .dip (the DipCheck); check(app) is sample() for a CompassApp, returning
+    # the W_* bits of what it shows. forget(run) ends a spell that began within the last
     # `run` samples (a run of stale repeats: not a field). A dip outside the DipCheck's
     # tolerance raises c.interference like the compass's own windows. Small ints only:
     # field differences are taken on body >> .shift (B >> shift < 2**11; a smaller B, such as
@@ -146,8 +156,18 @@ class FieldWatch:
         self.hi = 0
         self.on = False
         self.cal = None
+        self.flagged_us = 0               # check(): time flagged since the last clean sample
 
     def use(self, cal):
+        # the compass's |B| window afresh: max(FIELD_TOL_PCT, 3 x the fit's RMS error, which
+        # is no evidence of a magnet), at most _FIELD_TOL_MAX_PCT; the same calibration again
+        # keeps the rest
+        t = 3 * cal.fit_error // 100
+        if t < FIELD_TOL_PCT:
+            t = FIELD_TOL_PCT
+        elif t > _FIELD_TOL_MAX_PCT:
+            t = _FIELD_TOL_MAX_PCT
+        self.c.set_field(cal.field_out if cal.model is not None else 0, t)
         if cal is self.cal:
             return
         self.cal = cal
@@ -201,6 +221,29 @@ class FieldWatch:
             self._clean(tilt, dt)
         self._remember(tilt)
         return k
+
+    def check(self, app):
+        """The app's sample, after its compass update: 0 when the field is clean, else the
+        W_* bits of the spell it shows (docs/design.md, app)."""
+        k = self.sample(app.health.tilt and app.accel is not None, app._dt)
+        if k == SPELL_FIELD:
+            if app.relearning:  # the calibration in force is the one that does not fit
+                return W_FIELD | W_FLAG | W_KEEP
+            self.flagged_us += app._dt
+            if self.flagged_us < _STALE_US:
+                return W_FIELD | W_FLAG
+            self.flagged_us = 0
+            self.dip.reset()  # the dip too is learned afresh
+            return W_FIELD | W_FLAG | W_STALE
+        if not self.spell:
+            self.flagged_us = 0
+            return 0
+        r = W_JUMP if self.spell == SPELL_JUMP else 0
+        if k:
+            r |= W_FLAG
+        if k == 0 or k == SPELL_JUMP or app.relearning:  # what the collector still takes
+            r |= W_KEEP
+        return r
 
     def _clean(self, tilt, dt):
         c = self.c

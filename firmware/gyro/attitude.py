@@ -300,8 +300,8 @@ class Attitude:
         # fault): the compass's tilt and the field checks (the dip, its steadiness:
         # firmware/health.py) then see the filter's gravity, and a clean field keeps
         # correcting the heading while the board accelerates. True when app.gravity holds the
-        # gravity to use (the app's tilt then holds: CompassApp._heading).
-        t = app.tilt
+        # gravity to use (Health's tilt then holds: CompassApp._heading).
+        t = app.health.tilt
         if t:
             apply(app._am, app._acc, app.gravity)
         elif app.health.asame:  # frozen (firmware/health.py): the chip's fault, not a bump
