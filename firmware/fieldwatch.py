@@ -22,6 +22,7 @@ _JUMP_HALVES = const(7)         # ...(7 halves of it)...
 _NOISE_SHIFT = const(6)         # ...its mean change of step over ~2**6 still steps
 _TURN_KANG_PER_S = const(4551) # 25 deg/s: the turn two steps may add to the limit
 _RATE_SHIFT = const(3)          # one step is judged against the mean of ~2**3 still steps
+_RAMP_US = const(60000)         # three steps in less (above 50 Hz) are judged as one too
 _TILT_STILL_KANG = const(182)   # 1 deg of pitch and of roll from one sample to the next
 _LEVEL_KANG = const(8192)       # 45 deg: jumps are judged within this of level
 _STEADY_SHIFT = const(3)        # short averages over ~2**3 samples
@@ -130,18 +131,21 @@ class FieldWatch:
         self.spell_at = 0
         self.clean_us = 0
         self.m0 = array("h", (0, 0, 0))   # body at the spell's last flag
-        self.p0 = array("h", (0, 0, 0))   # body at the last clean sample before the spell,
+        self.p0 = array("h", (0, 0, 0))   # body at a clean sample before the spell,
         self.p0_pitch = 0                 # and the tilt then
         self.p0_roll = 0
         self.p0_ok = False
         self.g0 = array("h", (0, 0, 0))   # the last clean sample: body, tilt
+        self.g1 = array("h", (0, 0, 0))   # the two clean samples before it (a ramp caught
+        self.g2 = array("h", (0, 0, 0))   # on its third step began before g0)
         self.g0_pitch = 0
         self.g0_roll = 0
-        self.g0_ok = False
+        self.g0_ok = 0                    # how many of g0, g1, g2 hold a sample
         # the previous sample: heading (-1: none), tilt; the short averages of |b| and dip (x 8)
         self.prev_h, self.prev_tilt, self.prev_pitch, self.prev_roll = -1, False, 0, 0
         self.step_h = 0                   # the last still, clean step's heading change...
         self.step_us = 0                  # ...and its time
+        self.step_h2 = self.step_us2 = 0  # the same of the two steps before this one
         self.noise = (_JUMP_KANG << (_NOISE_SHIFT + 1)) // _JUMP_HALVES  # 2**6 x that mean
         self.jump = _JUMP_KANG            # the jump limit (KANG)
         self.rate = 0                     # 2**3 x the mean still step: the turn per step
@@ -173,7 +177,7 @@ class FieldWatch:
         self.cal = cal
         self.spell = 0
         self.prev_h = -1
-        self.g0_ok = False
+        self.g0_ok = 0
         self.on = cal.model is not None
         self.dip.reset()
         fe = cal.fit_error
@@ -247,10 +251,12 @@ class FieldWatch:
 
     def _clean(self, tilt, dt):
         c = self.c
+        self.g2, self.g1, self.g0 = self.g1, self.g0, self.g2  # (a rotation: no allocation)
         _copy(self.body, self.g0)
         self.g0_pitch = c.pitch_kang
         self.g0_roll = c.roll_kang
-        self.g0_ok = True
+        if self.g0_ok < 3:
+            self.g0_ok += 1
         if tilt and self.lo <= c.magnitude <= self.hi:
             self.learned = self.dip.learn(c.dip_kang, dt)
 
@@ -289,10 +295,12 @@ class FieldWatch:
         return tilt and (d > a or d < -a)
 
     def _jumped(self, tilt):
-        # a still step more than .jump off the recent turn per step (.rate), or two more than
-        # .jump plus a turn at _TURN_KANG_PER_S; .step_h is the last step's change (0 when
-        # that step was not still or raised a flag), .step_us its time. No more locals: a
-        # larger frame would go on MicroPython's heap (tests/scenarios/app_alloc.py)
+        # a still step more than .jump off the recent turn per step (.rate), two more than
+        # .jump plus a turn at _TURN_KANG_PER_S, or, above 50 Hz, three more than that off the
+        # recent turn (a ramp of steps each under .jump: a magnet brought near); .step_h is
+        # the last step's change (0 when that step was not still or raised a flag), .step_us
+        # its time, .step_h2 and .step_us2 the same of the last two. No more locals: a larger
+        # frame would go on MicroPython's heap (tests/scenarios/app_alloc.py)
         c = self.c
         if tilt and (_off(c.pitch_kang - self.prev_pitch, _TILT_STILL_KANG)
                      or _off(c.roll_kang - self.prev_roll, _TILT_STILL_KANG)
@@ -303,10 +311,18 @@ class FieldWatch:
         p = self.step_h
         self.step_h = 0
         if _off(d - (self.rate >> _RATE_SHIFT), self.jump) or \
-                _off(p + d, self.jump + _turn(self.step_us + self.dt)):
+                _off(p + d, self.jump + _turn(self.step_us + self.dt)) or \
+                p and self.step_us2 + self.dt < _RAMP_US and \
+                _off(self.step_h2 + d - 3 * (self.rate >> _RATE_SHIFT),
+                     self.jump + _turn(self.step_us2 + self.dt)):
             return True
         if p:
             self._noise(d, p)
+            self.step_h2 = p + d
+            self.step_us2 = self.step_us + self.dt
+        else:
+            self.step_h2 = d
+            self.step_us2 = self.dt
         self.step_h = d
         self.step_us = self.dt
         return False
@@ -335,9 +351,12 @@ class FieldWatch:
         _copy(self.body, self.m0)
 
     def _before(self):
-        # where the field was before the spell: the last clean sample, if there was one
-        self.p0_ok = self.g0_ok
-        _copy(self.g0, self.p0)
+        # where the field was before the spell: the clean sample before the steps that raised
+        # the flag (three back, for a ramp caught on its third step), if there was one; the
+        # tilt is g0's (a still step moves it < 1 deg)
+        n = self.g0_ok
+        self.p0_ok = n > 0
+        _copy(self.g2 if n > 2 else self.g1 if n > 1 else self.g0, self.p0)
         self.p0_pitch = self.g0_pitch
         self.p0_roll = self.g0_roll
 

@@ -15,7 +15,6 @@ from tests.test_reliability import POSE, Good, settled
 from host_sim.world import mat_vec, mount_apply
 from firmware.health import DIP_TOL_KANG
 from tests.scenarios import app_world as W
-from tests.known_limits import JUMP_NOISE, expect
 from host_sim import chips, motion
 
 from firmware.calibration import Calibration
@@ -78,7 +77,7 @@ def test_frozen_output_registers_say_stale_data_until_fresh_data_flows(good):
     assert app.calibration == good.cal
     reboot(good, fs, b, app)
     # (on the ICM-20948, ok for 2.2 s, then 0.8 s of false jump alarms within 1 deg)
-    expect(seen[-1] == "ok", good.setup, {"icm20948": JUMP_NOISE}, seen[-5:])
+    assert seen[-1] == "ok", seen[-5:]
 
 
 def test_frozen_registers_are_cured_by_the_re_initialisation(good):
@@ -90,7 +89,7 @@ def test_frozen_registers_are_cured_by_the_re_initialisation(good):
     assert wrong == 0 and "stale data" in seen and app.reinits > r0
     assert "ok" in seen[seen.index("stale data"):]
     # (on the LIS2MDL, ok again from 0.4 s, then false jump alarms within 2 deg from 1.4 s)
-    expect(seen[-1] == "ok", good.setup, {"lis2mdl": JUMP_NOISE}, seen[-5:])
+    assert seen[-1] == "ok", seen[-5:]
 
 
 def test_a_chip_returning_zeros_is_stale_data_and_re_initialised(good):
@@ -124,7 +123,7 @@ def test_an_accelerometer_gone_to_sleep_is_tilt_unavailable_then_woken(good):
     assert wrong == 0 and "tilt unavailable" in seen and not b.accel.asleep()
     assert "ok" in seen[seen.index("tilt unavailable"):]
     # (on the LIS2MDL, ok again at once, then false jump alarms within 1.5 deg from 0.8 s)
-    expect(seen[-1] == "ok", good.setup, {"lis2mdl": JUMP_NOISE}, seen[-5:])
+    assert seen[-1] == "ok", seen[-5:]
 
 
 @pytest.mark.parametrize("fault", ["ff", "free_fall"])
@@ -236,10 +235,12 @@ def test_a_magnet_carried_while_the_board_turns_shows_as_it_turns(good):
     b.world.add_magnet(turning_magnet(b, 60.0), t, t + 12.0, ramp_s=0.2, frame="sensor")
     turn = turning(b, rate_dps=10.0, pose=POSE)
     seen, wrong = watch(app, b, 12.0, turn)
-    # a first sample 10-15 ms into the ramp (the 100 Hz AKM boards, the MMC5603) is ~2 deg
-    # off: "ok" then is within the documented accuracy; from the first flag on, never "ok"
+    # the first samples 10-25 ms into the ramp (the 100 Hz AKM boards, the MMC5603) are 2-5
+    # deg off: "ok" then is within the documented accuracy (wrong counts any beyond it); a
+    # noisier chip's jump limit is higher (the GY-9250's: its ramp is caught on the third
+    # step, firmware/fieldwatch.py); from the first flag on, never "ok"
     i = next(i for i, s in enumerate(seen) if s != "ok")
-    assert wrong == 0 and i <= 1 and "ok" not in seen[i:]
+    assert wrong == 0 and i <= 2 and "ok" not in seen[i:]
     # gone: ok again once the board has turned ~30 deg with clean samples (3 s here)
     seen, wrong = watch(app, b, 5.0, turn)
     assert wrong == 0 and seen[-1] == "ok" and "ok" not in seen[:len(seen) // 2]

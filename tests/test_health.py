@@ -137,6 +137,18 @@ def test_a_drift_under_4_deg_a_step_is_a_jump_once_two_steps_pass_4_deg_and_25_d
     assert b.turn(0, 3.5, 2) == [0, SPELL_JUMP]
 
 
+def test_above_50_hz_a_ramp_of_small_steps_is_a_jump_on_its_third_step():
+    # at 100 Hz two steps span 20 ms: 2 deg a step is 4 deg over two, within 4 + 0.5 deg, and
+    # 6 deg over three, beyond 4 + 0.75 (a magnet brought near, docs/faults.md); at 50 Hz
+    # three steps span 60 ms and only the one- and two-step checks judge them
+    b = Board(dip=DIP60)
+    b.run(20, 10000, mag=4527, dip=DIP60, heading=0)
+    assert b.turn(0, 2.0, 3, dt=10000) == [0, 0, SPELL_JUMP]
+    b = Board(dip=DIP60)
+    b.run(20, mag=4527, dip=DIP60, heading=0)
+    assert b.turn(0, 2.0, 3) == [0, 0, 0]
+
+
 def test_one_step_is_judged_against_the_recent_turn_per_step():
     # at 15 Hz a steady 30 deg/s turn is 2 deg a step: a step of 5 deg is 3 deg off it (and
     # 7 deg over two, within 4 + 25 x 0.133 = 7.3), not a jump; from a board held still the
