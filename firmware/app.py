@@ -26,8 +26,8 @@ STATUS_CHANGED = "hardware changed?"  # a new fit jumped outside its history's l
 # field faults (firmware/health.py, docs/faults.md): user words, never "ok" while they last
 STATUS_TILT = "tilt unavailable"      # the accelerometer is implausible: level-board heading
 STATUS_INTERNAL = "internal error"    # step() caught an unexpected exception (e.g. MemoryError)
-STATUS_JUMP = "heading jumped"        # it moved > 4 deg in a sample (or 5 over two at 50 Hz):
-#                                       a magnet moving in, or a turn too fast to follow
+STATUS_JUMP = "heading jumped"        # it moved past the jump limit (docs/faults.md) in a
+#                                       sample or a few: a magnet moving in, a turn too fast
 STATUS_NO_MEMORY = "out of memory"  # the heap cannot hold a job the board needs (.no_memory
 #                                       says which: "start", "load", "calibrate", "heading");
 #                                       it keeps running and tries again
