@@ -99,6 +99,8 @@ def _program_due(i2c, what):
 
 def _need_kb():
     try:
+        drop_part("calibrate")  # the program's modules leave first, and a collection makes
+        free_bytes()            # room for the figure's module (the failed one left it short)
         from firmware.status import PROGRAM_NEED_KB
         return PROGRAM_NEED_KB
     except MemoryError:
