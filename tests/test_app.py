@@ -336,20 +336,20 @@ def test_the_board_main_runs_on_the_simulated_board_and_boots_with_its_stored_ca
     # restart once its fit is saved, then the heading from the store
     out = mp.run(["tests/scenarios/app_main.py", "boards/main.py", str(tmp_path), "40"],
                  micro=False).splitlines()
-    assert out[0].startswith("eCompass: calibrating (qmc5883l, accelerometer yes)")
+    assert out[0].startswith("eCompass: calibrating (qmc5883l, accelerometer MPU6050)")
     i = [k for k, ln in enumerate(out) if ln.startswith("restarted at ")][0]
     progress = [ln for ln in out[1:i] if ln.startswith("calibrating: ")]
     t = int(out[i].split()[2])
     assert len(progress) >= 2 * t - 2  # every 0.5 s
     assert "saved and read back" in progress[-1] and "model 10 fit" in progress[-1]
-    assert out[i + 1] == "eCompass: qmc5883l, accelerometer yes, stored calibration: loaded"
+    assert out[i + 1] == "eCompass: qmc5883l, accelerometer MPU6050, stored calibration: loaded"
     status = [ln for ln in out[i + 2:] if ln.startswith("heading ")]
     assert status and all("model 10 fit" in ln and "---.-" not in ln for ln in status)
     assert out[-1] == "stopped at 40 s"
     # reboot, on MicroPython this time: the calibration comes from the store at once
     out = mp.run(["tests/scenarios/app_main.py", "boards/main.py", str(tmp_path), "2"],
                  micro=True).splitlines()
-    assert out[0] == "eCompass: qmc5883l, accelerometer yes, stored calibration: loaded"
+    assert out[0] == "eCompass: qmc5883l, accelerometer MPU6050, stored calibration: loaded"
     assert "model 10 fit" in out[1]
     # calibrate() at the REPL: the request runs the program once more, then the heading
     (tmp_path / "calibrate.req").write_text("calibrate")

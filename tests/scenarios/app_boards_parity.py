@@ -5,8 +5,9 @@
 # Per board: each status and refusal reason as it changes (with the step), per second a digest
 # of every step's heading since the last line, the heading and the status line, every accepted
 # calibration's bytes, the headings of the still poses, the store's record and the counters.
-# argv: [plain] [SECONDS] [SETUP ...]: "plain" gives CompassApp fast=False (the plain kernels
-# where the port has the native ones); SECONDS (40) the session, its reset at 3/4 of it.
+# argv: [plain] [seed=N] [SECONDS] [SETUP ...]: "plain" gives CompassApp fast=False (the plain
+# kernels where the port has the native ones); N the board's seed (5); SECONDS (40) the
+# session, its reset at 3/4 of it.
 import json
 import sys
 
@@ -22,6 +23,9 @@ args = sys.argv[1:]
 plain = bool(args) and args[0] == "plain"
 if plain:
     args = args[1:]
+seed = 5
+if args and args[0].startswith("seed="):  # another simulated world (noise, sensor seeds)
+    seed = int(args.pop(0)[5:])
 seconds = int(args[0]) if args else 40
 boards = args[1:] or sorted(ALL_SETUPS)
 
@@ -32,7 +36,7 @@ def mix(h, v):
 
 
 def session(setup):
-    b = make_sim(setup, seed=5)
+    b = make_sim(setup, seed=seed)
     b.world.add_magnet((0.0, 90.0, 40.0), 22.0, 25.0, ramp_s=0.3, frame="sensor")
     store = mem_store()
     app = make_app(b, store=store, fast=False if plain else None)
