@@ -1,6 +1,6 @@
 """The app on every simulated board, on every interpreter: tests/scenarios/app_boards_parity.py
-(app_parity.py's session with its faults, on each board of app_world.ALL_SETUPS, one process
-per interpreter) prints the same bits on CPython, the unix port, the WebAssembly port and the
+(app_parity.py's session with its faults, on each board of app_world.ALL_SETUPS and a GY-271
+beside an MPU-6500, one process per interpreter) prints the same bits on CPython, the unix port, the WebAssembly port and the
 32-bit x86 port with its native kernels (firmware/fast.py) and without (fast=False): every
 status change, a digest of every heading, every accepted calibration's bytes, the still
 poses' headings, the stored record and the counters. A tier that cannot run here skips with
@@ -15,6 +15,7 @@ from tests import mp
 from tests.scenarios import app_world as W
 
 SCRIPT = "tests/scenarios/app_boards_parity.py"
+BOARDS = sorted(list(W.ALL_SETUPS) + list(W.PARITY_SETUPS))
 SINGLE_TOL_CDEG = 300  # a still pose's every heading within 3 deg (tests/test_app.py's bound)
 # (name, tier, plain): "plain" runs CompassApp(fast=False), the plain kernels where the port has
 # the native ones; the others take what the port has (firmware/compat.py kernels())
@@ -91,7 +92,7 @@ def test_every_board_gives_cpythons_bits(name, tier, plain):
     got, kernels = _split(_output(name))
     assert got == want, _first_difference(want, got)
     # the run took the path it names: the native kernels where the port has the emitter
-    assert sorted(kernels) == sorted(W.ALL_SETUPS)
+    assert sorted(kernels) == BOARDS
     native = tier in NATIVE and not plain
     assert set(kernels.values()) == {native} and set(want_kernels.values()) == {False}
 
@@ -105,12 +106,15 @@ def _boards(out):
     return boards
 
 
-@pytest.mark.parametrize("setup", sorted(W.ALL_SETUPS))
+@pytest.mark.parametrize("setup", BOARDS)
 def test_the_session_on_each_board_calibrates_and_keeps_the_heading(setup):
     # what the compared bits must say (CPython's run): a 10-element fit in force and stored,
     # the still poses within 3 deg, every injected fault counted once
     from host_sim import chips
     lines = _boards(_output("cpython"))[setup]
+    # the accelerometer found: the board's IMU, else its module (a GY-521's MPU6050)
+    assert lines[0][3] == {"gy9250": "MPU-9250", "icm20948": "ICM-20948",
+                           "gy271+mpu6500": "MPU-6500"}.get(setup, "MPU6050")
     accepted = [ln for ln in lines if ln[0] == "accepted"]
     assert accepted and accepted[-1][3] == 10
     fit = [ln for ln in lines if ln[0] == "fit"][0]
@@ -131,7 +135,8 @@ def test_the_session_on_each_board_calibrates_and_keeps_the_heading(setup):
     errors = dict(end[7])
     assert errors.get("bus_error") == 3 and errors.get("overflow") == 1
     assert errors.get("interference")   # the magnet from 22 s to 25 s
-    if chips.mag(chips.board(W.ALL_SETUPS[setup][0])[0])["standby"] is None:
+    chip = (W.ALL_SETUPS.get(setup) or W.PARITY_SETUPS[setup])[0]
+    if chips.mag(chips.board(chip)[0])["standby"] is None:
         # the MMC5603 is commanded per measurement: its reset costs no sample
         assert "timeout" not in errors and end[6] == 0
     else:

@@ -1,6 +1,7 @@
 # Parity on every board: app_parity.py's session (a first calibration through a figure-8 with
 # a NACK burst, an overflow, a magnet and a reset of the magnetometer on the way, then still
-# tilted poses) on each board of app_world.ALL_SETUPS, one after the other in this process.
+# tilted poses) on each board of app_world.ALL_SETUPS and PARITY_SETUPS, one after the other in
+# this process.
 # tests/test_boards_tiers.py runs it on every interpreter and compares the output bit for bit.
 # Per board: each status and refusal reason as it changes (with the step), per second a digest
 # of every step's heading since the last line, the heading and the status line, every accepted
@@ -12,8 +13,8 @@ import json
 import sys
 
 sys.path.append("tests/scenarios")
-from app_world import (ALL_SETUPS, OVERFLOW_RAW, TILTED_POSES, hold, make_app,  # noqa: E402
-                       make_sim, mem_store)
+from app_world import (ALL_SETUPS, OVERFLOW_RAW, PARITY_SETUPS, TILTED_POSES,  # noqa: E402
+                       hold, make_app, make_sim, mem_store)
 
 from binascii import hexlify  # noqa: E402
 
@@ -27,7 +28,7 @@ seed = 5
 if args and args[0].startswith("seed="):  # another simulated world (noise, sensor seeds)
     seed = int(args.pop(0)[5:])
 seconds = int(args[0]) if args else 40
-boards = args[1:] or sorted(ALL_SETUPS)
+boards = args[1:] or sorted(ALL_SETUPS) + sorted(PARITY_SETUPS)
 
 
 def mix(h, v):
@@ -40,7 +41,7 @@ def session(setup):
     b.world.add_magnet((0.0, 90.0, 40.0), 22.0, 25.0, ramp_s=0.3, frame="sensor")
     store = mem_store()
     app = make_app(b, store=store, fast=False if plain else None)
-    print(json.dumps(["board", setup, app.mag.KIND, app.accel is not None]))
+    print(json.dumps(["board", setup, app.mag.KIND, app.accel.NAME]))
     print(json.dumps(["kernels", setup, app.fast]))  # the one line that differs by tier
     end = seconds * 1000000
     events = [(8000000, "nack"), (12000000, "overflow"), (end * 3 // 4, "reset")]
@@ -57,7 +58,7 @@ def session(setup):
                 b.bus.inject_nack(after=0, count=3)
             elif ev == "overflow":
                 b.mag.inject_raw(OVERFLOW_RAW[app.mag.KIND], 0, 0)
-            elif setup == "gy271":
+            elif b.chip == "gy271":
                 b.bus.writeto_mem(0x0D, 0x0A, b"\x80")  # SOFT_RST: back in standby
             else:
                 b.mag.power_on()  # a brown-out: its registers at their power-on values
