@@ -26,7 +26,8 @@ is the body -> sensor signed permutation of host_sim.world):
                         x = the accelerometer's x, y = -its y, z = -its z -> (1, 2, 3)
 (host_sim/chips.py BOARDS holds this list.)
 `accel=True` adds a separate MPU6050 module (GY-521, 0x68, x forward, y left, z up) to a board
-without one; `accel="mpu6500"` (an IMUS kind of host_sim/chips.py) adds that chip's module. For these mountings the firmware's sensor -> body maps are: magnetometer
+without one; `accel="mpu6500"` (an IMUS kind of host_sim/chips.py) adds that chip's module,
+lying the same way. For these mountings the firmware's sensor -> body maps are: magnetometer
 (x, -y, -z) (the LIS2MDL: (x, -y, z)); accelerometer, AN4248 gravity sign, (-x, y, z).
 """
 from host_sim import chips

@@ -1,10 +1,11 @@
 """The app on every simulated board, on every interpreter: tests/scenarios/app_boards_parity.py
 (app_parity.py's session with its faults, on each board of app_world.ALL_SETUPS and a GY-271
-beside an MPU-6500, one process per interpreter) prints the same bits on CPython, the unix port, the WebAssembly port and the
-32-bit x86 port with its native kernels (firmware/fast.py) and without (fast=False): every
-status change, a digest of every heading, every accepted calibration's bytes, the still
-poses' headings, the stored record and the counters. A tier that cannot run here skips with
-its reason (tests/mp.py). The CPython run is also held to what the session must give."""
+beside an MPU-6500, one process per interpreter) prints the same bits on CPython, the unix
+port, the WebAssembly port and the 32-bit x86 port with its native kernels (firmware/fast.py)
+and without (fast=False): every status change, a digest of every heading, every accepted
+calibration's bytes, the still poses' headings, the stored record and the counters. A tier
+that cannot run here skips with its reason (tests/mp.py). The CPython run is also held to
+what the session must give."""
 import functools
 import os
 from concurrent.futures import ThreadPoolExecutor
@@ -13,6 +14,8 @@ import pytest
 
 from tests import mp
 from tests.scenarios import app_world as W
+# the qemu firmware's single-precision floats round the simulator's registers otherwise
+from tests.test_tiers import ARM_FLOAT_XFAIL
 
 SCRIPT = "tests/scenarios/app_boards_parity.py"
 BOARDS = sorted(list(W.ALL_SETUPS) + list(W.PARITY_SETUPS))
@@ -22,9 +25,6 @@ SINGLE_TOL_CDEG = 300  # a still pose's every heading within 3 deg (tests/test_a
 RUNS = (("cpython", "cpython", False), ("unix", "unix", False), ("wasm", "wasm", False),
         ("x86-32", "x86-32", False), ("x86-32-plain", "x86-32", True),
         ("arm", "arm", False))
-# the qemu firmware's single-precision floats round the simulator's registers otherwise
-# (tests/test_tiers.py ARM_FLOAT_XFAIL); the qemu tier runs a script without arguments
-ARM_FLOAT_XFAIL = "qemu firmware floats are single precision: the float simulator rounds differently"
 # the runs with native kernels where the tier has the emitter
 NATIVE = ("unix", "x86-32", "arm")
 
