@@ -18,7 +18,11 @@ from tests.scenarios import app_world as W
 from tests.test_tiers import ARM_FLOAT_XFAIL
 
 SCRIPT = "tests/scenarios/app_boards_parity.py"
-BOARDS = sorted(list(W.ALL_SETUPS) + list(W.PARITY_SETUPS))
+# the scenario's sessions: every board, then the gyro-aided heading on a board of each gyroscope
+# driver (the MPU-6500's is the MPU-9250's)
+BOARDS = sorted(W.ALL_SETUPS) + sorted(W.PARITY_SETUPS)
+GYRO = ["gy271/gyro", "gy9250/gyro", "icm20948/gyro"]
+SESSIONS = BOARDS + GYRO
 SINGLE_TOL_CDEG = 300  # a still pose's every heading within 3 deg (tests/test_app.py's bound)
 # (name, tier, plain): "plain" runs CompassApp(fast=False), the plain kernels where the port has
 # the native ones; the others take what the port has (firmware/compat.py kernels())
@@ -92,7 +96,7 @@ def test_every_board_gives_cpythons_bits(name, tier, plain):
     got, kernels = _split(_output(name))
     assert got == want, _first_difference(want, got)
     # the run took the path it names: the native kernels where the port has the emitter
-    assert sorted(kernels) == BOARDS
+    assert sorted(kernels) == sorted(SESSIONS)
     native = tier in NATIVE and not plain
     assert set(kernels.values()) == {native} and set(want_kernels.values()) == {False}
 
@@ -106,12 +110,17 @@ def _boards(out):
     return boards
 
 
-@pytest.mark.parametrize("setup", BOARDS)
-def test_the_session_on_each_board_calibrates_and_keeps_the_heading(setup):
+def test_the_scenario_runs_every_board_and_a_board_of_each_gyroscope():
+    assert list(_boards(_output("cpython"))) == SESSIONS
+
+
+@pytest.mark.parametrize("session", SESSIONS)
+def test_the_session_on_each_board_calibrates_and_keeps_the_heading(session):
     # what the compared bits must say (CPython's run): a 10-element fit in force and stored,
     # the still poses within 3 deg, every injected fault counted once
     from host_sim import chips
-    lines = _boards(_output("cpython"))[setup]
+    lines = _boards(_output("cpython"))[session]
+    setup, gyro = session.split("/")[0], session.endswith("/gyro")
     # the accelerometer found: the board's IMU, else its module (a GY-521's MPU6050)
     assert lines[0][3] == {"gy9250": "MPU-9250", "icm20948": "ICM-20948",
                            "gy271+mpu6500": "MPU-6500"}.get(setup, "MPU6050")
@@ -124,6 +133,9 @@ def test_the_session_on_each_board_calibrates_and_keeps_the_heading(setup):
     assert store[:6] + store[8:] == fit[5][:6] + fit[5][8:] and store[6:8] != "00"
     seconds = [ln for ln in lines if ln[0] == "t"]
     assert len(seconds) == 41 and len({ln[3] for ln in seconds}) > 35   # a digest per second
+    # the gyro's filter: its bias and uncertainty on each line, the status line says so
+    assert all(len(ln) == (9 if gyro else 6) for ln in seconds)
+    assert all(("gyro:" in ln[5]) == gyro for ln in seconds)
     poses = [ln for ln in lines if ln[0] == "pose"]
     assert len(poses) == len(W.TILTED_POSES)
     for ln in poses:

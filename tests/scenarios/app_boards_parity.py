@@ -6,9 +6,12 @@
 # Per board: each status and refusal reason as it changes (with the step), per second a digest
 # of every step's heading since the last line, the heading and the status line, every accepted
 # calibration's bytes, the headings of the still poses, the store's record and the counters.
+# Then the same session with the gyro-aided heading (use_gyro(), docs/gyro.md) on a board of
+# each gyroscope driver (GYRO: MPU6050, MPU-9250, ICM-20948), with the filter's bias and
+# uncertainty per second.
 # argv: [plain] [seed=N] [SECONDS] [SETUP ...]: "plain" gives CompassApp fast=False (the plain
 # kernels where the port has the native ones); N the board's seed (5); SECONDS (40) the
-# session, its reset at 3/4 of it.
+# session, its reset at 3/4 of it; SETUP/gyro a session with the gyro.
 import json
 import sys
 
@@ -28,7 +31,8 @@ seed = 5
 if args and args[0].startswith("seed="):  # another simulated world (noise, sensor seeds)
     seed = int(args.pop(0)[5:])
 seconds = int(args[0]) if args else 40
-boards = args[1:] or sorted(ALL_SETUPS) + sorted(PARITY_SETUPS)
+GYRO = ("gy271/gyro", "gy9250/gyro", "icm20948/gyro")
+boards = args[1:] or sorted(ALL_SETUPS) + sorted(PARITY_SETUPS) + list(GYRO)
 
 
 def mix(h, v):
@@ -37,13 +41,14 @@ def mix(h, v):
 
 
 def session(setup):
-    b = make_sim(setup, seed=seed)
+    b = make_sim(setup.split("/")[0], seed=seed)
     b.world.add_magnet((0.0, 90.0, 40.0), 22.0, 25.0, ramp_s=0.3, frame="sensor")
     store = mem_store()
     app = make_app(b, store=store, fast=False if plain else None)
+    att = app.use_gyro() if setup.endswith("/gyro") else None
+    end = seconds * 1000000
     print(json.dumps(["board", setup, app.mag.KIND, app.accel.NAME]))
     print(json.dumps(["kernels", setup, app.fast]))  # the one line that differs by tier
-    end = seconds * 1000000
     events = [(8000000, "nack"), (12000000, "overflow"), (end * 3 // 4, "reset")]
     accepted, next_t, step, digest = 0, 0, 0, 0
     status, reason = None, None
@@ -74,7 +79,8 @@ def session(setup):
         if now >= next_t:
             next_t += 1000000
             print(json.dumps(["t", now // 1000000, step, digest, app.heading_kang,
-                              status_line(app)]))
+                              status_line(app)] + ([] if att is None else [
+                                  list(att.bias), att.uncertainty_cdeg, att.known])))
             digest = 0
     for pose in TILTED_POSES:
         hold(b, pose[0], pose[1], pose[2])
