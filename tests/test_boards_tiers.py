@@ -129,7 +129,7 @@ def test_the_session_on_each_board_calibrates_and_keeps_the_heading(session):
     fit = [ln for ln in lines if ln[0] == "fit"][0]
     assert fit[1] == 10 and fit[5] == accepted[-1][7]
     # the store holds it, with the dip it measured (payload byte 3, firmware/calibration.py)
-    store = [ln for ln in lines if ln[0] == "store"][0][2]
+    seq, store = [ln for ln in lines if ln[0] == "store"][0][1:]
     assert store[:6] + store[8:] == fit[5][:6] + fit[5][8:] and store[6:8] != "00"
     seconds = [ln for ln in lines if ln[0] == "t"]
     assert len(seconds) == 41 and len({ln[3] for ln in seconds}) > 35   # a digest per second
@@ -145,6 +145,7 @@ def test_the_session_on_each_board_calibrates_and_keeps_the_heading(session):
             assert abs((h - want + 32768) % 65536 - 32768) < SINGLE_TOL_CDEG * 65536 // 36000
     end = [ln for ln in lines if ln[0] == "end"][0]
     errors = dict(end[7])
+    assert seq >= end[5] >= 1                  # the record's sequence number, the saves
     assert errors.get("bus_error") == 3 and errors.get("overflow") == 1
     assert errors.get("interference")   # the magnet from 22 s to 25 s
     chip = (W.ALL_SETUPS.get(setup) or W.PARITY_SETUPS[setup])[0]

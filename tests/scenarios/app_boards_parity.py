@@ -92,7 +92,8 @@ def session(setup):
     c = app.pending or app.calibration
     print(json.dumps(["fit", c.model, c.fit_error, c.samples, c.coverage,
                       hexlify(c.to_bytes()).decode()]))
-    print(json.dumps(["store", store.seq, hexlify(store.load()).decode()]))
+    record = hexlify(store.load()).decode()  # (load() sets .seq)
+    print(json.dumps(["store", store.seq, record]))
     print(json.dumps(["end", app.accepted, app.refused, app.solves, app.slices, app.stored,
                       app.reinits, sorted(app.errors.items())]))
 
