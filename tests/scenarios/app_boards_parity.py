@@ -7,8 +7,8 @@
 # of every step's heading since the last line, the heading and the status line, every accepted
 # calibration's bytes, the headings of the still poses, the store's record and the counters.
 # Then the same session with the gyro-aided heading (use_gyro(), docs/gyro.md) on a board of
-# each gyroscope driver (GYRO: MPU6050, MPU-9250, ICM-20948), with the filter's bias and
-# uncertainty per second.
+# each gyroscope driver (GYRO: MPU6050, ICM-20948; the MPU-9250's reads are the MPU6050's),
+# with the filter's bias and uncertainty per second.
 # argv: [plain] [seed=N] [SECONDS] [SETUP ...]: "plain" gives CompassApp fast=False (the plain
 # kernels where the port has the native ones); N the board's seed (5); SECONDS (40) the
 # session, its reset at 3/4 of it; SETUP/gyro a session with the gyro.
@@ -31,7 +31,7 @@ seed = 5
 if args and args[0].startswith("seed="):  # another simulated world (noise, sensor seeds)
     seed = int(args.pop(0)[5:])
 seconds = int(args[0]) if args else 40
-GYRO = ("gy271/gyro", "gy9250/gyro", "icm20948/gyro")
+GYRO = ("gy271/gyro", "icm20948/gyro")
 boards = args[1:] or sorted(ALL_SETUPS) + sorted(PARITY_SETUPS) + list(GYRO)
 
 
