@@ -90,23 +90,8 @@ def _probe(i2c, accel, found, notes, options):
             name = row[i:row.find(b" ", i)].decode()
             if (addr, name) in done:
                 continue
-            if [1 for d in done if d[0] == addr]:
-                f = row.split()
-                reg = int(f[2], 16)
-                want = bytearray(len(f[3]) // 2)
-                for i in range(len(want)):
-                    want[i] = int(f[3][2 * i:2 * i + 2], 16)
-                b = bytearray(len(want))
-                try:
-                    i2c.readfrom_mem_into(addr, reg, b)
-                except OSError as e:
-                    notes.append(str(bus_error(e, addr, reg)))
-                    continue
-                if b != want:
-                    notes.append("0x%02X answers but %s (0x%02X) reads %s, not the %s's %s" % (
-                        addr, f[4].decode(), reg, _hex(b, " "), f[6].decode(),
-                        _hex(want, " ")))
-                    continue
+            if [1 for d in done if d[0] == addr] and not _has_id(i2c, addr, row, notes):
+                continue
             done.append((addr, name))
             loaded = "firmware." + name in sys.modules
             opts = options if accel == _IMU else {
@@ -118,6 +103,34 @@ def _probe(i2c, accel, found, notes, options):
                 notes.append(str(e))
                 if not loaded:
                     drop(name)
+            except ValueError:
+                # an option value this driver refuses (its checks come before its ID probe):
+                # the caller's error only when this chip is the one there (AK8963 rate=8 is
+                # not the AK09916's to refuse at their shared 0x0C)
+                if _has_id(i2c, addr, row, notes):
+                    raise
+                if not loaded:
+                    drop(name)
+
+
+def _has_id(i2c, addr, row, notes):
+    # True when the line's ID register at addr reads its ID; else a note says what it read
+    f = row.split()
+    reg = int(f[2], 16)
+    want = bytearray(len(f[3]) // 2)
+    for i in range(len(want)):
+        want[i] = int(f[3][2 * i:2 * i + 2], 16)
+    b = bytearray(len(want))
+    try:
+        i2c.readfrom_mem_into(addr, reg, b)
+    except OSError as e:
+        notes.append(str(bus_error(e, addr, reg)))
+        return False
+    if b != want:
+        notes.append("0x%02X answers but %s (0x%02X) reads %s, not the %s's %s" % (
+            addr, f[4].decode(), reg, _hex(b, " "), f[6].decode(), _hex(want, " ")))
+        return False
+    return True
 
 
 def _any(buf, value):

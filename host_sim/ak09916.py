@@ -40,6 +40,9 @@ class AK09916Sim(AKMagSim):
     PERIODS = {0x02: 100000, 0x04: 50000, 0x06: 20000, 0x08: 10000}
     UT_PER_COUNT = 0.15
     LIMIT = 32752
+    # no glitch_range(): why, for a test that would glitch one
+    FIXED_RANGE = ("the AK09916 has one output width and sensitivity, 0.15 uT/LSB, "
+                   "-32752..32752 (ICM-20948 datasheet DS-000189 3.3, 13.3): no range setting")
 
     def next_pointer(self, reg):
         if reg == 0x03:

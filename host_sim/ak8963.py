@@ -41,8 +41,11 @@ Behaviour modelled (lazily, on the next transaction):
   0.15 uT/LSB, a model choice) and rounds to the nearest count.
 - Self-test and external trigger modes are not modelled (no data).
 - Fault hooks: freeze() and constant(x, y, z) (host_sim.bus.MagnetometerModel), brown_out(),
-  glitch(reg, value) (the mode register takes it whatever the mode rules); inject_raw(x, y, z) forces the raw counts of the next set (values
-  beyond the output range are clipped and set HOFL).
+  glitch(reg, value) (the mode register takes it whatever the mode rules), glitch_range()
+  (CNTL1's BIT flipped: the other output width); inject_raw(x, y, z) forces the raw counts
+  of the next set (values beyond the output range are clipped and set HOFL). A write of
+  power-down, SRST or power-on cures freeze and constant unless sticky (a model choice: a
+  driver's re-initialisation passes through power-down, as the HMC5883L's writes MODE).
 """
 import math
 
@@ -134,6 +137,14 @@ class AKMagSim(MagnetometerModel):
 
     def ut_per_count(self):
         return self.UT_PER_COUNT
+
+    def period_us(self):
+        """The continuous mode's measurement period, None in any other mode."""
+        return self.PERIODS.get(self.mode)
+
+    def counts_per_gauss(self):
+        """Output counts per gauss of the output width now set (before any ASA trim)."""
+        return UT_PER_GAUSS / self.ut_per_count()
 
     def gains(self):
         """The raw counts per count of field on each axis (1 where there is no trim)."""
@@ -252,6 +263,8 @@ class AKMagSim(MagnetometerModel):
             self.mode = _MODE_PD
             self._t_pd = now
             self._t0 = None
+            if not self.sticky:      # the measurement circuit stopped: a fault is cured
+                self.fault = None
             return
         restart = mode == self.mode and mode in self.PERIODS
         if not restart and (self.mode != _MODE_PD or now - self._t_pd < _TWAT_US):
@@ -284,6 +297,10 @@ class AK8963Sim(AKMagSim):
 
     def limit(self):
         return 32760 if self.regs[0x0A] & _BITM else 8190
+
+    def glitch_range(self):
+        """A glitch that flips CNTL1's BIT: 14-bit output (0.6 uT/LSB) <-> 16-bit (0.15)."""
+        self.glitch(0x0A, self.regs[0x0A] ^ _BITM)
 
     def gains(self):
         # raw = field / ((ASA - 128) x 0.5 / 128 + 1) = field x 256 / (ASA + 128)

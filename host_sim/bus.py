@@ -108,9 +108,12 @@ class RegisterDevice:
 
 class MagnetometerModel(RegisterDevice):
     """A RegisterDevice with the data-register fault hooks the magnetometer models share
-    (their docstrings say what each chip then shows): freeze() keeps the output registers as they are, constant(x, y, z)
-    makes every conversion read that sample; sticky=True survives a reset. The model reads
-    .fault, .fault_value and .sticky when it converts."""
+    (their docstrings say what each chip then shows): freeze() keeps the output registers as
+    they are, constant(x, y, z) makes every conversion read that sample; sticky=True survives
+    a reset. The model reads .fault, .fault_value and .sticky when it converts. Each model
+    also has counts_per_gauss() (its output's scale now), period_us() (its output period now;
+    the MMC5603, commanded per measurement, has meas_us()), and glitch_range() (a glitch write
+    to its range or gain setting) or, for a chip with one range, FIXED_RANGE: why not."""
     fault = None
     fault_value = (0, 0, 0)
     sticky = False

@@ -155,6 +155,10 @@ class HMC5883LSim(MagnetometerModel):
     def glitch(self, reg, value):
         self.write_reg(reg, value)
 
+    def glitch_range(self):
+        """A glitch that writes CRB to GN 3 (660 counts/G) or, from GN 3, to GN 1 (1090)."""
+        self.glitch(0x01, 0x20 if self.crb >> 5 == 3 else 0x60)
+
     # --- lazy time --------------------------------------------------------------------
     def update(self, now_us):
         if self._single_due is not None and now_us >= self._single_due:

@@ -98,6 +98,10 @@ class LIS2MDLSim(STMagModel):
         self.pointer = 0
 
     # --- the chip's settings ------------------------------------------------------------
+    # no glitch_range(): why, for a test that would glitch one
+    FIXED_RANGE = ("the LIS2MDL's sensitivity is fixed, 1.5 mG/LSB (+-49.152 G in int16; "
+                   "datasheet, magnetic characteristics): no range setting")
+
     def counts_per_gauss(self):
         return COUNTS_PER_G
 

@@ -109,6 +109,10 @@ class LIS3MDLSim(STMagModel):
     def single_done(self):
         self.ctrl[2] |= 0x03
 
+    def glitch_range(self):
+        """A glitch that flips CTRL_REG2's FS0 (+-4 <-> +-8 G, +-12 <-> +-16 G)."""
+        self.glitch(_REG_CTRL1 + 1, self.ctrl[1] ^ 0x20)
+
     # --- sub-address and registers --------------------------------------------------------
     def select(self, reg):
         self.pointer = reg & 0x7F

@@ -131,6 +131,14 @@ class MMC5603Sim(MagnetometerModel):
     def meas_us(self):
         return _MEAS_US[self.ctrl1 & 0x03]
 
+    # no glitch_range(): why, for a test that would glitch one
+    FIXED_RANGE = ("the MMC5603NJ has one range, +-30 G at 16384 counts/G (datasheet, "
+                   "electrical characteristics), and write-only controls: no range setting")
+
+    def counts_per_gauss(self):
+        """Counts per gauss of the 20-bit output (the field H a SET/RESET pair gives)."""
+        return COUNTS_PER_G
+
     def status1(self):
         return (_OTP_READ_DONE | (_MEAS_M_DONE if self.m_done else 0)
                 | (_MEAS_T_DONE if self.t_done else 0))

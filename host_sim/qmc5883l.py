@@ -138,6 +138,8 @@ class QMC5883LSim(MagnetometerModel):
     def odr_period_us(self):
         return _ODR_PERIOD_US[(self.ctrl1 >> 2) & 0x03]
 
+    period_us = odr_period_us     # the name the other models give it
+
     def osr(self):
         return _OSR[(self.ctrl1 >> 6) & 0x03]
 
@@ -168,6 +170,10 @@ class QMC5883LSim(MagnetometerModel):
 
     def glitch(self, reg, value):
         self.write_reg(reg, value)
+
+    def glitch_range(self):
+        """A glitch that flips CTRL1's RNG between +-2 G and +-8 G (12000 <-> 3000 counts/G)."""
+        self.glitch(0x09, self.ctrl1 ^ 0x10)
 
     # --- lazy time --------------------------------------------------------------------
     def update(self, now_us):

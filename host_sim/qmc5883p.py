@@ -93,6 +93,10 @@ class QMC5883PSim(MagnetometerModel):
     def counts_per_gauss(self):
         return _COUNTS_PER_G[(self.ctrl2 >> 2) & 0x03]
 
+    def period_us(self):
+        """The output period CTRL1's ODR sets."""
+        return _ODR_PERIOD_US[(self.ctrl1 >> 2) & 0x03]
+
     def status(self):
         return (_STATUS_DRDY if self.drdy else 0) | (_STATUS_OVFL if self.ovfl else 0)
 
@@ -106,6 +110,10 @@ class QMC5883PSim(MagnetometerModel):
 
     def glitch(self, reg, value):
         self.write_reg(reg, value)
+
+    def glitch_range(self):
+        """A glitch that flips CTRL2's lower RNG bit (+-2 <-> +-8 G, +-12 <-> +-30 G)."""
+        self.glitch(0x0B, self.ctrl2 ^ 0x04)
 
     def update(self, now_us):
         if self._t0 is None:

@@ -48,6 +48,23 @@ def test_detect_passes_each_driver_only_its_own_options():
     assert (q.counts_per_gauss, h.counts_per_gauss) == (3000, 390)
 
 
+@pytest.mark.parametrize("chip,options,kind,period", [
+    ("gy9250", {"rate": 8}, "ak8963", 125000), ("icm20948", {"rate": 50}, "ak09916", 20000),
+    ("lis2mdl", {"odr": 100}, "lis2mdl", 10000)])
+def test_an_option_value_only_the_chip_there_takes_is_not_refused_by_another_at_its_address(
+        chip, options, kind, period):
+    # 0x0C is the AK09916's and the AK8963's, 0x1E the HMC5883L's, LIS3MDL's and LIS2MDL's: a
+    # driver tried first there refuses a value the chip there takes (AK8963 rate=8, LIS2MDL
+    # odr=100); that is no error unless its own ID register reads its ID
+    b = make_board(chip)
+    mag = _detect(b, **options)
+    assert mag.KIND == kind and b.mag.period_us() == period
+    bad = {k: 7 for k in options}      # a value no driver at that address takes
+    with pytest.raises(ValueError) as e:
+        _detect(make_board(chip), **bad)
+    assert mag.__class__.__name__ in str(e.value) and "=7" in str(e.value)
+
+
 def test_detect_rejects_an_unknown_option():
     with pytest.raises(TypeError) as e:
         detect.detect(make_board("qmc5883l").bus, rnage=8)

@@ -26,3 +26,17 @@ def test_the_first_calibration_transcript_is_what_the_simulated_board_prints(tmp
         q = q.rstrip(".")
         assert any(q in ln for ln in out), (q, out[:30])
     assert any(ln.startswith("restarted at ") for ln in out)
+
+
+def test_the_wiring_table_lists_every_chip_detect_finds_at_each_of_its_addresses():
+    # firmware/detect.py CHIPS is the one list of the chips a board finds: each magnetometer
+    # and IMU is in README's wiring table with every address detect() looks at
+    from firmware.detect import CHIPS
+    text = open(README).read()
+    table = text[text.index("## Wiring"):]
+    rows = [r for r in table[:table.index("\n## ", 4)].splitlines() if r.startswith("| ")]
+    for entry in CHIPS:
+        addrs, label = entry.decode().split()[1], entry.decode().split()[6]
+        for a in addrs.split(","):
+            addr = "0x" + a
+            assert any(label in r and addr in r for r in rows), (label, addr)

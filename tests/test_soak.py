@@ -14,6 +14,7 @@ from firmware.store import CalStore
 from host_sim.boards import make_board
 from desktop import soak
 from desktop.memfs import MemFs
+from tests.known_limits import JUMP_NOISE, expect
 
 NEED_NO_DETECTION = {"stall", "accel_absent"}  # a pause; a missing part found at boot
 
@@ -143,9 +144,9 @@ def test_the_campaign_on_the_akm_boards_has_no_exception_no_loss_and_no_wrong_bu
 @pytest.mark.parametrize("setup", soak.CHIP_SETUPS, ids=[s for s, _ in soak.CHIP_SETUPS])
 def test_a_short_campaign_on_each_other_chip_has_no_exception_no_loss_and_no_wrong_but_ok(
         setup):
-    # the HMC5883L, QMC5883P, LIS3MDL, LIS2MDL and MMC5603 modules with a GY-521, alone:
-    # every fault class (the range glitch to each chip's own range or rate register), the
-    # goals of make soak
+    # the HMC5883L, QMC5883P, LIS3MDL, LIS2MDL and MMC5603 modules with a GY-521, and the
+    # GY-9250 (AK8963) and the ICM-20948 (AK09916), alone: every fault class (the range glitch
+    # to each chip's own range or rate register), the goals of make soak
     st = soak.campaign(sessions=8, seconds=30, seed=5, setups=(setup,))
     assert st["total_faults"] >= 12 and len(st["faults"]) >= 8
     assert st["exceptions"] == 0 and st["lost"] == 0
@@ -159,8 +160,11 @@ def test_a_short_campaign_on_each_other_chip_has_no_exception_no_loss_and_no_wro
         n = st["detect_ms"][cls]["n"] + st["reboot_cleared"].get(cls, 0)
         assert n == st["faults"][cls], cls
     c = st["clean"]
-    assert c["sessions"] == 2 and c["steps"] > 800
-    assert c["not_ok"] <= c["steps"] // 1000 and c["wrong_but_ok"] == 0
+    assert c["sessions"] == 2 and c["steps"] > 800 and c["wrong_but_ok"] == 0
+    # the AKM boards at 100 Hz: false jump alarms within the 2 % docs/faults.md states
+    assert c["not_ok"] <= 20 * c["steps"] // 1000, c
+    expect(c["not_ok"] <= c["steps"] // 1000, setup[0],
+           {"gy9250": JUMP_NOISE, "icm20948": JUMP_NOISE}, c)
 
 
 @pytest.mark.xfail(strict=True, reason="docs/chips.md, known limits: fault-free LIS3MDL and "
