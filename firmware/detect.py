@@ -40,6 +40,7 @@ CHIPS = (
     b"I 68,69 75 71 WHO_AM_I mpu9250 MPU-9250 accel_range,dlpf,gyro_range -",
     b"I 68,69 75 73 WHO_AM_I mpu9250 MPU-9255 accel_range,dlpf,gyro_range -",
     b"I 68,69 00 EA WHO_AM_I icm20948 ICM-20948 accel_range,dlpf,gyro_range -",
+    b"I 68,69 75 70 WHO_AM_I mpu9250 MPU-6500 accel_range,dlpf,gyro_range -",
 )
 _COMMON = b"delay_us,timeout_us"
 

@@ -45,6 +45,7 @@ _GYRO_CPD_X10 = (1310, 655, 328, 164)
 
 class ICM20948(Device):
     OPTIONS = ("accel_range", "dlpf", "gyro_range")
+    NAME = "ICM-20948"
 
     def __init__(self, i2c, address=0x68, *, accel_range=2, dlpf=24, gyro_range=500):
         afs = option_code("ICM20948", "accel_range", accel_range, _RANGES_G)

@@ -40,6 +40,7 @@ _GYRO_CPD_X10 = (1310, 655, 328, 164)  # counts per deg/s x 10 at each FS_SEL (t
 
 class MPU6050(Device):
     OPTIONS = ("accel_range", "dlpf", "gyro_range")
+    NAME = "MPU6050"  # the chip, as the boot line names it (firmware/runner.py)
 
     def __init__(self, i2c, address=0x68, *, accel_range=2, dlpf=21, gyro_range=500):
         if accel_range not in _RANGES_G:

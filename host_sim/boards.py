@@ -26,7 +26,8 @@ is the body -> sensor signed permutation of host_sim.world):
                         x = the accelerometer's x, y = -its y, z = -its z -> (1, 2, 3)
 (host_sim/chips.py BOARDS holds this list.)
 `accel=True` adds a separate MPU6050 module (GY-521, 0x68, x forward, y left, z up) to a board
-without one. For these mountings the firmware's sensor -> body maps are: magnetometer
+without one; `accel="mpu6500"` (an IMUS kind of host_sim/chips.py) adds that chip's module,
+lying the same way. For these mountings the firmware's sensor -> body maps are: magnetometer
 (x, -y, -z) (the LIS2MDL: (x, -y, z)); accelerometer, AN4248 gravity sign, (-x, y, z).
 """
 from host_sim import chips
@@ -91,7 +92,8 @@ def make_board(chip="qmc5883l", world=None, seed=1, noise=True, freq=400000, mou
     b.accel_mount = check_mount(accel_mount if accel_mount is not None else MOUNT_X_FWD_Y_LEFT_Z_UP)
     b.mag, b.mag_address = _mag(kind, world, b.mount, mag_seed, noise)
     if imu is None and accel:
-        imu = "mpu6050"  # a GY-521 module beside the magnetometer
+        # a GY-521 module beside the magnetometer, or the module of the IMU `accel` names
+        imu = accel if isinstance(accel, str) else "mpu6050"
     if imu is not None and (accel is None or accel):
         m = chips.imu(imu)
         kw = dict(m.get("options", {}))

@@ -29,7 +29,8 @@ MAGS, one dict per magnetometer:
               power-down): no data-ready after it; None where the driver commands each
               measurement
 IMUS, one dict per accelerometer: kind, name, addresses, id, model (as above), options (what
-  the model is made with: the MPU-9255 is the MPU-9250's model with its WHO_AM_I).
+  the model is made with: the MPU-9255 and the MPU-6500 are the MPU-9250's model with their
+  WHO_AM_I).
 BOARDS: make_board's names -> (magnetometer kind, accelerometer kind or None, True when the
   magnetometer sits behind the accelerometer's I2C bypass, the breakout's label, the
   magnetometer's mounting on the board: body -> sensor, host_sim.world).
@@ -104,6 +105,9 @@ IMUS = (
      "model": "mpu6050.MPU9250Sim"},
     {"kind": "mpu9255", "name": "MPU-9255", "addresses": (0x68, 0x69), "id": (0x75, b"\x73"),
      "model": "mpu6050.MPU9250Sim", "options": {"who_am_i": 0x73}},
+    # the MPU-9250 without its AK8963 (register map RM-MPU-6500A-00 rev 2.1; docs/hardware.md)
+    {"kind": "mpu6500", "name": "MPU-6500", "addresses": (0x68, 0x69), "id": (0x75, b"\x70"),
+     "model": "mpu6050.MPU9250Sim", "options": {"who_am_i": 0x70}},
     {"kind": "icm20948", "name": "ICM-20948", "addresses": (0x68, 0x69), "id": (0x00, b"\xea"),
      "model": "icm20948.ICM20948Sim"},
 )

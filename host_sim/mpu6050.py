@@ -277,7 +277,8 @@ _ACCEL_PSD_G_9250 = 300e-6     # 300 ug/sqrt(Hz)
 
 
 class MPU9250Sim(MPU6050Sim):
-    """MPU-9250 (WHO_AM_I 0x71) or, with who_am_i=0x73, MPU-9255: the MPU-6050 model with
+    """MPU-9250 (WHO_AM_I 0x71) or, with who_am_i=0x73, MPU-9255 (0x70: the MPU-6500, the
+    MPU-9250's accelerometer and gyroscope without its magnetometer): the MPU-6050 model with
     WHO_AM_I, the accelerometer's own low-pass filter in ACCEL_CONFIG2 (0x1D: A_DLPF_CFG
     0-7 = 218, 218, 99, 45, 21, 10, 5, 420 Hz; ACCEL_FCHOICE_B = 1 bypasses it, 1046 Hz),
     300 ug/sqrt(Hz) of accelerometer noise, 0.1 deg/s RMS of gyroscope noise and the

@@ -304,14 +304,14 @@ def test_a_read_through_the_adapter_allocates_nothing_on_micropython(name):
 def test_circuitpython_code_py_runs_the_app_and_boots_with_its_stored_calibration(tmp_path):
     # boards/circuitpython/code.py with stand-ins for CircuitPython's board and busio
     out = mp.run(["tests/scenarios/cpy_code.py", str(tmp_path), "12"], micro=False).splitlines()
-    assert out[0] == "eCompass: qmc5883l, accelerometer yes, stored calibration: missing"
+    assert out[0] == "eCompass: qmc5883l, accelerometer MPU6050, stored calibration: missing"
     status = [ln for ln in out if ln.startswith("heading ")]
     assert 22 <= len(status) <= 25  # every 0.5 s
     assert "uncalibrated" in status[0] and "model 10 fit" in status[-1]
     assert out[-2:] == ["stopped at 12 s", "busio.I2C [['GP5', 'GP4', 400000]]"]
     # reboot on MicroPython: the calibration saved through CalStore is loaded at once
     out = mp.run(["tests/scenarios/cpy_code.py", str(tmp_path), "2"], micro=True).splitlines()
-    assert out[0] == "eCompass: qmc5883l, accelerometer yes, stored calibration: loaded"
+    assert out[0] == "eCompass: qmc5883l, accelerometer MPU6050, stored calibration: loaded"
     assert "model 10 fit" in out[1]
 
 

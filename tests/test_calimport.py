@@ -91,7 +91,7 @@ def test_the_board_boots_with_the_imported_file_and_its_heading_is_calibrated(fi
     out = mp.run(["tests/scenarios/app_main.py", "boards/main.py", str(tmp_path), "1"],
                  micro=True).splitlines()
     assert out[0].startswith("eCompass: imported ") and "model 10" in out[0], out[:2]
-    assert out[1] == "eCompass: qmc5883l, accelerometer yes, stored calibration: loaded"
+    assert out[1] == "eCompass: qmc5883l, accelerometer MPU6050, stored calibration: loaded"
     assert "model 10 fit 0.3" in out[2] or "model 10 fit 0.4" in out[2], out[2]
     assert os.path.exists(str(tmp_path / "calibration.json.imported"))
 

@@ -92,8 +92,8 @@ def test_icm20948_reset_glitch_and_wrong_chip():
     assert "dlpf=21" in str(e.value)
 
 
-@pytest.mark.parametrize("who", [0x71, 0x73])
-def test_an_mpu9250_runs_as_an_mpu6050_with_its_accelerometer_filter(who):
+@pytest.mark.parametrize("who,name", [(0x71, "MPU-9250"), (0x73, "MPU-9255"), (0x70, "MPU-6500")])
+def test_an_mpu9250_runs_as_an_mpu6050_with_its_accelerometer_filter(who, name):
     bus = SimI2C(SimClock())
     w = World(motion=motion.still(0, 30, 0))
     imu = MPU9250Sim(w, noise=False, who_am_i=who)
@@ -101,7 +101,7 @@ def test_an_mpu9250_runs_as_an_mpu6050_with_its_accelerometer_filter(who):
     with pytest.raises(SensorNotFound):
         MPU6050(bus)                                  # its WHO_AM_I is not the MPU6050's
     m = MPU9250(bus, dlpf=10)
-    assert m.who_am_i == who and m.config_ok()
+    assert m.who_am_i == who and m.NAME == name and m.config_ok()
     assert imu.regs[0x1D] == 5 and imu.regs[0x1A] == 5   # ACCEL_CONFIG2 and CONFIG: code 5
     bus.sleep_us(2000)
     x, y, z = m.read_accel()
@@ -110,10 +110,11 @@ def test_an_mpu9250_runs_as_an_mpu6050_with_its_accelerometer_filter(who):
     m.read_accel_into([0, 0, 0])
     assert abs(m.temp_cdeg() - 2500) <= 1            # 25 C, raw / 333.87 + 21
     bus2 = SimI2C(SimClock())
-    bus2.attach(0x68, RegisterFile({0x75: 0x70}))     # an MPU-6500: not offered
+    bus2.attach(0x68, RegisterFile({0x75: 0x72}))     # not one of the family
     with pytest.raises(SensorNotFound) as e:
         MPU9250(bus2)
-    assert "0x71 (MPU-9250)" in str(e.value)
+    assert "0x72" in str(e.value) and "0x71 (MPU-9250)" in str(e.value)
+    assert "0x70 (MPU-6500)" in str(e.value)
     imu.brown_out()
     assert not m.config_ok()
     m.configure()

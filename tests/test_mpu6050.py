@@ -209,3 +209,49 @@ def test_a_glitched_gyro_range_fails_config_ok_until_configure():
     assert not m.config_ok()
     m.configure()
     assert m.config_ok()
+
+
+# -- the MPU-6500: an MPU-9250 without its magnetometer (WHO_AM_I 0x70, docs/hardware.md), sold
+# on many "GY-9250" / "MPU-9250" modules; beside a separate magnetometer it is the board's
+# accelerometer
+
+def test_an_mpu6500_is_found_as_the_accelerometer_and_named():
+    from firmware import detect
+    from firmware.mpu9250 import MPU9250
+    b = make_board("qmc5883l", accel="mpu6500")
+    assert b.bus.readfrom_mem(ADDR, 0x75, 1) == b"\x70"
+    with pytest.raises(SensorNotFound):
+        MPU6050(b.bus)                                 # the MPU6050's WHO_AM_I is 0x68
+    a = detect.detect_accel(b.bus, accel_range=4)
+    assert type(a) is MPU9250 and a.NAME == "MPU-6500" and a.counts_per_g == 8192
+    assert not b.accel.asleep() and b.accel.regs[0x1C] == 1 << 3   # ACCEL_CONFIG: +-4 g
+    assert detect.detect(b.bus, delay_us=b.sleep_us).KIND == "qmc5883l"
+
+
+def test_a_board_with_an_mpu6500_and_a_qmc5883l_calibrates_and_gives_tilted_headings():
+    from tests.scenarios import app_world as W
+    b = make_board("qmc5883l", world=W.make_world(), seed=3, accel="mpu6500")
+    app = W.make_app(b)                                # the accelerometer detected
+    assert app.accel.NAME == "MPU-6500"
+    W.run_until(app, b, 30)
+    assert app.calibration.model == 10
+    worst = 0
+    for pose in W.TILTED_POSES:
+        W.hold(b, *pose)
+        for _ in range(12):
+            app.step()
+            worst = max(worst, abs(W.heading_error_cdeg(app, b)))
+    assert app.status == "ok" and worst < 300           # every heading within 3 deg
+
+
+def test_a_board_with_an_mpu6500_boots_naming_it_and_shows_headings(tmp_path):
+    # boards/main.py on the simulated desktop board with an MPU-6500 module in place of its
+    # GY-521: the calibration program, the restart, the heading from the store
+    from tests import mp
+    out = mp.run(["tests/scenarios/app_main.py", "boards/main.py", str(tmp_path), "40",
+                  "mpu6500"], micro=False).splitlines()
+    assert out[0].startswith("eCompass: calibrating (qmc5883l, accelerometer MPU-6500)")
+    i = [k for k, ln in enumerate(out) if ln.startswith("restarted at ")][0]
+    assert out[i + 1] == "eCompass: qmc5883l, accelerometer MPU-6500, stored calibration: loaded"
+    status = [ln for ln in out[i + 2:] if ln.startswith("heading ")]
+    assert status and all("model 10 fit" in ln and "---.-" not in ln for ln in status)

@@ -27,5 +27,6 @@ while True:
         print("eCompass: %s" % e)
         time.sleep(2)
 print("eCompass: %s, accelerometer %s, stored calibration: %s" % (
-    app.mag.KIND, "yes" if app.accel else "no", app.load_reason or "loaded"))
+    app.mag.KIND, getattr(app.accel, "NAME", "yes") if app.accel else "no",
+    app.load_reason or "loaded"))
 app.run(None, report=lambda a: print(status_line(a)), every_us=500000)

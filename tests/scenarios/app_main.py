@@ -1,6 +1,8 @@
 # Runs a board's main.py (argv[1]) on the simulated desktop board (boards/host/board.py) for
 # argv[3] simulated seconds, with the calibration record in directory argv[2]; its output is
-# the board's. Stops it by raising StopRun from the board's delay once the time is up.
+# the board's. argv[4], if given: the accelerometer module beside the magnetometer, an IMUS
+# kind of host_sim/chips.py (board.ACCEL; the board's GY-521 otherwise). Stops it by raising
+# StopRun from the board's delay once the time is up.
 # board.restart() (main.py's restart after the calibration program) runs main.py afresh on a
 # new simulated board (its clock from 0, the same iron and store), as a reset would: at most
 # three times; "restarted at T s" marks each.
@@ -18,6 +20,8 @@ class StopRun(BaseException):
 
 main_py, store_dir, seconds = sys.argv[1], sys.argv[2], int(sys.argv[3])
 board.STORE_DIR = store_dir
+if len(sys.argv) > 4:
+    board.ACCEL = sys.argv[4]
 _delay = board.delay_us
 
 
