@@ -30,12 +30,6 @@ delay_us = getattr(board, "delay_us", None)
 REQUEST = board.STORE_DIR.rstrip("/") + "/calibrate.req"
 
 
-def _accel_name(accel):
-    # the chip its driver found (an MPU6050, an MPU-6500: firmware/detect.py CHIPS), "no"
-    # without one, "yes" for a driver that does not say
-    return getattr(accel, "NAME", "yes") if accel else "no"
-
-
 def wait_s(s):
     if delay_us is not None:
         delay_us(s * 1000000)
@@ -131,8 +125,10 @@ def run_program(i2c, why):
                     ticks_us_=getattr(board, "ticks_us", None), delay_us=delay_us,
                     renew=why == "asked")
         Program = None
+        # the accelerometer as its driver names it (firmware/detect.py CHIPS), else yes / no
         print("eCompass: calibrating (%s, accelerometer %s): turn the board through a figure-8, "
-              "over and around" % (p.mag.KIND, _accel_name(p.accel)))
+              "over and around" % (p.mag.KIND,
+                                   getattr(p.accel, "NAME", "yes") if p.accel else "no"))
         if p.run() is not None:
             restart()  # into the heading, with the calibration just saved
         print("eCompass: the calibration program ran out of memory (%s KB free at a solve): "
@@ -212,7 +208,8 @@ def announce():
         print("eCompass: %s" % status_line(app))
     else:
         print("eCompass: %s, accelerometer %s, stored calibration: %s%s" % (
-            app.mag.KIND, _accel_name(app.accel), app.load_reason or "loaded",
+            app.mag.KIND, getattr(app.accel, "NAME", "yes") if app.accel else "no",
+            app.load_reason or "loaded",
             ""))
     if compiled_here(sys.modules.get("firmware.app")) and free_kb() < _PY_SHORT_KB:
         print("eCompass: running from .py sources, %d KB free: .mpy files (make deploy) or "
