@@ -195,14 +195,20 @@ def feed_all(reader, data, sizes):
 def test_reader_finds_every_packet_behind_any_garbage_in_any_pieces(parts, sizes, sigs):
     stream = b""
     packets = []
+    starts = []
     garbage = 0
     for junk, seed in parts:
         if sigs:
             junk = junk + b"uT" + junk[:5]  # a false start right before the packet
         p = packet_of(seed)
+        starts.append(len(stream) + len(junk))
         stream += junk + p
         packets.append(p)
         garbage += len(junk)
+    # a false start whose 68 bytes pass the CRC (1 in 65536: hypothesis finds one) is a
+    # packet on the wire too: no reader can tell it apart
+    assume(not any(mc.packet_ok(stream[i:i + 68]) for i in range(len(stream) - 67)
+                   if i not in starts and stream[i:i + 2] == b"uT"))
     r = mc.PacketReader()
     ev = feed_all(r, stream, sizes) + r.end()
     got = [v for k, v in ev if k == mc.PACKET]
