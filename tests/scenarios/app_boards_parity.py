@@ -16,8 +16,8 @@ import json
 import sys
 
 sys.path.append("tests/scenarios")
-from app_world import (ALL_SETUPS, OVERFLOW_RAW, PARITY_SETUPS, TILTED_POSES,  # noqa: E402
-                       hold, make_app, make_sim, mem_store)
+from app_world import (ALL_SETUPS, PARITY_SETUPS, TILTED_POSES, hold, inject,  # noqa: E402
+                       make_app, make_sim, mem_store)
 
 from binascii import hexlify  # noqa: E402
 
@@ -59,14 +59,7 @@ def session(setup):
         digest = mix(digest, app.heading_kang)
         while events and now >= events[0][0]:
             ev = events.pop(0)[1]
-            if ev == "nack":
-                b.bus.inject_nack(after=0, count=3)
-            elif ev == "overflow":
-                b.mag.inject_raw(OVERFLOW_RAW[app.mag.KIND], 0, 0)
-            elif b.chip == "gy271":
-                b.bus.writeto_mem(0x0D, 0x0A, b"\x80")  # SOFT_RST: back in standby
-            else:
-                b.mag.power_on()  # a brown-out: its registers at their power-on values
+            inject(b, ev, app.mag.KIND)
             print(json.dumps(["event", ev, step, now]))
         if app.status != status or app.last_reason != reason:
             status, reason = app.status, app.last_reason

@@ -8,7 +8,7 @@ import json
 import sys
 
 sys.path.append("tests/scenarios")
-from app_world import OVERFLOW_RAW, TILTED_POSES, hold, make_app, make_sim, mem_store  # noqa: E402
+from app_world import TILTED_POSES, hold, inject, make_app, make_sim, mem_store  # noqa: E402
 
 from binascii import hexlify  # noqa: E402
 
@@ -29,14 +29,7 @@ def each(a):
     now = b.clock.now_us
     while events and now >= events[0][0]:
         ev = events.pop(0)[1]
-        if ev == "nack":
-            b.bus.inject_nack(after=0, count=3)
-        elif ev == "overflow":
-            b.mag.inject_raw(OVERFLOW_RAW[a.mag.KIND], 0, 0)
-        elif setup == "gy271":
-            b.bus.writeto_mem(0x0D, 0x0A, b"\x80")  # SOFT_RST: the chip is back in standby
-        else:
-            b.mag.power_on()  # a brown-out: its registers at their power-on values
+        inject(b, ev, a.mag.KIND)
         print(json.dumps(["event", ev, now]))
     if a.accepted != state["accepted"]:
         state["accepted"] = a.accepted

@@ -46,6 +46,20 @@ TILTED_POSES = ((30.0, 20.0, -15.0), (135.0, -25.0, 10.0), (250.0, 10.0, 30.0),
                 (300.0, -15.0, -25.0), (80.0, 0.0, 0.0))
 
 
+def inject(b, ev, kind):
+    """The parity sessions' fault `ev` on board b whose magnetometer driver is `kind`: a NACK
+    burst, an overflowing sample, or the magnetometer reset (the GY-271's QMC5883L by its
+    SOFT_RST, back in standby; any other by a brown-out: its power-on registers)."""
+    if ev == "nack":
+        b.bus.inject_nack(after=0, count=3)
+    elif ev == "overflow":
+        b.mag.inject_raw(OVERFLOW_RAW[kind], 0, 0)
+    elif b.chip == "gy271":
+        b.bus.writeto_mem(0x0D, 0x0A, b"\x80")
+    else:
+        b.mag.power_on()
+
+
 def stored_calibration(fs):
     """A plausible 10-element record for this world, made by hand, saved in MemFs `fs` (so
     nothing of the calibration machinery runs to make it)."""
