@@ -397,8 +397,9 @@ def _off(d, lim):
 
 
 def _turn(us):
-    # what two steps lasting `us` add to .jump: the turn at _TURN_KANG_PER_S; `us`
-    # held to 8 s (two of the app's steps are at most 8 sample periods), so the product
+    # what steps lasting `us` (two, or three above 50 Hz) add to .jump: the turn at
+    # _TURN_KANG_PER_S; `us` held to 8 s (two of the app's steps are at most 8 sample periods;
+    # three are checked only within _RAMP_US), so the product
     # stays below 2**26
     if us > 8000000:
         us = 8000000
