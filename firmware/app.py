@@ -13,10 +13,9 @@ there is no good calibration yet, collect and solve one in the background.
 from firmware.axes import apply
 from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED, correct
 from firmware.compass import FLAG_NO_GRAVITY
-from firmware.compat import const, drop, drop_part, free_bytes, sleep_us, ticks_diff
+from firmware.compat import const, drop, drop_part, free_bytes, room, sleep_us, ticks_diff
 from firmware.errors import SensorOverflow
-from firmware.fieldwatch import W_FIELD, W_FLAG, W_JUMP, W_KEEP, W_STALE
-from firmware.health import STATUS_OK, status_of
+from firmware.health import STATUS_OK, W_FIELD, W_FLAG, W_JUMP, W_KEEP, W_STALE, status_of
 
 STATUS_INTERFERENCE = "interference"  # a heading, but |field| is off: a magnet or steel near
 STATUS_NO_FIELD = "no_field"          # corrected field (0, 0, 0): no heading
@@ -110,6 +109,21 @@ _COUNTS = ("accepted", "refused", "solves", "history_errors", "reinits", "reinit
            "accel_retries")
 
 
+def _settle(app):
+    # the class's declared state copied into the instance: its table is final, then given
+    # room (firmware/compat.py room: a step calls a dozen of the app's methods)
+    d = app.__dict__  # (a copy on MicroPython: made once)
+    n = len(d)
+    c = CompassApp.__dict__
+    for k in c:  # (keys, not items(): no tuple, no slice allocated per name)
+        if k not in d and not k.startswith("__"):
+            v = c[k]
+            if not callable(v) and not isinstance(v, property):
+                setattr(app, k, v)
+                n += 1
+    room(app, n)
+
+
 class CompassApp:
     # the documented state (docs/api.md, the app), here too so that it exists at every heap
     calibration = UNCALIBRATED
@@ -158,16 +172,12 @@ class CompassApp:
         self.fast = self._kn is not None
         self.dip = self.watch.dip
         self._t_last = self._ticks()
-        # what every step writes or reads, in its own dict now (a dict that grows allocates)
-        self._ok = self._stalled = self._unsaved = False
-        self._dt = self._gap_us = self._age_us = 0
         self.collector = self._session = self.attitude = self._axes_status = None
-        self.heading_kang = -1
         self.status = STATUS_STARTING
-        self._args = None
-        self.no_memory = None
+        self._args = self.no_memory = None
         self._use(self._load())
         self._start_learning()
+        _settle(self)  # every declared name in the app's own table (a table that grows allocates)
 
     def _start_learning(self):
         # a session when asked for or while no good calibration is in force (docs/api.md)

@@ -7,7 +7,7 @@ from array import array
 from firmware import compass, i2cdevice
 from firmware.axes import AxisMap
 from firmware.compass import Compass
-from firmware.compat import const, drop, kernels, sleep_us, ticks_us, wall_clock
+from firmware.compat import const, drop, kernels, room, sleep_us, ticks_us, wall_clock
 from firmware.fieldwatch import FieldWatch
 from firmware.health import Health
 from firmware.trig import cdeg_to_kang
@@ -26,6 +26,8 @@ def setup(i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, store,
     clock, wrap = _app_clock(acc_map, ticks_us_)
     wall, wall_diff = wall_clock()
     mag, acc = _sensors(i2c, mag, accel, mag_options, delay_us)
+    room(mag)  # each step reads them (firmware/compat.py room)
+    room(acc)
     if mag_map.det != (-1 if getattr(mag, "MIRROR", False) else 1):
         raise ValueError(
             "mag_axes %r is a %s: the %s's axes are %s (its datasheet), so is its map (e.g. %s)"

@@ -2,9 +2,9 @@
 
     from firmware.compat import const, ticks_us, ticks_diff, sleep_us, kernels
 """
-# Also wait_clock(), wall_clock(), pick(), compiled_here(), free_bytes(), drop(), drop_part():
-# each function says what it gives. What each shim is on CPython, MicroPython, CircuitPython
-# and the WebAssembly port, and why emitter code lives only in firmware/fast.py:
+# Also wait_clock(), wall_clock(), pick(), room(), compiled_here(), free_bytes(), drop(),
+# drop_part(): each function says what it gives. What each shim is on CPython, MicroPython,
+# CircuitPython and the WebAssembly port, and why emitter code lives only in firmware/fast.py:
 # docs/design.md (module notes, compat).
 import sys
 import time
@@ -131,6 +131,32 @@ def drop_part(part, keep=()):
         if name not in keep:
             drop(name)
     drop(*(() if keep else (part,)))
+
+
+# MicroPython's hash-table sizes from 17 on (py/map.c): a table grows only when it is full
+_TABLE_SIZES = (17, 23, 29, 37, 47, 59, 73, 97, 127, 167, 223)
+
+
+def room(obj, n=None):
+    """Spare slots in obj's attribute table, called last in the construction of an object
+    whose methods each step calls (docs/design.md, memory: attribute tables); n: how many
+    names it holds, when the caller knows (obj.__dict__ is a copy on MicroPython)."""
+    # A method's name is looked up in the instance's table first, probing until an empty
+    # slot, and MicroPython's tables grow only when full: 59 names in 59 slots cost 59
+    # probes a call. Over 85 % full, names without a value grow the table to the next size.
+    d = () if n is not None else getattr(obj, "__dict__", ())
+    if n is None:
+        n = len(d)
+    for s in _TABLE_SIZES:
+        if n <= s:
+            i = 0
+            while n * 20 > s * 17 and n <= s:
+                k = "_r%d" % i
+                if k not in d:
+                    setattr(obj, k, None)
+                    n += 1
+                i += 1
+            return
 
 
 def compiled_here(m):

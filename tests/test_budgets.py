@@ -17,9 +17,11 @@ X86 = mp.TIERS["x86-32"]
 WASM = mp.TIERS["wasm"]
 # boot + 2000 headings on the WebAssembly port, .mpy files: everything allocated, transient
 # boot work included (nothing is collected there); the headings themselves add nothing
-WASM_HEADING_ALLOCATED = 114 * KB  # 115,728 B: the chip table, the app's declared state and
+WASM_HEADING_ALLOCATED = 118 * KB  # 115,728 B: the chip table, the app's declared state and
 #   owners (115,376 B), the sample path's owners (-464 B), the noise-scaled jump limit (+224 B),
-#   the MPU-6500 row and drivers' NAME (+96 B), the three-step jump check's state
+#   the MPU-6500 row and drivers' NAME (+96 B), the three-step jump check's state; 119,760 B
+#   once the objects a step calls keep spare slots (firmware/compat.py room: the tables'
+#   copies it reads and the grown tables' old slots are garbage, never collected here)
 
 
 @pytest.fixture(scope="module")
@@ -267,9 +269,11 @@ def test_each_chips_calibrated_board_holds_its_own_drivers_only(build, tmp_path)
     # with a stored calibration, 500 headings (tests/scenarios/chip_heap.py): the modules
     # are the QMC5883L board's with its own drivers in place of the QMC5883L's and MPU6050's,
     # and what it holds (the names' text counted, not the name pool's block steps, which
-    # depend on the simulator's names beside it) is within 2 KB of the QMC5883L board's
+    # depend on the simulator's names beside it) is within 2.5 KB of the QMC5883L board's
     # (measured: 20,368 B; the GY-9250 the most, 22,064 B: the MPU6050's driver and the
-    # MPU-9250's built on it, and the AK8963's)
+    # MPU-9250's built on it, and the AK8963's; 19,680 and 21,776 B once the drivers keep
+    # spare slots, firmware/compat.py room, which grows the GY-9250's two tables and not the
+    # QMC5883L's: 2.5 KB)
     import sys
     sys.path.insert(0, os.path.join(mp.ROOT, "tests", "scenarios"))
     import app_world as W
@@ -304,4 +308,4 @@ def test_each_chips_calibrated_board_holds_its_own_drivers_only(build, tmp_path)
         mods[setup] = set(r["modules"]) - {kind, imu or "mpu6050", "mpu6050"}
     print("held after boot and 500 headings, B: %s" % sorted(held.items()))
     assert all(m == mods["gy271"] for m in mods.values()), mods
-    assert all(h - held["gy271"] <= 2 * KB for h in held.values()), held
+    assert all(h - held["gy271"] <= 2 * KB + 512 for h in held.values()), held

@@ -16,7 +16,7 @@ from firmware.calibrate import acceptance
 from firmware.calibrate.acceptance import (DEFAULT_MAX_FIT_ERROR, MIN_SAMPLES, MIN_SAMPLES_GEOMETRY,
                                  REASON_PLANAR, REASON_SINGULAR, reject)
 from firmware.calibration import MINMAX, MODELS, UNCALIBRATED, Calibration, correct
-from firmware.compat import compiled_here, const, drop
+from firmware.compat import compiled_here, const, drop, room
 from firmware.errors import CalibrationRejected
 from firmware.fixedpoint import rdiv
 from firmware.calibrate.samples import (N_REGIONS, NOT_INT, REJECTED, REPLACED, SampleBuffer,
@@ -135,6 +135,7 @@ class Calibrator:
         self.expected_field = None
         self.overflow = overflow if overflow is not None else _RAIL_LO
         self.railed = 0       # samples refused at the rails or the overflow marker
+        room(self)  # add() runs every sample (firmware/compat.py room)
 
     @property
     def count(self):
@@ -628,6 +629,7 @@ class Collector:
         self.pairs = None          # firmware.calibrate.mounting.Pairs, set by the session
         self._cov = 0
         self._cov_dirty = True
+        room(self)
 
     def feed(self, raw):
         if self.calibrator.add(raw[0], raw[1], raw[2]):

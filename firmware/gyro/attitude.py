@@ -8,7 +8,7 @@ is corrected by gravity and by the calibrated magnetic field (docs/gyro.md).
 # (Mahony's complementary filter on a quaternion), its bias evidence and the held heading's
 # uncertainty: docs/design.md (module notes, attitude) and docs/gyro.md. Every intermediate
 # stays below 2**30 and the per-sample path allocates nothing (see firmware/compass.py).
-from firmware.compat import const, drop, kernels
+from firmware.compat import const, drop, kernels, room
 from firmware.trig import ZERO_VECTOR, atan2, isqrt, norm14, sin
 
 MAG_OK = const(1)
@@ -193,6 +193,11 @@ class Attitude:
         init = None
         drop("gyro.attitude_setup")
         self._use(_UNKNOWN_CDPS)
+        self._at = -2  # (the class's defaults in its own table: its size final, then room)
+        self._cal = None
+        self.config_ok = True  # (_verify's: the MPU6050's configuration read back)
+        self.raw = self.axes = None  # the gyroscope's sample and axes (attitude_setup.attach)
+        room(self)
 
     # results
     heading_kang = property(lambda self: self.st[_HEAD])
