@@ -15,7 +15,10 @@ from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED, corr
 from firmware.compass import FLAG_NO_GRAVITY
 from firmware.compat import const, drop, drop_part, free_bytes, room, sleep_us, ticks_diff
 from firmware.errors import SensorOverflow
-from firmware.health import STATUS_OK, W_FIELD, W_FLAG, W_JUMP, W_KEEP, W_STALE, status_of
+# (fieldwatch loads with the app: loaded during construction, it raised the boot's peak by a
+# 4 KB step of make bench's sweep)
+from firmware.fieldwatch import W_FIELD, W_FLAG, W_JUMP, W_KEEP, W_STALE
+from firmware.health import STATUS_OK, status_of
 
 STATUS_INTERFERENCE = "interference"  # a heading, but |field| is off: a magnet or steel near
 STATUS_NO_FIELD = "no_field"          # corrected field (0, 0, 0): no heading
@@ -110,18 +113,16 @@ _COUNTS = ("accepted", "refused", "solves", "history_errors", "reinits", "reinit
 
 
 def _settle(app):
-    # the class's declared state copied into the instance: its table is final, then given
-    # room (firmware/compat.py room: a step calls a dozen of the app's methods)
-    d = app.__dict__  # (a copy on MicroPython: made once)
-    n = len(d)
+    # the class's declared state copied into the app's own table first thing, so that no
+    # step grows it (a table that grows allocates); the copies of both tables read here are
+    # garbage before construction's peak
+    d = app.__dict__  # (a copy on MicroPython)
     c = CompassApp.__dict__
     for k in c:  # (keys, not items(): no tuple, no slice allocated per name)
         if k not in d and not k.startswith("__"):
             v = c[k]
             if not callable(v) and not isinstance(v, property):
                 setattr(app, k, v)
-                n += 1
-    room(app, n)
 
 
 class CompassApp:
@@ -158,6 +159,7 @@ class CompassApp:
             self._wrap = ticks_us is None
 
     def _build(self, args):
+        _settle(self)
         from firmware import app_setup  # construction only: dropped when the app is made
         try:
             (self.i2c, self.mag, self.accel, self._accel_auto, self.store, self.model,
@@ -177,7 +179,7 @@ class CompassApp:
         self._args = self.no_memory = None
         self._use(self._load())
         self._start_learning()
-        _settle(self)  # every declared name in the app's own table (a table that grows allocates)
+        room(self)  # a step calls a dozen of its methods (firmware/compat.py room)
 
     def _start_learning(self):
         # a session when asked for or while no good calibration is in force (docs/api.md)

@@ -137,16 +137,14 @@ def drop_part(part, keep=()):
 _TABLE_SIZES = (17, 23, 29, 37, 47, 59, 73, 97, 127, 167, 223)
 
 
-def room(obj, n=None):
+def room(obj):
     """Spare slots in obj's attribute table, called last in the construction of an object
-    whose methods each step calls (docs/design.md, memory: attribute tables); n: how many
-    names it holds, when the caller knows (obj.__dict__ is a copy on MicroPython)."""
+    whose methods each step calls (docs/design.md, memory: attribute tables)."""
     # A method's name is looked up in the instance's table first, probing until an empty
     # slot, and MicroPython's tables grow only when full: 59 names in 59 slots cost 59
     # probes a call. Over 85 % full, names without a value grow the table to the next size.
-    d = () if n is not None else getattr(obj, "__dict__", ())
-    if n is None:
-        n = len(d)
+    d = getattr(obj, "__dict__", ())  # (a copy on MicroPython)
+    n = len(d)
     for s in _TABLE_SIZES:
         if n <= s:
             i = 0

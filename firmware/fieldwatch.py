@@ -9,8 +9,7 @@ from array import array
 
 from firmware.compat import const, room
 from firmware.compass import FIELD_TOL_PCT
-from firmware.health import (DIP_TOL_KANG, SPELL_FIELD, SPELL_JUMP, SPELL_SHIFT, W_FIELD, W_FLAG,
-                             W_JUMP, W_KEEP, W_STALE)
+from firmware.health import DIP_TOL_KANG, SPELL_FIELD, SPELL_JUMP, SPELL_SHIFT
 
 _DIP_STEADY_KANG = const(273)   # 1.5 deg: a learning stretch restarts beyond this
 _DIP_LEARN_US = const(500000)   # 0.5 s of steady, clean samples make the reference...
@@ -36,6 +35,12 @@ _CLEAN_US = const(2000000)      # 2 s of clean samples over a turn of B / 4...
 _HOLD_MAX_US = const(10000000)  # ...or 10 s of clean samples end a spell
 _LEARN_FIELD_PCT = const(3)     # the dip is learned from samples with |B| this close
 _STALE_US = const(30000000)     # 30 s of interference: the calibration no longer fits the board
+# check(app): what the app shows for a sample in a spell (0: the field is clean)
+W_JUMP = const(1)               # "heading jumped" (else "interference")
+W_FLAG = const(2)               # this sample raised a flag: counted in app.errors
+W_FIELD = const(4)              # |B| or the dip outside their windows: read the chip's set back
+W_STALE = const(8)              # flagged for _STALE_US: the board's iron changed, relearn
+W_KEEP = const(16)              # the collector may take the sample
 _FIELD_TOL_MAX_PCT = const(50)  # use(): the compass's |B| window at most +-50 %
 
 

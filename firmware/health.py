@@ -7,7 +7,7 @@
 #
 # What each check catches and why its limits: docs/design.md (module notes, health); the fault
 # campaign's figures: docs/faults.md. The field checks are firmware/fieldwatch.py; the shared
-# constants (DIP_TOL_KANG, SPELL_*, W_*) are here. Allocation-free (tests/scenarios/app_alloc.py).
+# constants (DIP_TOL_KANG, SPELL_*) are here. Allocation-free (tests/scenarios/app_alloc.py).
 from array import array
 
 from firmware.compat import const, room
@@ -37,12 +37,6 @@ DIP_TOL_KANG = const(546)       # 3 deg (65536 KANG per turn): firmware/fieldwat
 SPELL_JUMP = const(1)           # FieldWatch spells, by weight: a heading jump...
 SPELL_SHIFT = const(2)          # ...|B| or the dip left their short averages...
 SPELL_FIELD = const(3)          # ...|B| or the dip outside their windows
-# FieldWatch.check(app): what the app shows for a sample in a spell (0: the field is clean)
-W_JUMP = const(1)               # "heading jumped" (else "interference")
-W_FLAG = const(2)               # this sample raised a flag: counted in app.errors
-W_FIELD = const(4)              # |B| or the dip outside their windows: read the chip's set back
-W_STALE = const(8)              # flagged for 30 s (a spell that lasts): the iron changed, relearn
-W_KEEP = const(16)              # the collector may take the sample
 
 
 def status_of(e):

@@ -159,8 +159,10 @@ def test_the_webassembly_port_allocates_within_budget_for_boot_and_headings(buil
 
 # importing the app from its sources (a mip install compiles on the board): the parser holds a
 # module's docstrings until it is compiled (docs/design.md, memory). 100 KB with the docstrings
-# firmware/app.py had; 75 KB once they were comments.
-APP_FROM_SOURCE_KB = 80
+# firmware/app.py had; 75 KB once they were comments; 78 KB before and 81 KB after the objects
+# a step calls kept spare slots (firmware/compat.py room, with fieldwatch compiled while the
+# app's bytecode is held: it loads with the app, which keeps a calibrated board's boot 4 KB lower)
+APP_FROM_SOURCE_KB = 82
 
 
 def test_the_app_compiles_from_its_sources_in_a_small_heap(tmp_path):
