@@ -16,8 +16,8 @@ import json
 import sys
 
 sys.path.append("tests/scenarios")
-from app_world import (ALL_SETUPS, PARITY_SETUPS, TILTED_POSES, hold, inject,  # noqa: E402
-                       make_app, make_sim, mem_store)
+from app_world import (ALL_SETUPS, PARITY_SETUPS, inject, make_app, make_sim,  # noqa: E402
+                       mem_store, pose_headings)
 
 from binascii import hexlify  # noqa: E402
 
@@ -75,12 +75,7 @@ def session(setup):
                               status_line(app)] + ([] if att is None else [
                                   list(att.bias), att.uncertainty_cdeg, att.known])))
             digest = 0
-    for pose in TILTED_POSES:
-        hold(b, pose[0], pose[1], pose[2])
-        hs = []
-        for i in range(12):
-            app.step()
-            hs.append(app.heading_kang)
+    for pose, hs in pose_headings(app, b):
         print(json.dumps(["pose", [int(v) for v in pose], hs, app.status]))
     c = app.pending or app.calibration
     print(json.dumps(["fit", c.model, c.fit_error, c.samples, c.coverage,

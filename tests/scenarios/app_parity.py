@@ -8,7 +8,7 @@ import json
 import sys
 
 sys.path.append("tests/scenarios")
-from app_world import TILTED_POSES, hold, inject, make_app, make_sim, mem_store  # noqa: E402
+from app_world import inject, make_app, make_sim, mem_store, pose_headings  # noqa: E402
 
 from binascii import hexlify  # noqa: E402
 
@@ -46,12 +46,7 @@ def each(a):
 while b.clock.now_us < end:
     app.step()
     each(app)
-for pose in TILTED_POSES:
-    hold(b, pose[0], pose[1], pose[2])
-    hs = []
-    for i in range(12):
-        app.step()
-        hs.append(app.heading_kang)
+for pose, hs in pose_headings(app, b):
     print(json.dumps(["pose", [int(v) for v in pose], hs]))
 record = hexlify(store.load()).decode()
 print(json.dumps(["store", store.seq, record]))

@@ -111,6 +111,18 @@ def hold(b, yaw, pitch, roll):
     b.world.motion = motion.still(yaw, pitch, roll)
 
 
+def pose_headings(app, b, steps=12):
+    """(pose, the app's headings over `steps` steps held still at it), each of TILTED_POSES in
+    turn (the app's state is that pose's while the caller holds the pair)."""
+    for pose in TILTED_POSES:
+        hold(b, pose[0], pose[1], pose[2])
+        hs = []
+        for _ in range(steps):
+            app.step()
+            hs.append(app.heading_kang)
+        yield pose, hs
+
+
 def heading_error_cdeg(app, b):
     """The app's heading minus the world's true heading, centidegrees in -18000..17999."""
     true_cdeg = int(b.world.true_heading_deg(b.clock.now_us) * 100 + 0.5)
