@@ -5,8 +5,8 @@ MicroPython's tables (py/map.c) grow through fixed sizes and only when full, and
 looks its name up in the instance's table first, probing until an empty slot: a full table of
 59 names made each of the app's method calls probe all 59 (a fifth of the step's time on the
 unix port: make bench's app-step rows, docs/benchmarks.md). The sizes are MicroPython's and
-the names are counted here on CPython: the firmware sets no name by port, and no firmware
-object deletes an attribute (checked below), whose marker slot probes would pass over too.
+the names are counted here on CPython (the unix port holds the same: checked below), and no
+firmware object deletes an attribute (checked below), whose marker slot probes would pass over.
 """
 import ast
 import pathlib
@@ -101,3 +101,10 @@ def test_no_firmware_object_deletes_an_attribute():
                     and p.name != "compat.py":  # (compat.drop: a module's name)
                 found.append("%s:%d" % (p.relative_to(ROOT), node.lineno))
     assert found == []
+
+
+def test_micropython_holds_the_same_names():
+    # the counts above are CPython's: the unix port's must be the same, object by object
+    from tests import mp
+    collecting, gyro = mp.json_lines(mp.parity(["tests/scenarios/app_names.py"]))
+    assert dict(collecting)["calibrator"] > SMALL and dict(gyro)["attitude"] > SMALL
