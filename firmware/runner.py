@@ -183,6 +183,9 @@ def _boot():
                               # MotionCal mode: its calibration, not the app's own
                               learn=False if MOTIONCAL else None, mag=_mag)
             _mag = None
+            if app.no_memory == "start":  # the app did not fit: again from a clean heap
+                app = None
+                raise MemoryError
             if note is not None:
                 print("eCompass: %s" % note)
             break

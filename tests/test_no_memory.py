@@ -115,3 +115,31 @@ def test_every_documented_attribute_exists_while_the_app_did_not_fit(no_room_for
         getattr(app, name)
     assert app.accuracy_reason() and app.progress()["model"] is None
     assert app.coverage() == 0 and app.calibrate() is None and app.step() is False
+
+
+def test_the_board_starts_afresh_when_the_app_did_not_fit(monkeypatch, capsys):
+    # firmware/runner.py: an app whose construction found no room is let go with the modules
+    # it loaded, and the boot tries again from a clean heap (a retry inside the fragmented
+    # heap it left could fail for good: docs/design.md, memory)
+    import types
+    waits = []
+    board = types.SimpleNamespace(STORE_DIR="/nowhere", MAG_AXES="x,-y,-z", ACCEL_AXES="-x,y,z",
+                                  DECLINATION_CDEG=0, CALIBRATE="never",
+                                  make_i2c=lambda: None, delay_us=waits.append)
+    monkeypatch.setitem(sys.modules, "board", board)
+    monkeypatch.delitem(sys.modules, "firmware.runner", raising=False)
+    import firmware.boot
+    import firmware.runner as runner
+    made = []
+
+    def start(i2c, store_dir, **options):
+        made.append(types.SimpleNamespace(no_memory="start" if not made else None))
+        return made[-1], None
+    monkeypatch.setattr(firmware.boot, "start", start)
+    dropped = []
+    monkeypatch.setattr(runner, "drop", lambda *names: dropped.extend(names))
+    runner._boot()
+    assert len(made) == 2 and runner.app is made[1]
+    assert {"app", "app_setup", "store"} <= set(dropped)
+    assert "eCompass: out of memory at boot" in capsys.readouterr().out
+    assert waits == [5000000]  # one pause between the tries
