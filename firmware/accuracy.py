@@ -104,7 +104,7 @@ def assess(app):
     if c is None:  # the app did not fit
         return UNRELIABLE, "no_heading"
     st = app.status
-    if st is not None and st == app._axes_status:
+    if st is not None and st == app.health.axes_status:
         return UNRELIABLE, "mag_axes"
     f = _conditions(app, c, st)
     cal = app.calibration

@@ -11,7 +11,7 @@ MPU-9255 (GY-9250, GY-91 breakouts), on the main bus once the IMU's I2C bypass i
 # AK8963(i2c, address=0x0C, *, range=49, rate=100, delay_us=None, timeout_us=None): options
 # and attributes in docs/api.md (drivers); registers, the fuse-ROM sensitivity and its integer
 # form in docs/hardware.md (AK8963).
-from firmware.compat import const
+from firmware.compat import const, room
 
 from firmware.i2cdevice import Magnetometer
 
@@ -115,3 +115,6 @@ class AK8963(Magnetometer):
         raw = self.held(0)
         raise self.overflow(raw, "HOFL set (a magnetic sensor overflow: a magnet close by?), "
                                  "raw %s" % (raw,))
+
+
+room(AK8963)  # its methods' table too (firmware/compat.py room)

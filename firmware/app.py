@@ -11,7 +11,7 @@ there is no good calibration yet, collect and solve one in the background.
 # step's named stages, interference, storage and history, and what is loaded when: the app in
 # docs/design.md (module notes) and docs/design.md#memory.
 from firmware.axes import apply
-from firmware.calibration import GOOD_FIT_ERROR, STALE_AGE_S, UNCALIBRATED, correct
+from firmware.calibration import STALE_AGE_S, UNCALIBRATED, correct
 from firmware.compass import FLAG_NO_GRAVITY
 from firmware.compat import const, drop, drop_part, free_bytes, room, sleep_us, ticks_diff
 from firmware.errors import SensorOverflow
@@ -105,11 +105,12 @@ class _ReadGuard:
 # session's while it runs, else what the last session left (firmware/calibrate/session.py ENDED,
 # KEPT); Health's (firmware/health.py). Default 0 for the counts, False for relearning, else None.
 _COLLECTED = ("accepted", "refused", "solves", "relearning", "last_reason", "last_detail",
-              "last_model")
-_SESSION_KEPT = ("history_errors", "pending", "change", "history_reason")
-_HEALTH_KEPT = ("reinits", "reinit_failures", "accel_retries", "last_error", "tilt")
+              "last_model", "calibrator", "solving")
+_SESSION_KEPT = ("history_errors", "pending", "change", "history_reason", "slices",
+                 "worst_stall_us")
+_HEALTH_KEPT = ("reinits", "reinit_failures", "accel_retries", "last_error", "tilt", "mounting")
 _COUNTS = ("accepted", "refused", "solves", "history_errors", "reinits", "reinit_failures",
-           "accel_retries")
+           "accel_retries", "slices", "worst_stall_us")
 
 
 def _settle(app):
@@ -119,7 +120,7 @@ def _settle(app):
     d = app.__dict__  # (a copy on MicroPython)
     c = CompassApp.__dict__
     for k in c:  # (keys, not items(): no tuple, no slice allocated per name)
-        if k not in d and not k.startswith("__"):
+        if k not in d and not k.startswith("__") and not k[2:3].isdigit():  # (room's _rN)
             v = c[k]
             if not callable(v) and not isinstance(v, property):
                 setattr(app, k, v)
@@ -129,9 +130,8 @@ class CompassApp:
     # the documented state (docs/api.md, the app), here too so that it exists at every heap
     calibration = UNCALIBRATED
     location = compass = collector = _session = load_reason = save_reason = health = None
-    no_memory = _args = _gyro_options = not_installed = quick = attitude = mounting = None
-    _axes_status = date_s = None
-    stored = save_errors = worst_save_us = worst_stall_us = slices = steps = _retry_us = 0
+    no_memory = _args = _gyro_options = not_installed = quick = attitude = date_s = None
+    stored = save_errors = worst_save_us = steps = _retry_us = 0
     _dt = _gap_us = _age_us = _save_wait_us = 0
     _unsaved = _dip_unsaved = _stalled = _ok = relearn_due = False
     heading_kang = -1
@@ -174,7 +174,7 @@ class CompassApp:
         self.fast = self._kn is not None
         self.dip = self.watch.dip
         self._t_last = self._ticks()
-        self.collector = self._session = self.attitude = self._axes_status = None
+        self.collector = self._session = self.attitude = None
         self.status = STATUS_STARTING
         self._args = self.no_memory = None
         self._use(self._load())
@@ -188,7 +188,7 @@ class CompassApp:
             self._retry_us = _LOAD_RETRY_US
             return
         learn = self.learn
-        if learn or learn is None and not self._good_enough(self.calibration):
+        if learn or learn is None and not self.calibration.good_for(self.model):
             self.calibrate()
 
     def _load(self):
@@ -214,12 +214,6 @@ class CompassApp:
         if r is not None:  # (None: no store)
             (self.stored, self._dip_unsaved, self.save_errors, self._save_wait_us,
              self._unsaved, self.save_reason, self.worst_save_us) = r
-
-    def _good_enough(self, cal):
-        """No collecting needed: the configured model, fit within GOOD_FIT_ERROR."""
-        m = self.model
-        return (cal.model is not None and cal.fit_error <= GOOD_FIT_ERROR
-                and (cal.model == m or m == "auto" and cal.model != "minmax"))
 
     def _use(self, cal):
         # the compass's |B| window, its dip, the short averages and any spell start over
@@ -255,12 +249,6 @@ class CompassApp:
                 return self._no_room()
             self._locate()
         return self.collector
-
-    def _mounted(self, verdict, axes, status):
-        # a mounting check's answer (firmware/calibrate/mountcheck.py); status False: kept
-        self.mounting = (verdict, axes)
-        if status is not False:
-            self._axes_status = status
 
     def _no_room(self):
         self.no_memory = "calibrate"
@@ -364,16 +352,16 @@ class CompassApp:
             if not self.health.tilt and (self.accel is not None or self._accel_auto) \
                     and self.status == STATUS_OK:
                 self._flag(STATUS_TILT)
-        c = self.collector
-        if c is not None and (c.job is not None or c.due()):
-            self._solve()
+        c = self.collector  # the session's solve: a few timed slices (its Session.solve)
+        if c is not None and (c.job is not None or c.due()) and self._session.solve(self):
+            self._end_session()
         s = self._session
         if s is not None and s.pending is not None and (self.status == STATUS_OK
                                                          or self.status == STATUS_INTERFERENCE):
             self.status = STATUS_CHANGED  # the likely cause of the interference, too
-        if self._axes_status is not None and (self.status == STATUS_OK
-                                              or self.status == STATUS_INTERFERENCE):
-            self.status = self._axes_status  # MAG_AXES is wrong (the interference's cause too)
+        st = self.health.axes_status  # MAG_AXES is wrong (the interference's cause too)
+        if st is not None and (self.status == STATUS_OK or self.status == STATUS_INTERFERENCE):
+            self.status = st
         if self.no_memory is not None and self._ok:
             self.status = STATUS_NO_MEMORY  # a heading, but not the calibrated one it should be
 
@@ -533,16 +521,6 @@ class CompassApp:
         drop("devinit")
         return ok
 
-    def _solve(self):
-        t = self._wall()
-        done = self._session.solve(self)
-        d = self._wall_diff(self._wall(), t)
-        self.slices = (self.slices + 1) & 0x3FFFFFFF
-        if d > self.worst_stall_us:
-            self.worst_stall_us = d
-        if done:
-            self._end_session()
-
     def _end_session(self):
         # the session's job is done: its counters stay, it and the calibration machinery go
         self._ended = self._session.ended()
@@ -567,10 +545,6 @@ class CompassApp:
             self.status = STATUS_OK
         return True
 
-    @property
-    def calibrator(self):
-        return self.collector.calibrator if self.collector is not None else None
-
     def __getattr__(self, name):
         # (only for names the app does not hold: _COLLECTED, _SESSION_KEPT, _HEALTH_KEPT)
         if name in _COLLECTED:
@@ -587,12 +561,7 @@ class CompassApp:
         if o is not None:
             return getattr(o, name)
         return self._ended.get(name, 0 if name in _COUNTS else
-                               False if name == "relearning" else None)
-
-    @property
-    def solving(self):
-        c = self.collector
-        return c is not None and c.job is not None
+                               False if name == "relearning" or name == "solving" else None)
 
     def coverage(self):
         """Percent of the sphere covered by the held samples (0 when not collecting)."""
@@ -622,6 +591,9 @@ class CompassApp:
             elif i % every == 0:
                 report(self)
         return good
+
+
+room(CompassApp)  # its methods' table too (firmware/compat.py room)
 
 
 _NO_MEMORY_LINE = ("status line: out of memory (a frozen or ROMFS build needs the least heap: "

@@ -41,7 +41,7 @@ def calibrated(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, m
     a good-enough fit for the chip found), else boards/main.py runs the calibration program;
     mag: the driver found, which start(mag=...) takes."""
     from firmware import detect
-    from firmware.calibration import GOOD_FIT_ERROR, Calibration
+    from firmware.calibration import Calibration
     from firmware.store import CalStore
     opts = dict(mag_options or {})
     if delay_us is not None:
@@ -61,7 +61,7 @@ def calibrated(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, m
         return False, mag
     finally:
         drop("store_slots")
-    return cal.model == model and cal.fit_error <= GOOD_FIT_ERROR, mag
+    return cal.good_for(model), mag
 
 
 def start(i2c, store_dir, cal_file=None, mag_options=None, delay_us=None, **app_options):

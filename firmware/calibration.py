@@ -93,6 +93,12 @@ class Calibration:
         """out[0:3] = InvW sat16(raw - V) >> 15, rounded (AN4246 section 3); see correct()."""
         correct(self.k, raw, out)
 
+    def good_for(self, model):
+        """No collecting needed for `model` (10, 7, 4, "minmax"; "auto": any but "minmax"):
+        its fit, within GOOD_FIT_ERROR."""
+        return (self.model is not None and self.fit_error <= GOOD_FIT_ERROR
+                and (self.model == model or model == "auto" and self.model != "minmax"))
+
     def with_dip(self, dip_kang):
         """The same fit with the dip it measures (KANG, or None)."""
         return Calibration(self.model, self.offset, self.invw, self.field, self.field_out,

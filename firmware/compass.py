@@ -10,7 +10,7 @@
 # in docs/api.md (heading).
 from array import array
 
-from firmware.compat import const, kernels
+from firmware.compat import const, kernels, room
 from firmware.trig import ZERO_VECTOR as _ZERO_VECTOR, atan2, isqrt, norm14, sin
 
 _KANG_90 = const(16384)
@@ -278,6 +278,9 @@ class Compass:
         h = (h + self.declination_kang) & 0xFFFF
         self.heading_kang = h
         return h
+
+
+room(Compass)  # its methods' table too (firmware/compat.py room)
 
 
 use_kernels()

@@ -391,6 +391,9 @@ class FieldWatch:
         self.prev_roll = c.roll_kang
 
 
+room(FieldWatch)  # its methods' table too (firmware/compat.py room)
+
+
 def _off(d, lim):
     # |d| > lim for an angle difference in KANG (wrapped to -32768..32767)
     d = ((d + 32768) & 0xFFFF) - 32768

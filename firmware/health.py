@@ -90,8 +90,17 @@ class Health:
         self.cfg_due = self.cfg_ok = True
         self.tilt = False  # the app's last accelerometer sample was plausible: a tilt to use
         self.last_error = None
+        self.mounting = None     # the mounting check's last answer: (verdict, MAG_AXES)
+        self.axes_status = None  # the app's status while that answer names other MAG_AXES
         self.set_accel(counts_per_g)
         room(self)  # (firmware/compat.py room)
+
+    def mounted(self, verdict, axes, status):
+        """A mounting check's answer (firmware/calibrate/mountcheck.py); status False: the
+        status is kept."""
+        self.mounting = (verdict, axes)
+        if status is not False:
+            self.axes_status = status
 
     def set_accel(self, counts_per_g):
         c = counts_per_g >> _G_SHIFT

@@ -8,7 +8,7 @@
 # Device(i2c, address, period_us, delay_us=None, timeout_us=None); Magnetometer(Device): the
 # scaffolding the magnetometer drivers share (see the class). The arguments, why the guard is a
 # `with` block, and the unguarded calls the app uses: docs/design.md (module notes, i2cdevice).
-from firmware.compat import const, pick, ticks_diff, ticks_us
+from firmware.compat import const, pick, room, ticks_diff, ticks_us
 from firmware.errors import BusError, DataReadyTimeout, SensorNotFound
 
 DEFAULT_PERIOD_US = const(20000)  # a driver without .period_us: its users assume 50 Hz
@@ -255,6 +255,9 @@ class Magnetometer(Device):
         # the status said an axis is beyond the range: the block is read (data lock released)
         from firmware.devinit import overflow_bit
         overflow_bit(self, bit, advice)
+
+
+room(Magnetometer)  # its methods' table too (firmware/compat.py room)
 
 
 use_kernels()

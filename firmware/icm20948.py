@@ -10,7 +10,7 @@ magnetometer sits (firmware/ak09916.py). The same methods as firmware/mpu6050.py
 # ICM20948(i2c, address=0x68, *, accel_range=2, dlpf=24, gyro_range=500): docs/api.md
 # (drivers). Registers and their banks: docs/hardware.md (ICM-20948); why every method leaves
 # bank 0 selected: docs/design.md (module notes, icm20948).
-from firmware.compat import const
+from firmware.compat import const, room
 
 from firmware.errors import SensorNotFound
 from firmware import i2cdevice
@@ -153,3 +153,6 @@ class ICM20948(Device):
     def temp_cdeg(self):
         """The die temperature of the last read_all_into() in 0.01 C (raw / 333.87 + 21)."""
         return self.temp_raw * 2995 // 10000 + 2100
+
+
+room(ICM20948)  # its methods' table too (firmware/compat.py room)

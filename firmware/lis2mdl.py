@@ -8,7 +8,7 @@
 # read() -> (x, y, z): 3 x the chip's value, 0.5 mG per count (2000 counts/G exactly).
 # Options and attributes: docs/api.md (drivers); registers: docs/hardware.md (LIS2MDL); the
 # counts and what the driver sets: docs/design.md (module notes, lis2mdl).
-from firmware.compat import const
+from firmware.compat import const, room
 
 from firmware.i2cdevice import Magnetometer
 
@@ -97,3 +97,6 @@ class LIS2MDL(Magnetometer):
         raw = self.held(0)
         raise self.overflow(raw, "raw %s (1.5 mG each) beyond +-%d counts: the field exceeds "
                                  "+-16 G; move the magnet away" % (raw, _LIMIT))
+
+
+room(LIS2MDL)  # its methods' table too (firmware/compat.py room)

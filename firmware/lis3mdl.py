@@ -7,7 +7,7 @@
 # LIS3MDL(i2c, address=0x1C, *, range=4, odr=20, mode="uhp", delay_us=None, timeout_us=None)
 # Options and attributes: docs/api.md (drivers); registers: docs/hardware.md (LIS3MDL); why an
 # axis at the rail is an overflow: docs/design.md (module notes, lis3mdl).
-from firmware.compat import const
+from firmware.compat import const, room
 
 from firmware.i2cdevice import Magnetometer, decode
 
@@ -96,3 +96,6 @@ class LIS3MDL(Magnetometer):
         raise self.overflow(raw, "an axis at the output's limit (-32768 or 32767) in raw %s: "
                                  "beyond +-%d G; use a larger range or move the magnet away"
                             % (raw, _RANGES_G[self.range_code]))
+
+
+room(LIS3MDL)  # its methods' table too (firmware/compat.py room)

@@ -8,7 +8,7 @@
 # Each sample is a SET and a RESET measurement whose difference cancels the bridge offset.
 # Options and attributes: docs/api.md (drivers); registers: docs/hardware.md (MMC5603NJ); the
 # arithmetic: docs/design.md (module notes, mmc5603).
-from firmware.compat import const
+from firmware.compat import const, room
 
 from firmware.i2cdevice import Magnetometer
 
@@ -117,3 +117,6 @@ class MMC5603(Magnetometer):
         raw = ((a[0] - b[0]) >> 1, (a[1] - b[1]) >> 1, (a[2] - b[2]) >> 1)
         raise self.overflow(raw, "%s: field %s (16384 counts/G), SET %s, RESET %s; use a larger "
                                  "range or move the magnet away" % (why, raw, a, b))
+
+
+room(MMC5603)  # its methods' table too (firmware/compat.py room)

@@ -65,10 +65,10 @@ def load(app, data):
         return False
     now = app._mag_map.spec
     if said[0] == now:
-        app._mounted(_WRONG, said[1], _STATUS % said[1])
+        app.health.mounted(_WRONG, said[1], _STATUS % said[1])
         return False
     if said[1] == now:
-        app._mounted(_OK, now, None)
+        app.health.mounted(_OK, now, None)
     return True
 
 

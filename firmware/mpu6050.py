@@ -9,7 +9,7 @@ for the compass, rotation rate for the gyro-aided heading (firmware/gyro/attitud
 #
 # MPU6050(i2c, address=0x68, *, accel_range=2, dlpf=21, gyro_range=500): the options, the
 # methods and why the 21 Hz filter: docs/api.md (drivers, each driver's options).
-from firmware.compat import const
+from firmware.compat import const, room
 
 from firmware.errors import SensorNotFound
 from firmware import i2cdevice
@@ -145,3 +145,6 @@ class MPU6050(Device):
     def temp_cdeg(self):
         """The die temperature of the last read_all_into() in 0.01 C (raw / 340 + 36.53)."""
         return self.temp_raw * 5 // 17 + 3653
+
+
+room(MPU6050)  # its methods' table too (firmware/compat.py room)

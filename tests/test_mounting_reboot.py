@@ -273,7 +273,7 @@ def test_a_torn_corrupt_or_foreign_verdict_is_no_verdict_and_the_calibration_loa
         fs.files[NOTE_PATH] = _BAD[name]
     app = _app(b, fs, WRONG)
     assert app.load_reason is None and app.calibration == danced["app"].calibration
-    assert app.mounting is None and app._axes_status is None
+    assert app.mounting is None and app.health.axes_status is None
     W.hold(b, 30.0, 0.0, 0.0)
     for _ in range(5):
         app.step()
@@ -306,7 +306,7 @@ def test_a_record_without_a_verdict_loads_as_before_and_boot_writes_nothing():
                          store=CalStore("/", fs=fs), delay_us=b.sleep_us,
                          ticks_us=b.clock.ticks_us, learn=False)
         assert app.load_reason is None and app.calibration.model == 10
-        assert app.mounting is None and app._axes_status is None
+        assert app.mounting is None and app.health.axes_status is None
         for _ in range(5):
             app.step()
         assert not app.status.startswith("check MAG_AXES")

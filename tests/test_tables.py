@@ -103,8 +103,19 @@ def test_no_firmware_object_deletes_an_attribute():
     assert found == []
 
 
-def test_micropython_holds_the_same_names():
+def test_micropython_holds_the_same_names_and_the_classes_keep_room():
     # the counts above are CPython's: the unix port's must be the same, object by object
     from tests import mp
-    collecting, gyro = mp.json_lines(mp.parity(["tests/scenarios/app_names.py"]))
+    argv = ["tests/scenarios/app_names.py"]
+    collecting, gyro = mp.json_lines(mp.run(argv, micro=False))
     assert dict(collecting)["calibrator"] > SMALL and dict(gyro)["attitude"] > SMALL
+    on_mp = mp.json_lines(mp.run(argv, micro=True))
+    assert on_mp[:2] == [collecting, gyro]
+    # a method call that misses the instance's table finds the method in its class's
+    # (or a base's): the same probing, so a class's table keeps the same room (room(cls));
+    # the unix port's last line (CPython's class tables are other)
+    classes = on_mp[2]
+    assert len(classes) >= 10 and dict(classes)["CompassApp"] > SMALL
+    bad = ["%s: %d names in %d slots" % (c, n, slots(n)) for c, n in classes
+           if n > SMALL and n * 100 > FULL_PCT * slots(n)]
+    assert bad == []

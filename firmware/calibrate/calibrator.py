@@ -473,6 +473,9 @@ class Calibrator:
         return result
 
 
+room(Calibrator)  # its methods' table too (firmware/compat.py room)
+
+
 def _consistency_sums(buf, k, s, f, out):
     # The change of hard iron c between the older and the newer half of the held samples (in
     # the order kept), corrected with k (InvW, V: calibration.correct), shifted right by s,
@@ -645,6 +648,11 @@ class Collector:
             self.quiet_us += dt
         if self.since_kept_us < _SOLVE_IDLE_US:
             self.since_kept_us += dt
+
+    @property
+    def solving(self):
+        """A solve runs: its slices are due at the next steps (CompassApp.solving)."""
+        return self.job is not None
 
     def due(self):
         if self.kept >= self.solve_every or self.next_model is not None:

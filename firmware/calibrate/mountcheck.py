@@ -165,7 +165,7 @@ def check(pairs, cal, mag_axes, accel_axes):
 def judge(app):
     # The check of a CompassApp's calibration session (firmware/calibrate/session.py mount_check):
     # the pairs its collector kept, the calibration in force, the app's maps. Returns
-    # (verdict, axes, status) for CompassApp._mounted: WRONG's status is shown in place of
+    # (verdict, axes, status) for Health.mounted: WRONG's status is shown in place of
     # "ok" (`check MAG_AXES: the data say "y,x,-z"`); OK clears it (None); SPREAD and
     # UNSTEADY leave it as it was (False).
     v, axes, sigma, best = check(app.collector.pairs, app.calibration, app._mm, app._am)

@@ -14,7 +14,9 @@ _FLAG_PENDING = const(2)      # firmware.calibrate.history.FLAG_PENDING
 _FLAG_BASELINE = const(4)     # firmware.calibrate.history.FLAG_BASELINE
 # what a finished session leaves for CompassApp's counters (accepted, refused, ...)
 ENDED = ("accepted", "refused", "solves", "last_reason", "last_detail", "last_model")
-KEPT = ("history_errors", "history_reason")  # the session's own, carried from one to the next
+# the session's own, carried from one to the next: the history's errors, the solve's slices
+# and the longest (us) a step spent in them
+KEPT = ("history_errors", "history_reason", "slices", "worst_stall_us")
 
 
 class Session:
@@ -34,11 +36,13 @@ class Session:
         self.store = app.store
         self.calibration = app.calibration
         self.date_s = None
-        self.history_errors = app.history_errors
-        self.history_reason = app.history_reason
+        for name in KEPT:
+            setattr(self, name, getattr(app, name))
 
     def solve(self, app):
-        """A few slices of the running solve; True when the session ended."""
+        """A few slices of the running solve, timed by the app's wall clock; True when the
+        session ended."""
+        t = app._wall()
         c = self.collector
         if c.job is None:
             self.slices_per_step = c.start(getattr(app.mag, "period_us", DEFAULT_PERIOD_US))
@@ -48,7 +52,12 @@ class Session:
             if cal is not None:
                 self.accept(app, cal)
             n -= 1
-        return c.job is None and self.end_if_done(app)
+        done = c.job is None and self.end_if_done(app)
+        d = app._wall_diff(app._wall(), t)
+        self.slices = (self.slices + 1) & 0x3FFFFFFF
+        if d > self.worst_stall_us:
+            self.worst_stall_us = d
+        return done
 
     def accept(self, app, cal):
         from firmware.calibrate.acceptance import check_calibration
@@ -83,7 +92,7 @@ class Session:
         c = self.collector
         if (app.learn or self.pending is not None or app._unsaved or c.relearning
                 or c.job is not None or c.kept or c.since_kept_us < c.QUIET_US
-                or not app._good_enough(app.calibration)):
+                or not app.calibration.good_for(app.model)):
             return False
         self.mount_check(app)  # once more with every pair kept, when no check could tell yet
         return True
@@ -100,8 +109,8 @@ class Session:
     def mount_check(self, app):
         # The mounting check (firmware/calibrate/mountcheck.py: loaded for it, dropped after) of the pairs
         # kept against the calibration in force, until one gives an answer (ok or wrong) that is
-        # kept for the next boot (firmware/mountnote.py save): app.mounting, and app._axes_status
-        # the status while it names another MAG_AXES (CompassApp._mounted). Then the session's
+        # kept for the next boot (firmware/mountnote.py save): app.mounting, and Health.axes_status
+        # the status while it names another MAG_AXES (Health.mounted). Then the session's
         # pairs go: a board short of heap loads the check's code as seldom as that, and the next
         # session checks afresh. mountnote's code is loaded for a wrong setting, and for a right
         # one only when a verdict file is there to remove, by a string as firmware/app_persist.py
@@ -119,7 +128,7 @@ class Session:
             v, axes, shown = mountcheck.judge(app)
             mountcheck = None
             drop("calibrate.mountcheck")
-            app._mounted(v, axes, shown)
+            app.health.mounted(v, axes, shown)
             st = app.store
             if v == "ok" and st is not None:
                 try:  # firmware.mountnote.NAME

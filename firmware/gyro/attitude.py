@@ -623,5 +623,8 @@ class Attitude:
         return m if m < 1000 else 1000
 
 
+room(Attitude)  # its methods' table too (firmware/compat.py room)
+
+
 
 use_kernels()

@@ -6,7 +6,7 @@ import json
 import sys
 
 from firmware import app_persist, mountnote
-from firmware.app import CompassApp
+from firmware.health import Health
 from firmware.calibration import Calibration
 from firmware.axes import AxisMap
 from firmware.store_slots import crc32
@@ -20,28 +20,29 @@ class Mag:
 
 
 class App:
-    mounting = None
-    _axes_status = None
-    _mounted = CompassApp._mounted  # what the app does with a verdict
-
     def __init__(self, store, mag_axes, accel_axes="-x,y,z"):
+        self.health = Health()  # what keeps a verdict (Health.mounted)
         self.store = store
         self.mag = Mag()
         self._mag_map = AxisMap(mag_axes)
         self._acc_map = AxisMap(accel_axes)
+
+    @property
+    def mounting(self):  # as CompassApp reads it
+        return self.health.mounting
 
 
 def recall(fs, mag_axes, accel_axes="-x,y,z"):
     a = App(CalStore("/", fs=fs), mag_axes, accel_axes)
     if path in fs.files:
         mountnote.load(a, fs.files[path][:80])  # as firmware/app_persist.py reads it
-    return [a.mounting and list(a.mounting), a._axes_status]
+    return [a.mounting and list(a.mounting), a.health.axes_status]
 
 
 fs = MemFs()
 path = "/ecompass_mounting.txt"
 a = App(CalStore("/", fs=fs), "x,-y,-z")
-a.mounting = ("wrong", "y,x,-z")
+a.health.mounting = ("wrong", "y,x,-z")
 mountnote.save(a)
 line = fs.files[path]
 print(json.dumps(["line", line.decode()]))
@@ -65,7 +66,7 @@ for text in (b"wrong hmc5883l x,y,z -x,y,z y,x,-z", b"wrong hmc5883l x,-y,-z -x,
     fs.files[path] = text + ("%08x\n" % crc32(text)).encode()
     print(json.dumps(["line", len(text), recall(fs, "x,-y,-z")]))
 # through the store's load at boot (firmware/app_persist.py: the code loaded by its name, dropped)
-a.mounting = ("wrong", "y,x,-z")
+a.health.mounting = ("wrong", "y,x,-z")
 mountnote.save(a)
 CalStore("/", sensor="hmc5883l", fs=fs).save(Calibration(
     model=10, offset=(100, -200, 300), invw=(30000, 0, 0, 0, 30000, 0, 0, 0, 30000), field=600,
@@ -74,8 +75,8 @@ for axes in ("x,-y,-z", "y,x,-z", "-y,-x,-z"):
     b = App(CalStore("/", fs=fs), axes)
     cal, why = app_persist.load(b)  # (the app keeps why as .load_reason)
     print(json.dumps(["boot", axes, why, cal.model, cal.dip_kang,
-                      b.mounting and list(b.mounting), b._axes_status,
+                      b.mounting and list(b.mounting), b.health.axes_status,
                       "firmware.mountnote" in sys.modules]))
-a.mounting = ("ok", "x,-y,-z")
+a.health.mounting = ("ok", "x,-y,-z")
 mountnote.save(a)
 print(json.dumps(["after ok", path in fs.files, recall(fs, "x,-y,-z")]))
