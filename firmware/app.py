@@ -17,7 +17,7 @@ from firmware.compat import const, drop, drop_part, free_bytes, room, sleep_us, 
 from firmware.errors import SensorOverflow
 # (fieldwatch loads with the app: loaded during construction, it raised the boot's peak by a
 # 4 KB step of make bench's sweep)
-from firmware.fieldwatch import W_FIELD, W_FLAG, W_JUMP, W_KEEP, W_STALE
+from firmware.fieldwatch import W_FLAG, W_JUMP, W_KEEP
 from firmware.health import STATUS_OK, status_of
 
 STATUS_INTERFERENCE = "interference"  # a heading, but |field| is off: a magnet or steel near
@@ -268,8 +268,6 @@ class CompassApp:
     def _locate(self):
         if self.location is not None:
             self.location.apply(self)
-            if self.collector is None:  # the model's figures are kept: its table code and
-                drop("field.wmm", "calibrate.acceptance")  # the field check leave (docs/design.md)
 
     def quick_calibrate(self, true_heading_cdeg, refine=False, samples=32):
         """Hard iron from this pose and its true heading, in force and saved (docs/api.md)."""
@@ -492,10 +490,6 @@ class CompassApp:
             self._flag(st)
         else:
             self.status = st
-        if k & W_FIELD:
-            self.health.cfg_due = True  # the chip's set read back at the next sample
-        if k & W_STALE:
-            self._stale()
         return (k & W_KEEP) != 0
 
     def _select(self):
@@ -552,10 +546,7 @@ class CompassApp:
         elif name in _SESSION_KEPT:
             o = self._session
         elif name in _HEALTH_KEPT:
-            o = self.health
-            if o is None:
-                return 0 if name in _COUNTS else None
-            return getattr(o, name)
+            o = self.health  # (None: the app did not fit; _ended holds none of its names)
         else:
             raise AttributeError(name)
         if o is not None:

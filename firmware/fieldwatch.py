@@ -38,9 +38,7 @@ _STALE_US = const(30000000)     # 30 s of interference: the calibration no longe
 # check(app): what the app shows for a sample in a spell (0: the field is clean)
 W_JUMP = const(1)               # "heading jumped" (else "interference")
 W_FLAG = const(2)               # this sample raised a flag: counted in app.errors
-W_FIELD = const(4)              # |B| or the dip outside their windows: read the chip's set back
-W_STALE = const(8)              # flagged for _STALE_US: the board's iron changed, relearn
-W_KEEP = const(16)              # the collector may take the sample
+W_KEEP = const(4)               # the collector may take the sample
 _FIELD_TOL_MAX_PCT = const(50)  # use(): the compass's |B| window at most +-50 %
 
 
@@ -229,17 +227,20 @@ class FieldWatch:
 
     def check(self, app):
         """The app's sample, after its compass update: 0 when the field is clean, else the
-        W_* bits of the spell it shows (docs/design.md, app)."""
+        W_* bits of the spell it shows (docs/design.md, app). A field outside its windows also
+        has the chip's set read back (Health.cfg_due), and after _STALE_US the app relearns."""
         k = self.sample(app.health.tilt and app.accel is not None, app._dt)
         if k == SPELL_FIELD:
+            app.health.cfg_due = True  # the chip's set read back at the next sample
             if app.relearning:  # the calibration in force is the one that does not fit
-                return W_FIELD | W_FLAG | W_KEEP
+                return W_FLAG | W_KEEP
             self.flagged_us += app._dt
             if self.flagged_us < _STALE_US:
-                return W_FIELD | W_FLAG
+                return W_FLAG
             self.flagged_us = 0
             self.dip.reset()  # the dip too is learned afresh
-            return W_FIELD | W_FLAG | W_STALE
+            app._stale()  # the board's iron changed: relearn
+            return W_FLAG
         if not self.spell:
             self.flagged_us = 0
             return 0

@@ -11,7 +11,7 @@ new calibration, the interference window, quick calibration's expected field vec
 #
 # CompassApp.set_location(lat_e7, lon_e7, year_e3=None) builds one and applies it (apply()).
 # Units, errors, statuses and what apply() changes: docs/design.md (module notes, location).
-from firmware.compat import const
+from firmware.compat import const, drop
 from firmware.fixedpoint import rdiv
 
 _LAT_MAX_E7 = 900000000
@@ -126,6 +126,8 @@ class Location:
         col = app.collector
         if col is not None:
             col.calibrator.expected_field = exp
+        else:  # the model's figures are kept: its table code and the field check leave
+            drop("field.wmm", "calibrate.acceptance")  # (docs/design.md, memory)
 
     @staticmethod
     def _window(c, cal, exp):
