@@ -14,7 +14,9 @@ BUDGETS = {
     # holds the drivers' fault handling, the constants one home each; 58.4 KB once the
     # objects a step calls keep spare slots in their attribute tables, firmware/compat.py
     # room: the app's step a fifth faster on the unix port, docs/design.md, memory)
-    "heading_live_mpy": 59 * KB,
+    # 59,728 B in every lone run; one process of a whole `make test` read 60,800 B (what a
+    # conservative collector keeps alive can differ from process to process)
+    "heading_live_mpy": 60 * KB,
     # the same from frozen / ROMFS bytecode
     "heading_live_romfs": 35 * KB,
     # a first calibration session that has ended, minus the line above (.mpy): the names the
