@@ -183,11 +183,11 @@ def _boot():
                               # MotionCal mode: its calibration, not the app's own
                               learn=False if MOTIONCAL else None, mag=_mag)
             _mag = None
+            if note is not None:  # (said before a retry: the file is imported once)
+                print("eCompass: %s" % note)
             if app.no_memory == "start":  # the app did not fit: again from a clean heap
                 app = None
                 raise MemoryError
-            if note is not None:
-                print("eCompass: %s" % note)
             break
         except OSError as e:  # SensorNotFound, BusError: wiring or power; say so and retry
             print("eCompass: %s" % e)

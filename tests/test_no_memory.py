@@ -134,12 +134,14 @@ def test_the_board_starts_afresh_when_the_app_did_not_fit(monkeypatch, capsys):
 
     def start(i2c, store_dir, **options):
         made.append(types.SimpleNamespace(no_memory="start" if not made else None))
-        return made[-1], None
+        return made[-1], "calibration.json imported" if len(made) == 1 else None
     monkeypatch.setattr(firmware.boot, "start", start)
     dropped = []
     monkeypatch.setattr(runner, "drop", lambda *names: dropped.extend(names))
     runner._boot()
     assert len(made) == 2 and runner.app is made[1]
     assert {"app", "app_setup", "store"} <= set(dropped)
-    assert "eCompass: out of memory at boot" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "eCompass: out of memory at boot" in out
+    assert "eCompass: calibration.json imported" in out  # the import's word is not lost
     assert waits == [5000000]  # one pause between the tries
