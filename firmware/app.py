@@ -120,7 +120,8 @@ def _settle(app):
     d = app.__dict__  # (a copy on MicroPython)
     c = CompassApp.__dict__
     for k in c:  # (keys, not items(): no tuple, no slice allocated per name)
-        if k not in d and not k.startswith("__") and not k[2:3].isdigit():  # (room's _rN)
+        if k not in d and not k.startswith("__") and not (k.startswith("_r") and k[2:].isdigit()):
+            # (room()'s names: the class's own spare slots stay its own)
             v = c[k]
             if not callable(v) and not isinstance(v, property):
                 setattr(app, k, v)

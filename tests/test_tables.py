@@ -115,7 +115,9 @@ def test_micropython_holds_the_same_names_and_the_classes_keep_room():
     # (or a base's): the same probing, so a class's table keeps the same room (room(cls));
     # the unix port's last line (CPython's class tables are other)
     classes = on_mp[2]
-    assert len(classes) >= 10 and dict(classes)["CompassApp"] > SMALL
+    names = dict(classes)
+    assert {"CompassApp", "SampleBuffer", "Calibrator", "Attitude", "LIS3MDL", "AK8963",
+            "MMC5603"} <= set(names) and names["CompassApp"] > SMALL
     bad = ["%s: %d names in %d slots" % (c, n, slots(n)) for c, n in classes
            if n > SMALL and n * 100 > FULL_PCT * slots(n)]
     assert bad == []

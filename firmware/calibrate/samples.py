@@ -10,7 +10,7 @@ from array import array
 
 from firmware.fixedpoint import isqrt
 
-from firmware.compat import const, pick
+from firmware.compat import const, pick, room
 
 REJECTED = const(0)  # offer(): too close to a held sample, or its cell is taken
 KEPT = const(1)      # offer(): stored in a free slot
@@ -511,6 +511,9 @@ class SampleBuffer:
             if i0 + step < N_REGIONS:
                 yield
         out[0] = occupied * 100 // N_REGIONS
+
+
+room(SampleBuffer)  # its methods' table too (firmware/compat.py room)
 
 
 use_kernels()

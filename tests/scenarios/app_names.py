@@ -1,7 +1,8 @@
 # How many names each object a GY-87 app holds has in its attribute table, while collecting and
 # with the gyro-aided heading: tests/test_tables.py counts them on CPython and asserts that
 # MicroPython's count is the same (the tables' sizes are MicroPython's). Last, on MicroPython,
-# the names in the table of each of their classes and its bases (a method is found there).
+# the names in the table of each class (and its bases) of every firmware object an app holds
+# while collecting, on every board, and with the gyro (a method is found there).
 import json
 import sys
 
@@ -29,20 +30,49 @@ run_until(app, b, 20.0)
 print(json.dumps(counts(app)))
 
 
-def classes(objs):
-    out, todo = {}, [type(o) for o in objs]
+def firmware_classes():
+    # every class a loaded firmware module defines or imports (MicroPython's classes name no
+    # module)
+    from array import array
+    out = set()
+    for name, m in sorted(sys.modules.items()):
+        if name.startswith("firmware"):
+            for k in dir(m):
+                v = getattr(m, k)
+                if isinstance(v, type) and v not in (array, type(sys)):
+                    out.add(v)
+    return out
+
+
+def classes(app, out):
+    # the tables of the classes of every firmware object the app holds, and their bases'
+    ours, seen, todo = firmware_classes(), set(), [app]
     while todo:
-        c = todo.pop()
-        if c is not object and c.__name__ not in out:
+        o = todo.pop()
+        c = type(o)
+        if id(o) in seen or c not in ours:
+            continue
+        seen.add(id(o))
+        for k in dir(o):  # (instance names and class names: values that are firmware objects)
+            if not k.startswith("__"):
+                v = getattr(o, k, None)
+                if type(v) in ours and not isinstance(v, type):
+                    todo.append(v)
+        while c is not object:
             out[c.__name__] = len(c.__dict__)
-            todo.extend(c.__bases__)
-    return sorted(out.items())
+            c = c.__bases__[0]
 
 
 if sys.implementation.name == "micropython":  # (CPython's class tables are other)
-    b = make_sim("gy87")
-    app2 = make_app(b)
-    run_until(app2, b, 2.0)
-    print(json.dumps(classes([app2, app2.health, app2.watch, app2.dip, app2.compass, app2.mag,
-                              app2.accel, app2.collector, app2.collector.calibrator,
-                              app2._session, app.attitude])))
+    from app_world import ALL_SETUPS  # noqa: E402
+    found = {}
+    for setup in sorted(ALL_SETUPS):
+        b = make_sim(setup)
+        a = make_app(b)
+        run_until(a, b, 2.0)  # collecting: the session's objects too
+        classes(a, found)
+        if setup == "gy87":
+            a.use_gyro()
+            run_until(a, b, 3.0)
+            classes(a, found)
+    print(json.dumps(sorted(found.items())))
