@@ -545,7 +545,7 @@ class ProfileRun:
 
 
 # the heap (KB, besides the recording and a ROMFS image) of the calibration-mode profile: a
-# board with less than calmode.SESSION_ROOM free after boot, as a stock ESP32 would be
+# board with less than firmware.learning.SESSION_ROOM free after boot, as a stock ESP32 would be
 PROGRAM_PROFILE_KB = 150
 
 

@@ -11,14 +11,15 @@ there is no good calibration yet, collect and solve one in the background.
 # step's named stages, interference, storage and history, and what is loaded when: the app in
 # docs/design.md (module notes) and docs/design.md#memory.
 from firmware.axes import apply
-from firmware.calibration import STALE_AGE_S, UNCALIBRATED, correct
+from firmware.calibration import UNCALIBRATED, correct
 from firmware.compass import FLAG_NO_GRAVITY
-from firmware.compat import const, drop, drop_part, free_bytes, room, sleep_us, ticks_diff
+from firmware.compat import ROOM_NAMES, const, drop, need, room, sleep_us, ticks_diff
 from firmware.errors import SensorOverflow
 # (fieldwatch loads with the app: loaded during construction, it raised the boot's peak by a
 # 4 KB step of make bench's sweep)
 from firmware.fieldwatch import W_FLAG, W_JUMP, W_KEEP
 from firmware.health import STATUS_OK, status_of
+from firmware.learning import LOAD_NO_MEMORY, Learning
 
 STATUS_INTERFERENCE = "interference"  # a heading, but |field| is off: a magnet or steel near
 STATUS_NO_FIELD = "no_field"          # corrected field (0, 0, 0): no heading
@@ -42,15 +43,7 @@ SOLVE_EVERY = const(25)       # kept samples between solves: ~1/9 of a full sphe
 _REINIT_AFTER = const(5)     # failed reads in a row before the drivers are re-initialised
 _SAVE_RETRY_US = const(60000000)  # a failed save is retried after 60 s
 _US_PER_S = const(1000000)
-_LOAD_NO_MEMORY = "no_memory"  # firmware.app_persist.LOAD_NO_MEMORY
-_LOAD_RETRY_US = const(5000000)  # a load (or the heading line) that found no room: again in 5 s
 _RETRY_PAUSE_US = const(5000)   # the pause of a step while the app itself does not fit
-_CAL_RETRY_US = const(60000000)  # a session that found no room: again in 60 s
-# free heap (bytes, after a collection) a calibration session needs beside the heading line:
-# below it, calibrating is the calibration program's job (firmware/calibrate/program.py, run
-# by boards/main.py after a restart). The session completes reliably from ~128 KB free after
-# boot (x86-32 build, boards/main.py; docs/benchmarks.md).
-SESSION_ROOM = const(128 * 1024)
 _GAP_CAP_US = const(0x10000000)  # the time since the last read stops counting at 268 s
 _REPORT_EVERY = const(25)    # run(): steps between reports (0.5 s at 50 Hz)
 
@@ -120,7 +113,7 @@ def _settle(app):
     d = app.__dict__  # (a copy on MicroPython)
     c = CompassApp.__dict__
     for k in c:  # (keys, not items(): no tuple, no slice allocated per name)
-        if k not in d and not k.startswith("__") and not (k.startswith("_r") and k[2:].isdigit()):
+        if k not in d and not k.startswith("__") and k not in ROOM_NAMES:
             # (room()'s names: the class's own spare slots stay its own)
             v = c[k]
             if not callable(v) and not isinstance(v, property):
@@ -130,13 +123,12 @@ def _settle(app):
 class CompassApp:
     # the documented state (docs/api.md, the app), here too so that it exists at every heap
     calibration = UNCALIBRATED
-    location = compass = collector = _session = load_reason = save_reason = health = None
-    no_memory = _args = _gyro_options = not_installed = quick = attitude = date_s = None
+    location = compass = collector = load_reason = save_reason = health = learning = None
+    no_memory = _args = quick = attitude = date_s = None
     stored = save_errors = worst_save_us = steps = _retry_us = 0
     _dt = _gap_us = _age_us = _save_wait_us = 0
-    _unsaved = _dip_unsaved = _stalled = _ok = relearn_due = False
+    _unsaved = _dip_unsaved = _stalled = _ok = False
     heading_kang = -1
-    _ended = {}  # the counters of the last session (read only here: an app has its own)
 
     def __init__(self, i2c, mag=None, accel=None, mag_axes="x,-y,-z", accel_axes="-x,y,z",
                  model=10, declination_cdeg=0, store=None, delay_us=None, ticks_us=None,
@@ -146,9 +138,9 @@ class CompassApp:
         self._step_guard = _StepGuard()
         self.errors = {}
         self.steps = 0
+        self.learning = Learning(learn, capacity, solve_every, fallback)  # (at every heap)
         args = (i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, store,
-                delay_us, ticks_us, capacity, solve_every, fallback, reinit_after,
-                mag_options, learn, fast)
+                delay_us, ticks_us, solve_every, reinit_after, mag_options, fast)
         try:
             self._build(args)
         except MemoryError:  # no room for the app: step() tries again (docs/api.md)
@@ -164,40 +156,28 @@ class CompassApp:
         from firmware import app_setup  # construction only: dropped when the app is made
         try:
             (self.i2c, self.mag, self.accel, self._accel_auto, self.store, self.model,
-             self.capacity, self.solve_every, self.fallback, self.reinit_after, self.learn,
-             self._mag_map, self._acc_map, self._mag_into, self._mag_cfg, self._mm, self._am,
-             self._delay, self._ticks, self._wrap, self._wall, self._wall_diff, self._dt_cap,
-             self.raw, self._cor, self.body, self._acc, self.gravity, self.health,
-             self._kn, self.compass, self.watch) = app_setup.setup(*args)
+             self.reinit_after, self._mag_map, self._acc_map, self._mag_into, self._mag_cfg,
+             self._mm, self._am, self._delay, self._ticks, self._wrap, self._wall,
+             self._wall_diff, self._dt_cap, self.raw, self._cor, self.body, self._acc,
+             self.gravity, self.health, self._kn, self.compass, self.watch) = app_setup.setup(*args)
         finally:
             app_setup = None
             drop("app_setup", "devinit")  # the drivers' start-up and error texts too
         self.fast = self._kn is not None
         self.dip = self.watch.dip
         self._t_last = self._ticks()
-        self.collector = self._session = self.attitude = None
         self.status = STATUS_STARTING
         self._args = self.no_memory = None
         self._use(self._load())
-        self._start_learning()
-        room(self)  # a step calls a dozen of its methods (firmware/compat.py room)
-
-    def _start_learning(self):
-        # a session when asked for or while no good calibration is in force (docs/api.md)
-        if self.load_reason == _LOAD_NO_MEMORY:
-            self.no_memory = "load"
-            self._retry_us = _LOAD_RETRY_US
-            return
-        learn = self.learn
-        if learn or learn is None and not self.calibration.good_for(self.model):
-            self.calibrate()
+        self.learning.begin(self)
+        room(self, 75)  # a step misses its table for a dozen methods (firmware/compat.py room)
 
     def _load(self):
         try:
             from firmware import app_persist
             cal, self.load_reason = app_persist.load(self)
         except MemoryError:  # no room for the store's code: not "uncalibrated" (_retry)
-            cal, self.load_reason = UNCALIBRATED, _LOAD_NO_MEMORY
+            cal, self.load_reason = UNCALIBRATED, LOAD_NO_MEMORY
         app_persist = None
         drop("app_persist", "store_slots")
         return cal
@@ -208,7 +188,7 @@ class CompassApp:
             from firmware import app_persist
             r = app_persist.save(self, dip_only)
         except MemoryError:  # no room for the store's code: as a failed save
-            r = (self.stored, False, self.save_errors + 1, 0, True, _LOAD_NO_MEMORY,
+            r = (self.stored, False, self.save_errors + 1, 0, True, LOAD_NO_MEMORY,
                  self.worst_save_us)
         app_persist = None
         drop("app_persist", "store_slots")
@@ -225,7 +205,8 @@ class CompassApp:
 
     def use_calibration(self, cal, save=True, collect=True):
         """Put the Calibration `cal` in force (docs/api.md)."""
-        if not collect:
+        if not collect and self.collector is not None:
+            self.learning.end()  # the user's choice stands: the session and its code go
             self.collector = None
         self._use(cal)
         if save:
@@ -234,35 +215,20 @@ class CompassApp:
     def calibrate(self):
         """Start a calibration session beside the heading line (docs/api.md)."""
         if self.collector is None and self._args is None:  # (no app yet: nothing to collect for)
-            f = free_bytes()
-            if f is not None and f < SESSION_ROOM:
-                return self._no_room()
-            try:
-                from firmware.calibrate import session
-                s = self._session = session.Session(self)
-                self.collector = s.collector
-            except ImportError:  # package-calibrate.json not installed on this board
-                self.not_installed = "calibrate"
-                return None
-            except MemoryError:  # no room beside the heading line after all
-                self._session = self.collector = session = None
-                drop_part("calibrate")
-                return self._no_room()
-            self._locate()
+            self.collector = self.learning.start(self)
+            if self.collector is not None:
+                self._locate()
         return self.collector
 
-    def _no_room(self):
-        self.no_memory = "calibrate"
-        self._retry_us = _CAL_RETRY_US
-        return None
+    def _no_room(self, what, us):
+        # the heap could not hold `what` (.no_memory): _retry tries again in `us`
+        self.no_memory = what
+        self._retry_us = us
 
     def set_location(self, lat_e7, lon_e7, year_e3=None, table=None):
         """The board's place and date; returns the location's status (docs/api.md)."""
-        try:
-            from firmware.field.location import place
-        except ImportError:  # an optional part (docs/design.md, parts)
-            raise ImportError("set_location() needs the field part: install package-field.json")
-        loc = self.location = place(self, lat_e7, lon_e7, year_e3, table)
+        m = need("field.location", "set_location()")  # an optional part
+        loc = self.location = m.place(self, lat_e7, lon_e7, year_e3, table)
         self._use(self.calibration)  # the window afresh, then the location applied
         return loc.status
 
@@ -272,25 +238,15 @@ class CompassApp:
 
     def quick_calibrate(self, true_heading_cdeg, refine=False, samples=32):
         """Hard iron from this pose and its true heading, in force and saved (docs/api.md)."""
-        try:
-            from firmware.field.quickcal import quick_calibrate
-        except ImportError:
-            raise ImportError("quick_calibrate() needs the field part: install "
-                              "package-field.json")
-        self.quick, cal = quick_calibrate(self, true_heading_cdeg, refine, samples)
+        m = need("field.quickcal", "quick_calibrate()")
+        self.quick, cal = m.quick_calibrate(self, true_heading_cdeg, refine, samples)
         return cal
 
     def use_gyro(self, **options):
         """The MPU6050's gyroscope holds the heading; returns the Attitude (docs/gyro.md)."""
-        try:
-            from firmware.gyro.attitude_setup import attach
-            from firmware.gyro import attitude
-        except ImportError:
-            raise ImportError("use_gyro() needs the gyro part: install package-gyro.json")
-        a = self.attitude = attach(self, attitude, options)
-        attach = None
+        m = need("gyro.attitude_setup", "use_gyro()")
+        a = self.attitude = m.attach(self, need("gyro.attitude", "use_gyro()"), options)
         drop("gyro.attitude_setup")
-        self._gyro_options = options if options else ()
         return a
 
     @property
@@ -305,9 +261,8 @@ class CompassApp:
         return assess(self)[1]
 
     def step(self):
-        """One sample and a bounded slice of background work; True if a heading came out.
-        Never raises: an unexpected exception becomes the status "internal error", a
-        MemoryError "out of memory"."""
+        """One sample and a bounded slice of background work; True if a heading came out. Never
+        raises: an exception becomes the status "internal error" (MemoryError "out of memory")."""
         self.steps = (self.steps + 1) & 0x3FFFFFFF  # a small int for years at 200 Hz
         g = self._step_guard
         with g:
@@ -321,9 +276,9 @@ class CompassApp:
 
     def _retry_build(self):
         # the app itself did not fit: a pause per step (no spinning), a try every 256 steps
-        self._ok = False
         (self._args[8] or sleep_us)(_RETRY_PAUSE_US)  # delay_us, else the port's
         if self.steps & 0xFF == 0:
+            self.collector = self.attitude = self.learning.session = None  # (a build cut short)
             self._build(self._args)
 
     def _step(self):
@@ -351,13 +306,13 @@ class CompassApp:
             if not self.health.tilt and (self.accel is not None or self._accel_auto) \
                     and self.status == STATUS_OK:
                 self._flag(STATUS_TILT)
-        c = self.collector  # the session's solve: a few timed slices (its Session.solve)
-        if c is not None and (c.job is not None or c.due()) and self._session.solve(self):
-            self._end_session()
-        s = self._session
-        if s is not None and s.pending is not None and (self.status == STATUS_OK
-                                                         or self.status == STATUS_INTERFERENCE):
-            self.status = STATUS_CHANGED  # the likely cause of the interference, too
+        c = self.collector  # the session's solve: a few timed slices (Learning.solve)
+        if c is not None:
+            if (c.job is not None or c.due()) and self.learning.solve(self):
+                self.collector = None  # the session ended
+            elif self.learning.session.pending is not None and (
+                    self.status == STATUS_OK or self.status == STATUS_INTERFERENCE):
+                self.status = STATUS_CHANGED  # the likely cause of the interference, too
         st = self.health.axes_status  # MAG_AXES is wrong (the interference's cause too)
         if st is not None and (self.status == STATUS_OK or self.status == STATUS_INTERFERENCE):
             self.status = st
@@ -369,12 +324,10 @@ class CompassApp:
         if self.health is not None:
             self.health.last_error = e
         if isinstance(e, MemoryError):
-            self._flag(STATUS_NO_MEMORY)
-            return
+            return self._flag(STATUS_NO_MEMORY)
         self._flag(STATUS_INTERNAL)
-        c = self.collector
-        if c is not None and c.job is not None:
-            c.job = None  # a solve that raised is abandoned (the next one starts afresh)
+        if self.collector is not None:
+            self.collector.job = None  # a solve that raised is abandoned (the next starts afresh)
 
     def _flag(self, st):
         self.status = st
@@ -382,10 +335,7 @@ class CompassApp:
 
     def _clock(self):
         now = self._ticks()
-        if self._wrap:
-            dt = ticks_diff(now, self._t_last)
-        else:
-            dt = now - self._t_last
+        dt = ticks_diff(now, self._t_last) if self._wrap else now - self._t_last
         self._t_last = now
         if dt < 0:
             dt = 0
@@ -429,9 +379,9 @@ class CompassApp:
         self.no_memory = None
         if what == "load":
             cal = self._load()
-            if self.load_reason != _LOAD_NO_MEMORY:
+            if self.load_reason != LOAD_NO_MEMORY:
                 self._use(cal)
-            self._start_learning()  # (or "load" again, while it finds no room)
+            self.learning.begin(self)  # (or "load" again, while it finds no room)
         elif what == "calibrate":
             self.calibrate()
 
@@ -500,14 +450,6 @@ class CompassApp:
             if c.pairs is not None and self.health.tilt:  # the mounting check's pairs
                 c.pairs.feed(self.raw, self._acc)
 
-    def _stale(self):
-        # the board's iron changed (docs/design.md, app): relearn
-        c = self.calibrate()
-        if c is not None:
-            c.relearn(STALE_AGE_S)
-        else:
-            self.relearn_due = True  # no room: the calibration program's job (boards/main.py)
-
     def reinit(self):
         """Re-initialise the drivers; True when both answered (docs/api.md)."""
         from firmware import devinit  # the drivers' start-up code and error texts
@@ -515,12 +457,6 @@ class CompassApp:
         devinit = None
         drop("devinit")
         return ok
-
-    def _end_session(self):
-        # the session's job is done: its counters stay, it and the calibration machinery go
-        self._ended = self._session.ended()
-        self.collector = self._session = None
-        drop_part("calibrate")
 
     def accept_change(self):
         """Put the pending calibration in force (docs/api.md); False when none is pending."""
@@ -531,29 +467,30 @@ class CompassApp:
         return self._change(False)
 
     def _change(self, accept):
-        s = self._session
-        if s is None or s.pending is None:
-            return False
-        if s.accept_change(self) if accept else s.discard_change(self):
-            self._end_session()
-        if self.status == STATUS_CHANGED:
+        r = self.learning.change(self, accept)  # (None: nothing pending)
+        if r:
+            self.collector = None  # the session ended with it
+        if r is not None and self.status == STATUS_CHANGED:
             self.status = STATUS_OK
-        return True
+        return r is not None
 
     def __getattr__(self, name):
-        # (only for names the app does not hold: _COLLECTED, _SESSION_KEPT, _HEALTH_KEPT)
+        # (names the app does not hold: _COLLECTED, _SESSION_KEPT, _HEALTH_KEPT, Learning's)
+        lr = self.learning
         if name in _COLLECTED:
             o = self.collector
         elif name in _SESSION_KEPT:
-            o = self._session
+            o = lr.session
         elif name in _HEALTH_KEPT:
-            o = self.health  # (None: the app did not fit; _ended holds none of its names)
+            o = self.health  # (None: the app did not fit; .ended holds none of its names)
+        elif name == "relearn_due" or name == "not_installed":
+            o = lr
         else:
             raise AttributeError(name)
         if o is not None:
             return getattr(o, name)
-        return self._ended.get(name, 0 if name in _COUNTS else
-                               False if name == "relearning" or name == "solving" else None)
+        return lr.ended.get(name, 0 if name in _COUNTS else
+                            False if name == "relearning" or name == "solving" else None)
 
     def coverage(self):
         """Percent of the sphere covered by the held samples (0 when not collecting)."""
@@ -569,7 +506,7 @@ class CompassApp:
         # in the class: a cold module could find no room (firmware/runner.py retries run())
         good = i = 0
         last = self._ticks()
-        while (n is None or i < n) and not self.relearn_due:
+        while (n is None or i < n) and not self.learning.relearn_due:
             if self.step():
                 good += 1
             i += 1

@@ -16,10 +16,10 @@ store's slot code (firmware/store_slots.py): a running board rarely saves.
 from firmware.calibration import UNCALIBRATED, Calibration
 from firmware.compat import drop
 from firmware.errors import StoreError
+from firmware.learning import LOAD_NO_MEMORY
 
 LOAD_BAD_PAYLOAD = "bad_payload"      # .load_reason: the record is intact, its payload is not
 LOAD_IO_ERROR = "io_error"            # .load_reason: the filesystem raised OSError
-LOAD_NO_MEMORY = "no_memory"          # .load_reason / .save_reason: MemoryError
 
 
 def load(app):
@@ -76,8 +76,8 @@ def save(app, dip_only):
     reason = None
     try:
         app.store.save(_record(app))
-        if not dip_only and app._session is not None:
-            app._session.saved(app)  # the history follows the store
+        if not dip_only and app.learning.session is not None:
+            app.learning.session.saved(app)  # the history follows the store
     except StoreError as e:
         reason = e.reason
     except OSError as e:

@@ -12,12 +12,11 @@ from firmware.fieldwatch import FieldWatch
 from firmware.health import Health
 from firmware.trig import cdeg_to_kang
 
-DEFAULT_CAPACITY = const(300)  # samples held while collecting (firmware.calibrate.calibrator's default)
 _EVIDENCE_PERIODS = const(4)  # a step counts as at most 4 sample periods of evidence
 
 
 def setup(i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, store, delay_us,
-          ticks_us_, capacity, solve_every, fallback, reinit_after, mag_options, learn, fast):
+          ticks_us_, solve_every, reinit_after, mag_options, fast):
     """The options checked, the chips, the clocks, the per-sample buffers and objects, as the
     tuple CompassApp._build assigns (its order)."""
     mag_map = AxisMap(mag_axes)
@@ -44,8 +43,7 @@ def setup(i2c, mag, accel, mag_axes, accel_axes, model, declination_cdeg, store,
     i2cdevice.use_kernels(kn or False)  # the drivers' decode
     c = Compass(declination_kang=cdeg_to_kang(declination_cdeg))
     watch = FieldWatch(c, body)  # firmware/fieldwatch.py
-    return (i2c, mag, acc, accel is None, store, model, capacity or DEFAULT_CAPACITY,
-            solve_every, fallback, reinit_after, learn, mag_map, acc_map,
+    return (i2c, mag, acc, accel is None, store, model, reinit_after, mag_map, acc_map,
             # the per-sample calls, looked up once: a driver's unguarded read where it has
             # one (inside the read guard), its configuration check, the axis maps' arrays
             getattr(mag, "sample_into", None) or mag.read_into,

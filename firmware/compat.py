@@ -99,6 +99,16 @@ def kernels():
     return _kernels
 
 
+def need(name, call):
+    """The module firmware.<name> of an optional part (docs/design.md, parts), or an
+    ImportError that names the package `call` needs."""
+    try:
+        return __import__("firmware." + name, None, None, ("x",))  # (the leaf module)
+    except ImportError:
+        part = name[:name.find(".")]
+        raise ImportError("%s needs the %s part: install package-%s.json" % (call, part, part))
+
+
 def pick(kn, name, plain):
     """kn's function `name` (kn None: the port's kernels()), else `plain`."""
     if kn is None:
@@ -135,21 +145,27 @@ def drop_part(part, keep=()):
 
 # MicroPython's hash-table sizes from 17 on (py/map.c): a table grows only when it is full
 _TABLE_SIZES = (17, 23, 29, 37, 47, 59, 73, 97, 127, 167, 223)
+# room()'s names: builtins' names, which MicroPython keeps in ROM with its own (a name made
+# here would be interned in the heap's name table for good), and no firmware object's
+ROOM_NAMES = ("abs", "all", "any", "bin", "chr", "divmod", "hex", "oct", "ord", "pow", "repr",
+              "round", "sorted", "sum", "zip", "hash", "iter", "next", "min", "max", "callable",
+              "globals", "locals", "delattr", "setattr", "hasattr", "getattr", "issubclass",
+              "isinstance", "dir", "len", "print")
 
 
-def room(obj):
+def room(obj, pct=85):
     """Spare slots in obj's attribute table, called last in the construction of an object
     whose methods each step calls (docs/design.md, memory: attribute tables)."""
     # A method's name is looked up in the instance's table first, probing until an empty
     # slot, and MicroPython's tables grow only when full: 59 names in 59 slots cost 59
-    # probes a call. Over 85 % full, names without a value grow the table to the next size.
+    # probes a call. Over pct % full, names without a value grow the table to the next size.
     d = getattr(obj, "__dict__", ())  # (a copy on MicroPython)
     n = len(d)
     for s in _TABLE_SIZES:
         if n <= s:
             i = 0
-            while n * 20 > s * 17 and n <= s:
-                k = "_r%d" % i
+            while n * 100 > s * pct and n <= s:
+                k = ROOM_NAMES[i] if i < len(ROOM_NAMES) else "_r%d" % i
                 if k not in d:
                     setattr(obj, k, None)
                     n += 1

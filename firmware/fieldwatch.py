@@ -239,7 +239,7 @@ class FieldWatch:
                 return W_FLAG
             self.flagged_us = 0
             self.dip.reset()  # the dip too is learned afresh
-            app._stale()  # the board's iron changed: relearn
+            app.learning.relearn(app)  # the board's iron changed: relearn
             return W_FLAG
         if not self.spell:
             self.flagged_us = 0

@@ -241,10 +241,7 @@ def report(a):
 
 def motioncal(rate_hz=50):
     """MotionCal mode on this app until Ctrl-C (firmware/motioncal/mode.py)."""
-    try:
-        from firmware.motioncal.mode import MotionCalMode
-    except ImportError:
-        raise ImportError("motioncal() needs the motioncal part: install package-motioncal.json")
+    MotionCalMode = compat.need("motioncal.mode", "motioncal()").MotionCalMode
     kbd_intr = compat.kbd_intr  # 0x03 in MotionCal's packet is data
     try:
         MotionCalMode(app, rate_hz=rate_hz, mag_axes=board.MAG_AXES, kbd_intr=kbd_intr,

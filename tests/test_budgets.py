@@ -115,8 +115,8 @@ def test_the_calibration_program_holds_only_what_calibrating_needs_at_its_solvin
     assert "error" not in r and r["complete"], r
     held = set(r["peak_modules"])
     assert not held & {"app", "app_setup", "compass", "fast", "trig", "trig_tables", "status",
-                       "accuracy", "fieldwatch", "detect", "devinit", "boot", "app_persist",
-                       "store_slots", "calibrate.history", "calibrate.session"}, held
+                       "accuracy", "fieldwatch", "learning", "detect", "devinit", "boot",
+                       "app_persist", "store_slots", "calibrate.history", "calibrate.session"}, held
     assert {"calibrate.calibrator", "calibrate.samples", "calibrate.accum",
             "calibrate.program"} <= held, held
     assert r["peak_solving"] <= BUDGETS["program_peak_mpy"], r["peak_solving"]

@@ -97,7 +97,7 @@ def test_iron_that_changed_with_no_room_for_a_session_asks_for_the_program(no_ro
     b = W.make_sim("gy271", m=motion.still(30.0, 10.0, 0.0), seed=4)
     app = W.make_app(b, store=CalStore("/", fs=fs), learn=False)
     no_room_for.names = {"calibrate.session"}
-    app._stale()  # what 30 s of interference lead to (tests/test_app.py drives it for real)
+    app.learning.relearn(app)  # what 30 s of interference lead to (tests/test_app.py drives it for real)
     assert app.collector is None and app.no_memory == "calibrate" and app.relearn_due
     assert app.run(100) == 0  # returns at once: boards/main.py restarts into the program
 

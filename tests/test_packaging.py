@@ -190,15 +190,18 @@ def test_every_firmware_import_resolves_within_its_part_or_the_parts_it_requires
     # module level, inside functions and by a string held in a name (tests/test_layout.py
     # _imports): a part installed with only what it requires never meets ModuleNotFoundError
     # A part may reach into one it does not require only where the import is guarded (an
-    # ImportError handler around it: the board says which part to install), as core's
-    # calibrate(), set_location(), use_gyro() and the boot's calibration file do.
+    # ImportError handler around it, or compat.need(), whose ImportError names the part: the
+    # board says which part to install), as core's calibrate(), set_location(), use_gyro()
+    # and the boot's calibration file do.
     import ast
-    from tests.test_layout import _imports
+    from tests.test_layout import _imports, _needed
     owner = {module_name(f): p for p, fs in PARTS.items() for f in fs if f.endswith(".py")}
 
     def guarded(path):
         out = set()
         for t in ast.walk(ast.parse(open(path).read())):
+            if _needed(t, "firmware"):
+                out.add(_needed(t, "firmware"))
             if isinstance(t, ast.Try) and any(
                     "ImportError" in ast.dump(h.type) for h in t.handlers if h.type):
                 for n in t.body:

@@ -13,6 +13,7 @@ import pathlib
 
 import pytest
 
+from firmware.compat import ROOM_NAMES
 from tests.scenarios import app_world
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
@@ -39,7 +40,7 @@ def held(app):
             continue
         out.append((path, o))
         for k, v in d.items():
-            if not k.startswith("_r") or not k[2:].isdigit():
+            if k not in ROOM_NAMES:
                 todo.append((path + "." + k, v))
     return out
 

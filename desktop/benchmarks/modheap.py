@@ -14,7 +14,8 @@ from desktop.benchmarks import common
 # what a calibrated board holds while it shows headings (tests/test_layout.py CORE), then the
 # status line it prints, then what it loads for a job and drops after it
 HEADING = ("compat", "errors", "fixedpoint", "i2cdevice", "trig", "trig_tables", "axes",
-           "calibration", "compass", "health", "fieldwatch", "store", "mpu6050", "qmc5883l", "app")
+           "calibration", "compass", "health", "fieldwatch", "learning", "store", "mpu6050",
+           "qmc5883l", "app")
 REPORT = ("status", "accuracy")
 MACHINERY = ("boot", "detect", "app_setup", "app_persist", "store_slots", "calibrate.session",
              "calibrate.history", "calibrate.samples", "calibrate.accum", "calibrate.solve",

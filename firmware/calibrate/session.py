@@ -88,9 +88,9 @@ class Session:
 
     def end_if_done(self, app):
         """True when the session's job is done (see the module's opening comment): then the
-        app drops it (CompassApp._end_session) with the calibration machinery."""
+        app drops it (Learning.end, firmware/learning.py) with the calibration machinery."""
         c = self.collector
-        if (app.learn or self.pending is not None or app._unsaved or c.relearning
+        if (app.learning.learn or self.pending is not None or app._unsaved or c.relearning
                 or c.job is not None or c.kept or c.since_kept_us < c.QUIET_US
                 or not app.calibration.good_for(app.model)):
             return False
@@ -194,11 +194,12 @@ def start(app, fast=True):
     """A collector for `app` (firmware.calibrate.calibrator.Collector), with the kernel set it
     chose (fast False: the plain functions)."""
     from firmware.calibrate import samples
-    from firmware.calibrate.calibrator import Collector
+    from firmware.calibrate.calibrator import DEFAULT_CAPACITY, Collector
     samples.use_kernels((kernels() if fast and app.fast else None) or False)
-    c = Collector(model=app.model, capacity=app.capacity,
+    lr = app.learning  # the app's options for its sessions
+    c = Collector(model=app.model, capacity=lr.capacity or DEFAULT_CAPACITY,
                   counts_per_gauss=app.mag.counts_per_gauss, current=app.calibration,
-                  solve_every=app.solve_every, fallback=app.fallback,
+                  solve_every=lr.solve_every, fallback=lr.fallback,
                   overflow=getattr(app.mag, "OVERFLOW", None))
     if app.accel is not None:  # the mounting check's pairs (firmware/calibrate/mounting.py)
         from firmware.calibrate.mounting import Pairs

@@ -213,7 +213,7 @@ res["errors"] = app.errors
 
 # with a 10-element solve running (one started by hand; the buffer holds the converged set)
 gc.collect()
-app._session.worst_stall_us = 0  # (the session times its solve slices)
+app.learning.session.worst_stall_us = 0  # (the session times its solve slices)
 app.collector.next_model = 10
 steps = 0
 worst_bytes = 0

@@ -15,7 +15,7 @@ def counts(app):
             "compass": app.compass, "mag": app.mag, "accel": app.accel}
     if app.collector is not None:
         objs.update(collector=app.collector, calibrator=app.collector.calibrator,
-                    session=app._session)
+                    session=app.learning.session)
     if app.attitude is not None:
         objs["attitude"] = app.attitude
     return sorted((k, len(o.__dict__)) for k, o in objs.items())

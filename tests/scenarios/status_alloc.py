@@ -72,9 +72,9 @@ class Jump:  # a session holding a pending fit whose field jumped (firmware/cali
     history_reason = None
 
 
-app2._session = Jump()
+app2.learning.session = Jump()
 measure("jump", app2)
-app2._session = None
+app2.learning.session = None
 app2.set_location(ZURICH[0], ZURICH[1], YEAR_E3)
 W.run_until(app2, b2, 2.5)
 measure("location", app2)
