@@ -26,8 +26,6 @@ MOTIONCAL = getattr(board, "MODE", "compass") == "motioncal"
 # None on a real board (time.sleep_us, time.ticks_us); the simulated board (boards/host)
 # brings its own clock
 delay_us = getattr(board, "delay_us", None)
-# calibrate(): the calibration program at the next start, even with a good calibration
-REQUEST = board.STORE_DIR.rstrip("/") + "/calibrate.req"
 
 
 def wait_s(s):
@@ -42,111 +40,15 @@ def free_kb():
     return f // 1024 if f is not None else -1
 
 
-def restart():
-    """Start afresh: board.restart() where the board module has one (the simulated board),
-    else the port's reset."""
-    r = getattr(board, "restart", None)
-    if r is None:
-        import machine
-        r = machine.reset
-    r()
-
-
 def calibrate():
     """From the REPL (Ctrl-C stops the compass): restart into the calibration program."""
-    _request("calibrate")
-    restart()
+    _restart_into("calibrate")
 
 
-def _request(what):
-    with open(REQUEST, "w") as f:
-        f.write(what)
-
-
-def _asked():
-    # the request's word ("calibrate", "relearn", "skip"), read once: a program cut short by
-    # a power cut is not run again
-    try:
-        import os
-        with open(REQUEST) as f:
-            what = f.read(16)
-        os.remove(REQUEST)
-        return what
-    except OSError:
-        return None
-
-
-def _program_due(i2c, what):
-    # "auto" (board.CALIBRATE's default): when no good calibration is stored; "never": the
-    # board never calibrates itself (a desktop, MotionCal or browser calibration instead).
-    # `what`: the request found at this start (_asked)
-    if what == "skip":  # the program just said it could not run here: the heading now
-        return None
-    if what:
-        return "asked"
-    if getattr(board, "CALIBRATE", "auto") != "auto":
-        return None
-    global _mag
-    from firmware.boot import calibrated
-    try:
-        ok, _mag = calibrated(i2c, board.STORE_DIR, cal_file=CAL_FILE, delay_us=delay_us,
-                              mag_options={"rate": 75} if MOTIONCAL else None)
-        return None if ok else "uncalibrated"
-    finally:
-        calibrated = None
-        drop("boot")
-
-
-def _need_kb():
-    try:
-        drop_part("calibrate")  # the program's modules leave first, and a collection makes
-        free_bytes()            # room for the figure's module (the failed one left it short)
-        from firmware.status import PROGRAM_NEED_KB
-        return PROGRAM_NEED_KB
-    except MemoryError:
-        return "?"
-
-
-def _smaller():
-    """What needs less heap than this install: .mpy files than .py sources, and a frozen or
-    ROMFS build (its bytecode in flash) than .mpy files (docs/install.md)."""
-    if compiled_here(sys.modules.get(__name__)):
-        return "use .mpy files (make deploy), a frozen or a ROMFS build"
-    return "use a frozen or a ROMFS build (docs/install.md)"
-
-
-def run_program(i2c, why):
-    """The calibration program alone (firmware/calibrate/program.py), then a restart: into
-    the heading with its fit, or, when it could not run (said why), without running it again."""
-    # asked for (`why`), any good fit may replace the stored one: a new mounting, new iron
-    try:
-        from firmware.calibrate.program import Program
-        p = Program(i2c, board.STORE_DIR, mag_axes=board.MAG_AXES, accel_axes=board.ACCEL_AXES,
-                    ticks_us_=getattr(board, "ticks_us", None), delay_us=delay_us,
-                    renew=why == "asked")
-        Program = None
-        # the accelerometer as its driver names it (firmware/detect.py CHIPS), else yes / no
-        print("eCompass: calibrating (%s, accelerometer %s): turn the board through a figure-8, "
-              "over and around" % (p.mag.KIND,
-                                   getattr(p.accel, "NAME", "yes") if p.accel else "no"))
-        if p.run() is not None:
-            restart()  # into the heading, with the calibration just saved
-        print("eCompass: the calibration program ran out of memory (%s KB free at a solve): "
-              "it needs ~%s KB of heap; %s, or calibrate on the desktop or in the browser "
-              "(docs/calibration.md)"
-              % (p.free_at_solve // 1024 if p.free_at_solve else "?", _need_kb(), _smaller()))
-    except ImportError:
-        print("eCompass: cannot calibrate on the board: install package-calibrate.json "
-              "(or calibrate on the desktop: docs/calibration.md)")
-        return
-    except MemoryError:
-        p = Program = None
-        print("eCompass: the calibration program needs ~%s KB of heap, more than this board "
-              "has: %s, or calibrate on the desktop or in the browser (docs/calibration.md)"
-              % (_need_kb(), _smaller()))
-    p = Program = None
-    _request("skip")
-    restart()  # a clean heap for the heading
+def _restart_into(what):
+    from firmware import runner_program  # (the program's turn: firmware/runner_program.py)
+    runner_program.request(what)
+    runner_program.restart()
 
 
 _PY_SHORT_KB = 96  # free heap below which a board running from .py sources is told so
@@ -156,7 +58,8 @@ status_line = status_view = None
 def _boot():
     # the heading's app (or the calibration program first, which restarts the board)
     global app, status_line, status_view, _mag
-    what = _asked()
+    from firmware import runner_program as rp  # the program's turn: gone before the app
+    what = rp.asked()
     checked = MOTIONCAL  # the program is considered once a start (the boot loop retries)
     while True:
         try:
@@ -165,13 +68,16 @@ def _boot():
                 # the boot check and the program run the plain kernels (same bits):
                 # firmware.fast and its tables stay out of the program's heap
                 compat.FAST = False
-                why = _program_due(i2c, what)
+                why, _mag = rp.due(i2c, what, CAL_FILE, {"rate": 75} if MOTIONCAL else None,
+                                   delay_us)
                 checked = True
                 if why:
                     _mag = None
-                    run_program(i2c, why)  # restarts, unless calibrate is not installed
+                    rp.run(i2c, why, delay_us)  # restarts, unless calibrate is not installed
                     i2c = board.make_i2c()
                 compat.FAST = True
+            rp = None
+            drop("runner_program")
             from firmware.app import status_line, status_view
             from firmware.boot import start
             # MotionCal mode: an HMC5883L at 75 Hz for 50 Raw lines/s (the QMC chips take no rate)
@@ -272,5 +178,4 @@ def run():
             if app.relearn_due and getattr(board, "CALIBRATE", "auto") != "never":
                 print("eCompass: the calibration no longer fits the board and no session fits "
                       "beside the heading: restarting into the calibration program")
-                _request("relearn")
-                restart()
+                _restart_into("relearn")
