@@ -2,17 +2,16 @@
 user makes (calibrate(), motioncal()). Its code is a module of the firmware, so a board loads
 it as bytecode instead of compiling a long main.py at every boot."""
 # run()        boot: a board without a good stored calibration runs the calibration program
-#              (firmware/calibrate/program.py) and restarts; otherwise the app shows headings
-#              (its status line every 0.5 s) or, board.MODE = "motioncal", streams to MotionCal.
+#              (firmware/calibrate/program.py, launched by firmware/runner_program.py) and
+#              restarts; otherwise the app shows headings (its status line every 0.5 s) or,
+#              board.MODE = "motioncal", streams to MotionCal (firmware/runner_heading.py).
 # calibrate()  from the REPL: restart into the calibration program.
 # motioncal()  from the REPL: MotionCal mode on the running app until Ctrl-C.
 # `board` is the board's own module (boards/<board>/board.py): pins, axes, STORE_DIR, and on
 # the simulated board its clock and restart().
-import sys
-
 import board
 from firmware import compat
-from firmware.compat import compiled_here, drop, drop_part, free_bytes, sleep_us
+from firmware.compat import drop, free_bytes, sleep_us
 
 app = None  # the CompassApp, once the heading runs
 _mag = None  # the magnetometer the boot check found: the app takes it over
@@ -42,22 +41,14 @@ def free_kb():
 
 def calibrate():
     """From the REPL (Ctrl-C stops the compass): restart into the calibration program."""
-    _restart_into("calibrate")
-
-
-def _restart_into(what):
     from firmware import runner_program  # (the program's turn: firmware/runner_program.py)
-    runner_program.request(what)
+    runner_program.request("calibrate")
     runner_program.restart()
-
-
-_PY_SHORT_KB = 96  # free heap below which a board running from .py sources is told so
-status_line = status_view = None
 
 
 def _boot():
     # the heading's app (or the calibration program first, which restarts the board)
-    global app, status_line, status_view, _mag
+    global app, _mag
     from firmware import runner_program as rp  # the program's turn: gone before the app
     what = rp.asked()
     checked = MOTIONCAL  # the program is considered once a start (the boot loop retries)
@@ -78,7 +69,6 @@ def _boot():
                 compat.FAST = True
             rp = None
             drop("runner_program")
-            from firmware.app import status_line, status_view
             from firmware.boot import start
             # MotionCal mode: an HMC5883L at 75 Hz for 50 Raw lines/s (the QMC chips take no rate)
             app, note = start(i2c, board.STORE_DIR, cal_file=CAL_FILE,
@@ -99,7 +89,7 @@ def _boot():
             print("eCompass: %s" % e)
             wait_s(2)
         except MemoryError:  # not even the app fits: say so, and what to do, and try again
-            start = status_line = status_view = None
+            start = None
             drop("app", "boot", "detect", "app_setup", "devinit", "store", "app_persist", "store_slots")
             print("eCompass: out of memory at boot (%d KB free): use the .mpy or frozen "
                   "install (docs/design.md, memory)" % free_kb())
@@ -111,71 +101,14 @@ def _boot():
     drop("boot")  # a running board holds only what it runs (docs/design.md, memory)
 
 
-def announce():
-    """What was found, and what the board will do (one line each)."""
-    if app.no_memory is not None:
-        print("eCompass: %s" % status_line(app))
-    else:
-        print("eCompass: %s, accelerometer %s, stored calibration: %s%s" % (
-            app.mag.KIND, getattr(app.accel, "NAME", "yes") if app.accel else "no",
-            app.load_reason or "loaded",
-            ""))
-    if compiled_here(sys.modules.get("firmware.app")) and free_kb() < _PY_SHORT_KB:
-        print("eCompass: running from .py sources, %d KB free: .mpy files (make deploy) or "
-              "a frozen build need much less heap (docs/design.md, memory)" % free_kb())
-    if getattr(board, "GYRO", False) and not MOTIONCAL:
-        try:
-            app.use_gyro()  # docs/gyro.md: status "gyro held" while it holds the heading
-            print("eCompass: gyro-aided heading on")
-        except (ImportError, ValueError, MemoryError) as e:  # no part; no MPU6050; no room
-            print("eCompass: no gyro-aided heading: %s" % (e or "out of memory"))
-
-
-_out = getattr(sys.stdout, "buffer", sys.stdout)
-
-
-def report(a):
-    # the status line from the buffer firmware/status.py keeps: no garbage every half second
-    try:
-        _out.write(status_view(a))
-        _out.write(b"\n")
-    except MemoryError:  # no room to print this one: the next report tries again
-        pass
-
-
-
-
 def motioncal(rate_hz=50):
-    """MotionCal mode on this app until Ctrl-C (firmware/motioncal/mode.py)."""
-    MotionCalMode = compat.need("motioncal.mode", "motioncal()").MotionCalMode
-    kbd_intr = compat.kbd_intr  # 0x03 in MotionCal's packet is data
-    try:
-        MotionCalMode(app, rate_hz=rate_hz, mag_axes=board.MAG_AXES, kbd_intr=kbd_intr,
-                      ticks_us=getattr(board, "ticks_us", None)).run()
-    finally:  # MotionCal mode is done: its code leaves (docs/design.md, memory)
-        if app.collector is None:
-            drop_part("motioncal")
-            drop("calibrate.acceptance", "calibrate.solve")
-        else:
-            drop_part("motioncal")
+    """MotionCal mode on the running app until Ctrl-C (firmware/motioncal/mode.py)."""
+    from firmware import runner_heading
+    runner_heading.motioncal(app, rate_hz)
 
 
 def run():
     """Boot, then the heading's loop (or MotionCal mode) for good."""
     _boot()
-    try:
-        announce()
-    except MemoryError:  # the board runs on; its status line says the rest
-        pass
-    if MOTIONCAL:
-        motioncal()
-    else:
-        while True:
-            try:
-                app.run(None, report=report, every_us=500000)
-            except MemoryError:  # step() never raises; the loop's own bookkeeping: go on
-                pass
-            if app.relearn_due and getattr(board, "CALIBRATE", "auto") != "never":
-                print("eCompass: the calibration no longer fits the board and no session fits "
-                      "beside the heading: restarting into the calibration program")
-                _restart_into("relearn")
+    from firmware import runner_heading  # (once the app is built: firmware/runner_heading.py)
+    runner_heading.run(app, MOTIONCAL)

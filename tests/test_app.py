@@ -118,7 +118,8 @@ def test_every_setting_of_a_board_file_is_read_by_the_code_that_runs_on_it():
         os.path.join(ROOT, "boards", "circuitpython", "wiring.py")]
     readers = files + [os.path.join(ROOT, "boards", "main.py"),
                        os.path.join(ROOT, "firmware", "runner.py"),
-                       os.path.join(ROOT, "firmware", "runner_program.py")] + sorted(
+                       os.path.join(ROOT, "firmware", "runner_program.py"),
+                       os.path.join(ROOT, "firmware", "runner_heading.py")] + sorted(
         glob.glob(os.path.join(ROOT, "boards", "circuitpython", "*.py"))) + sorted(
         glob.glob(os.path.join(ROOT, "host_sim", "**", "*.py"), recursive=True)) + sorted(
         glob.glob(os.path.join(ROOT, "desktop", "**", "*.py"), recursive=True))

@@ -25,7 +25,7 @@ PIPELINE = ["compat", "errors", "fixedpoint", "i2cdevice", "detect"] + DRIVERS +
             # time, the status line)
             "boot", "app_setup", "devinit", "app_persist", "calibrate.session", "status", "hints",
             # the calibration program, and what a board's main.py runs
-            "calibrate.program", "runner", "runner_program"]
+            "calibrate.program", "runner", "runner_program", "runner_heading"]
 CALIBRATION_MACHINERY = {"firmware.calibrate.calibrator", "firmware.calibrate.solve", "firmware.calibrate.accum",
                          "firmware.calibrate.samples", "firmware.calibrate.acceptance", "firmware.calibrate.session",
                          "firmware.calibrate.history"}
