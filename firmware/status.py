@@ -15,7 +15,7 @@ _STATUS_INTERFERENCE = "interference"  # firmware.app.STATUS_INTERFERENCE
 _LINE_MAX = const(400)  # bytes: the longest line (a jump, the location, a hint) fits
 # the heap the calibration program completes from (.mpy, x86-32, boards/main.py; make bench's
 # figure in docs/benchmarks.md, at most 4 KB below it: tests/test_program_need.py)
-PROGRAM_NEED_KB = const(136)
+PROGRAM_NEED_KB = const(132)
 _buf = bytearray(_LINE_MAX)
 _mv = memoryview(_buf)
 _n = 0
