@@ -5,8 +5,8 @@ boot and drops it before the heading's app is built, and loads it again to resta
 #     what = asked()                         # the request file's word, read once
 #     why, mag = due(i2c, what, cal_file)    # None: the heading now; mag: the chip it found
 #     run(i2c, why)                          # the program alone, then restart()
-#
-# The request file and its words: docs/calibration.md; the program: firmware/calibrate/program.py.
+# The request file: docs/design.md (memory, the calibration program); the program itself:
+# firmware/calibrate/program.py.
 import sys
 
 import board
