@@ -164,8 +164,8 @@ def room(obj, pct=85):
     for s in _TABLE_SIZES:
         if n <= s:
             i = 0
-            while n * 100 > s * pct and n <= s:
-                k = ROOM_NAMES[i] if i < len(ROOM_NAMES) else "_r%d" % i
+            while n * 100 > s * pct and n <= s and i < len(ROOM_NAMES):
+                k = ROOM_NAMES[i]
                 if k not in d:
                     setattr(obj, k, None)
                     n += 1

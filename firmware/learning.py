@@ -23,8 +23,6 @@ LOAD_NO_MEMORY = "no_memory"  # .load_reason / .save_reason: MemoryError (app_pe
 
 
 class Learning:
-    ended = {}  # the counters the last session left (Session.ended), none before the first
-
     def __init__(self, learn, capacity, solve_every, fallback):
         # the app's options for its sessions (docs/api.md, the app)
         self.learn = learn  # True: always, False: never, None: while not calibrated well
@@ -32,7 +30,7 @@ class Learning:
         self.solve_every = solve_every  # kept samples between solves
         self.fallback = fallback  # a 4-element fit while a model lacks samples
         self.session = None  # firmware.calibrate.session.Session while one runs
-        self.ended = Learning.ended
+        self.ended = {}  # the counters the last session left (Session.ended)
         self.relearn_due = False  # the iron changed and no session fitted beside the heading
         self.not_installed = None  # "calibrate": package-calibrate.json is not on the board
 

@@ -42,8 +42,7 @@ def free_kb():
 def calibrate():
     """From the REPL (Ctrl-C stops the compass): restart into the calibration program."""
     from firmware import runner_program  # (the program's turn: firmware/runner_program.py)
-    runner_program.request("calibrate")
-    runner_program.restart()
+    runner_program.restart_into("calibrate")
 
 
 def _boot():

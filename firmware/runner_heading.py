@@ -81,5 +81,4 @@ def run(app, motioncal_mode=False):
             print("eCompass: the calibration no longer fits the board and no session fits "
                   "beside the heading: restarting into the calibration program")
             from firmware import runner_program
-            runner_program.request("relearn")
-            runner_program.restart()
+            runner_program.restart_into("relearn")

@@ -26,10 +26,11 @@ def restart():
     r()
 
 
-def request(what):
-    """The word the next start reads ("calibrate", "relearn", "skip")."""
+def restart_into(what):
+    """A restart whose start reads `what` ("calibrate", "relearn", "skip": asked())."""
     with open(REQUEST, "w") as f:
         f.write(what)
+    restart()
 
 
 def asked():
@@ -112,5 +113,4 @@ def run(i2c, why, delay_us=None):
               "has: %s, or calibrate on the desktop or in the browser (docs/calibration.md)"
               % (_need_kb(), _smaller()))
     p = Program = None
-    request("skip")
-    restart()  # a clean heap for the heading
+    restart_into("skip")  # a clean heap for the heading

@@ -122,3 +122,16 @@ def test_micropython_holds_the_same_names_and_the_classes_keep_room():
     bad = ["%s: %d names in %d slots" % (c, n, slots(n)) for c, n in classes
            if n > SMALL and n * 100 > FULL_PCT * slots(n)]
     assert bad == []
+
+
+def test_no_firmware_object_has_an_attribute_named_as_room_fills_its_table():
+    # room()'s spare slots take builtins' names (firmware/compat.py ROOM_NAMES): set on an
+    # object that uses one of them, a spare slot would overwrite it
+    found = []
+    for p in sorted((ROOT / "firmware").rglob("*.py")):
+        for node in ast.walk(ast.parse(p.read_text())):
+            if isinstance(node, ast.Attribute) and node.attr in ROOM_NAMES:
+                found.append("%s:%d .%s" % (p.relative_to(ROOT), node.lineno, node.attr))
+            elif isinstance(node, (ast.FunctionDef, ast.ClassDef)) and node.name in ROOM_NAMES:
+                found.append("%s:%d %s" % (p.relative_to(ROOT), node.lineno, node.name))
+    assert found == []
